@@ -1,0 +1,15 @@
+"""osg-control: Offline Skill Graph robot-control stack.
+
+MuJoCo kitchen with the example-robot-data Franka Panda, a differential-IK controller
+(mink or Pinocchio/Pink), TD3+BC skills learned from offline data, a skill graph exported
+as PDDL, a symbolic planner, a state-to-skill classifier and an executor.
+"""
+
+from importlib.metadata import PackageNotFoundError, version
+
+try:
+    __version__ = version("osg-control")
+except PackageNotFoundError:  # pragma: no cover - running from a source tree
+    __version__ = "0.0.0+unknown"
+
+__all__ = ["__version__"]

@@ -1,0 +1,218 @@
+"""Offline data sets as HDF5: D4RL/Minari field names, readable with plain h5py.
+
+One file per skill. Flat step arrays (``N`` steps over all episodes)::
+
+    observations       (N, 10) float32   state before the step
+    next_observations  (N, 10) float32   state after the step
+    actions            (N, 7)  float32   the action applied (after clipping)
+    rewards            (N,)    float32   1.0 on the step the success predicate first holds
+    terminations       (N,)    bool      episode ended by success
+    truncations        (N,)    bool      episode ended by the step budget
+    episode_ids        (N,)    int64     episode index of each step
+    world_states       (N, 11) float32   world state after the step (``scene.WORLD_FIELDS``)
+
+Per-episode arrays (``E`` episodes): ``episode_starts`` (offset of the first step),
+``episode_lengths``, ``episode_successes``. Attributes: ``skill`` (the spec as JSON),
+``seed``, ``package_version``, ``format_version``, ``world_fields``.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import tempfile
+from collections.abc import Sequence
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import h5py
+import numpy as np
+
+from osg_control.errors import DatasetError
+
+FORMAT_VERSION = 1
+OBS_DIM = 10
+ACTION_DIM = 7
+STEP_FIELDS: dict[str, tuple[tuple[int, ...], Any]] = {
+    "observations": ((OBS_DIM,), np.float32),
+    "next_observations": ((OBS_DIM,), np.float32),
+    "actions": ((ACTION_DIM,), np.float32),
+    "rewards": ((), np.float32),
+    "terminations": ((), np.bool_),
+    "truncations": ((), np.bool_),
+    "episode_ids": ((), np.int64),
+    "world_states": ((11,), np.float32),
+}
+
+
+@dataclass
+class Episode:
+    """One recorded episode (arrays over its T steps, field shapes as in ``STEP_FIELDS``)."""
+
+    observations: np.ndarray
+    next_observations: np.ndarray
+    actions: np.ndarray
+    rewards: np.ndarray
+    terminations: np.ndarray
+    truncations: np.ndarray
+    world_states: np.ndarray
+
+    @property
+    def success(self) -> bool:
+        """Whether the episode got its reward."""
+        return bool(self.rewards.sum() > 0)
+
+    def __len__(self) -> int:
+        return len(self.actions)
+
+
+@dataclass
+class Dataset:
+    """A loaded data set: the step arrays, per-episode arrays and metadata."""
+
+    path: Path
+    arrays: dict[str, np.ndarray]
+    episode_starts: np.ndarray
+    episode_lengths: np.ndarray
+    episode_successes: np.ndarray
+    attrs: dict[str, Any]
+
+    @property
+    def num_episodes(self) -> int:
+        """Episodes in the file."""
+        return len(self.episode_lengths)
+
+    @property
+    def num_steps(self) -> int:
+        """Steps over all episodes."""
+        return len(self.arrays["actions"])
+
+    @property
+    def success_rate(self) -> float:
+        """Fraction of episodes that reached the skill's success predicate."""
+        return float(self.episode_successes.mean()) if self.num_episodes else 0.0
+
+    @property
+    def skill_name(self) -> str:
+        """The name of the skill recorded."""
+        return str(json.loads(self.attrs["skill"])["name"])
+
+    def episode(self, index: int) -> Episode:
+        """Slice out one episode."""
+        start = int(self.episode_starts[index])
+        stop = start + int(self.episode_lengths[index])
+        return Episode(
+            **{
+                key: self.arrays[key][start:stop]
+                for key in STEP_FIELDS
+                if key != "episode_ids"
+            }
+        )
+
+
+def _atomic_h5(path: Path) -> tuple[Path, int]:
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
+    return Path(tmp), fd
+
+
+def write_episodes(path: Path, episodes: Sequence[Episode], attrs: dict[str, Any]) -> None:
+    """Write episodes to ``path`` atomically (a temp file renamed over the target).
+
+    An interrupted write leaves the old file (or none), never a truncated one.
+    """
+    tmp, fd = _atomic_h5(Path(path))
+    os.close(fd)
+    try:
+        lengths = np.array([len(e) for e in episodes], dtype=np.int64)
+        starts = np.concatenate([[0], np.cumsum(lengths)[:-1]]).astype(np.int64)
+        with h5py.File(tmp, "w") as f:
+            for key, (shape, dtype) in STEP_FIELDS.items():
+                if key == "episode_ids":
+                    values = np.repeat(np.arange(len(episodes), dtype=np.int64), lengths)
+                elif episodes:
+                    values = np.concatenate([getattr(e, key) for e in episodes]).astype(dtype)
+                else:
+                    values = np.zeros((0, *shape), dtype=dtype)
+                f.create_dataset(key, data=values.reshape((-1, *shape)))
+            f.create_dataset("episode_starts", data=starts)
+            f.create_dataset("episode_lengths", data=lengths)
+            f.create_dataset(
+                "episode_successes", data=np.array([e.success for e in episodes], dtype=np.bool_)
+            )
+            f.attrs["format_version"] = FORMAT_VERSION
+            for key, value in attrs.items():
+                f.attrs[key] = value
+        os.replace(tmp, path)
+    finally:
+        if tmp.exists():
+            tmp.unlink()
+
+
+def load_dataset(path: str | Path) -> Dataset:
+    """Read and validate a data set file.
+
+    Raises:
+        DatasetError: naming the file and what is wrong (missing, not HDF5, missing field,
+            wrong shape, inconsistent episode bounds).
+    """
+    path = Path(path)
+    if not path.is_file():
+        raise DatasetError(f"{path}: data set file not found")
+    try:
+        with h5py.File(path, "r") as f:
+            arrays: dict[str, np.ndarray] = {}
+            for key, (shape, _dtype) in STEP_FIELDS.items():
+                if key not in f:
+                    raise DatasetError(f"{path}: missing field {key!r}")
+                arrays[key] = f[key][()]
+                if arrays[key].shape[1:] != shape:
+                    raise DatasetError(
+                        f"{path}: field {key!r} has shape {arrays[key].shape}, expected "
+                        f"(N, {', '.join(map(str, shape))})"
+                    )
+            per_episode = {}
+            for key in ("episode_starts", "episode_lengths", "episode_successes"):
+                if key not in f:
+                    raise DatasetError(f"{path}: missing field {key!r}")
+                per_episode[key] = f[key][()]
+            attrs = dict(f.attrs)
+    except DatasetError:
+        raise
+    except (OSError, KeyError, ValueError) as err:
+        raise DatasetError(f"{path}: not a readable HDF5 data set ({err})") from err
+    steps = {len(v) for v in arrays.values()}
+    if len(steps) != 1:
+        raise DatasetError(f"{path}: step fields disagree on length: {sorted(steps)}")
+    lengths = per_episode["episode_lengths"]
+    if int(lengths.sum()) != steps.pop():
+        raise DatasetError(f"{path}: episode_lengths do not add up to the number of steps")
+    for key in ("skill", "seed"):
+        if key not in attrs:
+            raise DatasetError(f"{path}: missing attribute {key!r}")
+    if not np.all(np.isfinite(arrays["observations"])) or not np.all(
+        np.isfinite(arrays["actions"])
+    ):
+        raise DatasetError(f"{path}: non-finite values in observations or actions")
+    return Dataset(
+        path=path,
+        arrays=arrays,
+        episode_starts=per_episode["episode_starts"],
+        episode_lengths=lengths,
+        episode_successes=per_episode["episode_successes"].astype(bool),
+        attrs=attrs,
+    )
+
+
+def dataset_summary(dataset: Dataset) -> dict[str, Any]:
+    """A JSON-ready summary: episodes, steps, success rate, field shapes, seed."""
+    return {
+        "path": str(dataset.path),
+        "skill": dataset.skill_name,
+        "episodes": dataset.num_episodes,
+        "steps": dataset.num_steps,
+        "success_rate": dataset.success_rate,
+        "seed": int(dataset.attrs["seed"]),
+        "fields": {key: list(value.shape) for key, value in dataset.arrays.items()},
+    }

@@ -1,0 +1,37 @@
+"""One exception tree for the package, so callers can catch ``OSGError``."""
+
+
+class OSGError(Exception):
+    """Base class of every error raised by osg-control."""
+
+
+class ModelNotFoundError(OSGError, FileNotFoundError):
+    """A robot or scene model file could not be found; the message names the paths searched."""
+
+
+class ControllerError(OSGError):
+    """The IK controller could not produce a command (bad input or solver failure)."""
+
+
+class SimulationError(OSGError):
+    """The physics diverged (MuJoCo warning or non-finite state)."""
+
+
+class DatasetError(OSGError):
+    """A data set file is missing, truncated or malformed; the message names the file."""
+
+
+class CheckpointError(OSGError):
+    """A checkpoint is missing, corrupt or does not match the environment."""
+
+
+class SkillSpecError(OSGError):
+    """A skill specification is invalid; the message names the skill and the field."""
+
+
+class PDDLError(OSGError):
+    """PDDL input is malformed or unsupported; the message names the file and line."""
+
+
+class PlanningError(OSGError):
+    """The planner cannot solve the task (e.g. unknown goal facts)."""
