@@ -36,10 +36,10 @@ FINGER_OPEN = 0.04
 _TCP_IN_LINK7_POS = (0.0, 0.0, 0.107 + 0.1034)
 _TCP_IN_LINK7_QUAT = (np.cos(-np.pi / 8), 0.0, 0.0, np.sin(-np.pi / 8))
 
-# Position-servo gains per arm joint [N m / rad] and damping [N m s / rad], as on the real
-# arm's joint impedance defaults (stiffer proximal joints).
+# Position-servo gains per arm joint [N m / rad] and damping [N m s / rad]: kv/kp of about
+# 15 ms, so a 50 ms control step is tracked to within a few per cent.
 _ARM_KP = (4500.0, 4500.0, 3500.0, 3500.0, 2000.0, 2000.0, 2000.0)
-_ARM_KV = (450.0, 450.0, 350.0, 350.0, 200.0, 200.0, 200.0)
+_ARM_KV = (70.0, 70.0, 50.0, 50.0, 30.0, 30.0, 30.0)
 _ARM_FORCE_LIMIT = (87.0, 87.0, 87.0, 87.0, 12.0, 12.0, 12.0)
 _GRIPPER_KP = 2000.0
 _GRIPPER_KV = 100.0
@@ -138,6 +138,11 @@ def panda_spec(with_fingers: bool = True) -> mujoco.MjSpec:
         gripper.ctrllimited = True
         gripper.forcerange = [-_GRIPPER_FORCE_LIMIT, _GRIPPER_FORCE_LIMIT]
         gripper.forcelimited = True
+        for name in FINGER_JOINTS:
+            # Reflected inertia and damping of the hand's drive: without them the 15 g
+            # fingers reach metres per second and tunnel through thin parts.
+            spec.joint(name).armature = 0.1
+            spec.joint(name).damping = [20.0, 0.0, 0.0]
         qpos_home += [FINGER_OPEN, FINGER_OPEN]
     ctrl_home = list(HOME_Q) + ([FINGER_OPEN] if with_fingers else [])
     spec.add_key(name="home", qpos=qpos_home, ctrl=ctrl_home)

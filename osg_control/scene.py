@@ -7,6 +7,7 @@ pose, whether the cube is held) for skill effects and evaluation. Policies never
 from __future__ import annotations
 
 import os
+import warnings
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -51,14 +52,17 @@ def kitchen_spec() -> mujoco.MjSpec:
     for key in list(robot.keys):
         robot.delete(key)
     frame = spec.worldbody.add_frame()
-    spec.attach(robot, frame=frame, prefix="")
+    with warnings.catch_warnings():
+        # The robot's URDF names are unique in the scene, so no prefix is needed.
+        warnings.filterwarnings("ignore", message="Attaching a spec with an empty prefix")
+        spec.attach(robot, frame=frame, prefix="")
     return spec
 
 
 def build_kitchen_model() -> mujoco.MjModel:
     """Compile the kitchen and add a full-state ``home`` keyframe (arm home, door shut)."""
     spec = kitchen_spec()
-    model = spec.compile()
+    model = _compile(spec)
     data = mujoco.MjData(model)
     qpos = data.qpos.copy()
     ctrl = np.zeros(model.nu)
@@ -69,7 +73,13 @@ def build_kitchen_model() -> mujoco.MjModel:
         qpos[model.joint(name).qposadr[0]] = FINGER_OPEN
     ctrl[model.actuator("gripper").id] = FINGER_OPEN
     spec.add_key(name="home", qpos=qpos, ctrl=ctrl)
-    return spec.compile()
+    return _compile(spec)
+
+
+def _compile(spec: mujoco.MjSpec) -> mujoco.MjModel:
+    with warnings.catch_warnings():
+        warnings.filterwarnings("ignore", message="Attaching a spec with an empty prefix")
+        return spec.compile()
 
 
 @dataclass(frozen=True)

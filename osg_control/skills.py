@@ -44,9 +44,9 @@ NODES: dict[str, Node] = {
     for node in (
         Node("home", (0.35, 0.00, 0.45)),
         Node("above-cube", (0.50, -0.20, 0.15)),
-        Node("door-front", (0.42, 0.14, 0.55)),
+        Node("door-front", (0.42, 0.14, 0.50)),
         Node("cabinet-front", (0.38, 0.30, 0.35)),
-        Node("handle", (0.42, 0.14, 0.40), "closed"),
+        Node("handle", (0.42, 0.14, 0.335), "closed"),
         Node("cube-grasped", (0.50, -0.20, 0.03), "closed"),
         Node("cube-lifted", (0.50, -0.20, 0.20), "closed"),
         Node("place-front", (0.40, 0.30, 0.20), "closed"),
@@ -98,6 +98,8 @@ class SkillSpec:
         success_tolerance: TCP distance to ``end`` [m] within which beta holds.
         script: Algorithm 1's parameters for data collection.
         max_steps: the step budget of a learned policy's episode.
+        start_door_opening: door travel [m] in the world this skill starts in (data
+            collection and evaluation): skills that start at the cabinet run with it open.
     """
 
     name: str
@@ -111,6 +113,7 @@ class SkillSpec:
     success_tolerance: float = 0.02
     script: ScriptParams = field(default_factory=ScriptParams)
     max_steps: int = 80
+    start_door_opening: float = 0.0
 
     @property
     def start_node(self) -> Node:
@@ -151,7 +154,7 @@ def _at(position: tuple[float, float, float], gripper: Gripper) -> Waypoint:
     return Waypoint(position, gripper)
 
 
-def _movement(name: str, start: str, end: str) -> SkillSpec:
+def _movement(name: str, start: str, end: str, door: float = 0.0) -> SkillSpec:
     return SkillSpec(
         name=name,
         kind="movement",
@@ -159,11 +162,14 @@ def _movement(name: str, start: str, end: str) -> SkillSpec:
         end=end,
         waypoints=(_wp(end),),
         preconditions=frozenset({"hand-empty"}),
+        start_door_opening=door,
     )
 
 
-HANDLE_OPEN_POS = (0.42, 0.54, 0.40)
-"""TCP at the handle once the door has slid 0.40 m open."""
+DOOR_OPENED = 0.40
+"""Door travel [m] after the slide skill (the handle moves +y by as much)."""
+HANDLE_OPEN_POS = (0.42, 0.14 + DOOR_OPENED, 0.335)
+"""TCP at the handle once the door has slid open."""
 PLACE_INSIDE_POS = (0.64, 0.30, 0.135)
 """TCP where the cube is released on the cabinet's shelf."""
 
@@ -172,8 +178,8 @@ SKILLS: tuple[SkillSpec, ...] = (
     _movement("move-cube-to-home", "above-cube", "home"),
     _movement("move-home-to-door", "home", "door-front"),
     _movement("move-door-to-home", "door-front", "home"),
-    _movement("move-cabinet-to-cube", "cabinet-front", "above-cube"),
-    _movement("move-cabinet-to-home", "cabinet-front", "home"),
+    _movement("move-cabinet-to-cube", "cabinet-front", "above-cube", DOOR_OPENED),
+    _movement("move-cabinet-to-home", "cabinet-front", "home", DOOR_OPENED),
     SkillSpec(
         name="grab-handle",
         kind="door",
@@ -192,7 +198,7 @@ SKILLS: tuple[SkillSpec, ...] = (
         waypoints=(
             _at(HANDLE_OPEN_POS, "closed"),
             _at(HANDLE_OPEN_POS, "open"),
-            _at((0.42, 0.54, 0.55), "open"),
+            _at((0.42, 0.54, 0.50), "open"),
             _wp("cabinet-front"),
         ),
         preconditions=frozenset({"holding-handle", "door-closed"}),
@@ -226,7 +232,8 @@ SKILLS: tuple[SkillSpec, ...] = (
         start="cube-lifted",
         end="place-front",
         waypoints=(_wp("place-front"),),
-        preconditions=frozenset({"holding-cube", "cube-lifted"}),
+        preconditions=frozenset({"holding-cube", "cube-lifted", "door-open"}),
+        start_door_opening=DOOR_OPENED,
     ),
     SkillSpec(
         name="place-cube-in-cabinet",
@@ -243,6 +250,7 @@ SKILLS: tuple[SkillSpec, ...] = (
         add_effects=frozenset({"cube-in-cabinet", "hand-empty"}),
         del_effects=frozenset({"holding-cube", "cube-lifted"}),
         max_steps=140,
+        start_door_opening=DOOR_OPENED,
     ),
 )
 

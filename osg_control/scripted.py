@@ -1,0 +1,69 @@
+"""The paper's Algorithm 1: a scripted, deliberately noisy waypoint-following policy.
+
+For each waypoint of a skill, for a fixed number of steps: while the TCP is farther than a
+threshold ``~ N(mu_1, sigma_1^2)`` from the waypoint, act with the error ``target - current``
+(position [m] and orientation [rad], clipped by the env); else, if the gripper is not in
+the waypoint's state, switch it; else do nothing. Every action gets ``N(mu_2, sigma_2^2)``
+noise on its motion components (orientation noise scaled by the bound ratio 0.1/0.02); the
+gripper component is left noise-free so that noise never toggles the gripper by itself.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from osg_control.env import ACTION_BOUNDS, GRIPPER_CLOSED_CMD, GRIPPER_OPEN_CMD
+from osg_control.ik import quat_to_matrix, rotation_error
+from osg_control.skills import TOP_DOWN_QUAT, ScriptParams, SkillSpec
+
+_TARGET_ROT = quat_to_matrix(np.array(TOP_DOWN_QUAT))
+_NOISE_SCALE = np.concatenate([np.ones(3), np.full(3, ACTION_BOUNDS[3] / ACTION_BOUNDS[0])])
+
+
+class ScriptedPolicy:
+    """Algorithm 1 for one skill; call ``reset`` at the start of every episode."""
+
+    def __init__(
+        self, skill: SkillSpec, rng: np.random.Generator, params: ScriptParams | None = None
+    ) -> None:
+        self.skill = skill
+        self.params = params or skill.script
+        self.rng = rng
+        self.threshold = 0.0
+        self._step = 0
+
+    def reset(self) -> None:
+        """Draw this episode's threshold and restart at the first waypoint."""
+        p = self.params
+        self.threshold = max(0.0, float(self.rng.normal(p.threshold_mean, p.threshold_std)))
+        self._step = 0
+
+    @property
+    def done(self) -> bool:
+        """Every waypoint's step budget is used up."""
+        return self._step >= len(self.skill.waypoints) * self.params.steps_per_waypoint
+
+    def __call__(self, obs: np.ndarray) -> np.ndarray:
+        """The noisy action for an observation (10-D, see ``osg_control.env``)."""
+        index = min(self._step // self.params.steps_per_waypoint, len(self.skill.waypoints) - 1)
+        waypoint = self.skill.waypoints[index]
+        self._step += 1
+        action = np.zeros(7)
+        position_error = np.asarray(waypoint.position) - obs[:3]
+        wanted = GRIPPER_OPEN_CMD if waypoint.gripper == "open" else GRIPPER_CLOSED_CMD
+        if np.linalg.norm(position_error) > self.threshold:
+            action[:3] = _scale_into(position_error, ACTION_BOUNDS[0])
+            action[3:6] = _scale_into(
+                rotation_error(quat_to_matrix(obs[3:7]), _TARGET_ROT), ACTION_BOUNDS[3]
+            )
+        elif obs[7] != wanted:
+            action[6] = wanted
+        noise = self.rng.normal(self.params.noise_mean, self.params.noise_std, 6) * _NOISE_SCALE
+        action[:6] += noise
+        return np.clip(action, -ACTION_BOUNDS, ACTION_BOUNDS)
+
+
+def _scale_into(vector: np.ndarray, bound: float) -> np.ndarray:
+    """Scale a vector so that no component exceeds ``bound``, keeping its direction."""
+    largest = float(np.abs(vector).max())
+    return vector * (bound / largest) if largest > bound else vector
