@@ -148,7 +148,8 @@ class KitchenEnv(gym.Env):
             [pos, canonical_quat(quat), [self._gripper_cmd, force, float(fingers.sum())]]
         )
 
-    def _observe(self) -> np.ndarray:
+    def observe(self) -> np.ndarray:
+        """The current observation (with the configured noise on the TCP position)."""
         obs = self._true_obs()
         if self.config.obs_noise_std > 0:
             obs[:3] += self.np_random.normal(0.0, self.config.obs_noise_std, 3)
@@ -192,7 +193,7 @@ class KitchenEnv(gym.Env):
             )
         self._steps = 0
         self._succeeded = False
-        return self._observe(), self._info()
+        return self.observe(), self._info()
 
     def _default_holding(self) -> str | None:
         if self.skill is None:
@@ -320,7 +321,7 @@ class KitchenEnv(gym.Env):
         info["action_applied"] = action
         if failure is not None:
             info["failure"] = failure
-        return self._observe(), reward, terminated, truncated, info
+        return self.observe(), reward, terminated, truncated, info
 
     def _simulate(self) -> str | None:
         """Run the physics substeps; return a failure reason if the simulation diverged."""

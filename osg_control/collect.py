@@ -1,0 +1,184 @@
+"""Scripted noisy data collection (Algorithm 1): parallel, deterministic, resumable.
+
+Episode ``i`` of skill ``k`` draws everything from ``SeedSequence([seed, k, i])``, so the
+data set is the same whatever the number of workers. Episodes are written in chunks, each
+atomically, under ``<out>/.parts/<skill>/``; an interrupted run keeps every finished chunk
+and the same command continues where it stopped. When all chunks exist they are merged
+into ``<out>/<skill>.h5`` (atomically) and the parts are removed.
+"""
+
+from __future__ import annotations
+
+import shutil
+from collections.abc import Callable, Iterable, Iterator
+from concurrent.futures import ProcessPoolExecutor
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any, Protocol, TypeVar
+
+import numpy as np
+from tqdm import tqdm
+
+from osg_control import __version__
+from osg_control.datasets import Dataset, Episode, load_dataset, write_episodes
+from osg_control.env import EnvConfig, KitchenEnv
+from osg_control.scene import WORLD_FIELDS
+from osg_control.scripted import ScriptedPolicy
+from osg_control.skills import SKILLS, SkillSpec, get_skill
+
+DEFAULT_EPISODES = 300
+CHUNK_EPISODES = 25
+T = TypeVar("T")
+R = TypeVar("R")
+
+
+class TaskExecutor(Protocol):
+    """Maps a function over items, yielding results in order (local pool, Ray, ...)."""
+
+    def map(self, fn: Callable[[T], R], items: Iterable[T]) -> Iterator[R]:
+        """Apply ``fn`` to every item; results come back in the items' order."""
+        ...
+
+
+class LocalExecutor:
+    """Runs tasks in this process (``workers=1``) or a local process pool."""
+
+    def __init__(self, workers: int = 1) -> None:
+        if workers < 1:
+            raise ValueError(f"workers must be >= 1, got {workers}")
+        self.workers = workers
+
+    def map(self, fn: Callable[[T], R], items: Iterable[T]) -> Iterator[R]:
+        if self.workers == 1:
+            yield from map(fn, items)
+            return
+        with ProcessPoolExecutor(max_workers=self.workers) as pool:
+            yield from pool.map(fn, items)
+
+
+_ENVS: dict[str, KitchenEnv] = {}
+_SKILL_INDEX = {skill.name: index for index, skill in enumerate(SKILLS)}
+
+
+def _env_for(skill: SkillSpec) -> KitchenEnv:
+    """One env per skill per process, reused across episodes."""
+    if skill.name not in _ENVS:
+        _ENVS[skill.name] = KitchenEnv(skill=skill, config=EnvConfig())
+    return _ENVS[skill.name]
+
+
+def run_scripted_episode(skill: SkillSpec, seed: int, index: int) -> Episode:
+    """Run Algorithm 1 for one episode from a random start in the skill's initiation region."""
+    skill_index = _SKILL_INDEX.get(skill.name, len(SKILLS))
+    rng = np.random.default_rng(np.random.SeedSequence([seed, skill_index, index]))
+    env = _env_for(skill)
+    obs, info = env.reset(
+        seed=int(rng.integers(2**31)),
+        options={"radius": skill.start_radius, "angle": skill.start_angle},
+    )
+    policy = ScriptedPolicy(skill, rng)
+    policy.reset()
+    rows: dict[str, list[Any]] = {k: [] for k in ("obs", "next", "act", "rew", "term", "world")}
+    terminated = False
+    while not terminated and not policy.done:
+        action = policy(obs)
+        next_obs, reward, terminated, _truncated, info = env.step(action)
+        rows["obs"].append(obs)
+        rows["next"].append(next_obs)
+        rows["act"].append(info["action_applied"])
+        rows["rew"].append(reward)
+        rows["term"].append(terminated and reward > 0)
+        rows["world"].append(info["world"].as_array())
+        obs = next_obs
+    truncations = np.zeros(len(rows["act"]), dtype=bool)
+    if not rows["term"][-1]:
+        truncations[-1] = True
+    return Episode(
+        observations=np.asarray(rows["obs"], dtype=np.float32),
+        next_observations=np.asarray(rows["next"], dtype=np.float32),
+        actions=np.asarray(rows["act"], dtype=np.float32),
+        rewards=np.asarray(rows["rew"], dtype=np.float32),
+        terminations=np.asarray(rows["term"], dtype=bool),
+        truncations=truncations,
+        world_states=np.asarray(rows["world"], dtype=np.float32),
+    )
+
+
+@dataclass(frozen=True)
+class ChunkTask:
+    """Episodes ``[start, stop)`` of one skill, written to ``path``."""
+
+    skill: SkillSpec
+    seed: int
+    start: int
+    stop: int
+    path: Path
+
+
+def _run_chunk(task: ChunkTask) -> tuple[int, int]:
+    episodes = [run_scripted_episode(task.skill, task.seed, i) for i in range(task.start, task.stop)]
+    write_episodes(task.path, episodes, _attrs(task.skill, task.seed))
+    return len(episodes), sum(e.success for e in episodes)
+
+
+def _attrs(skill: SkillSpec, seed: int) -> dict[str, Any]:
+    return {
+        "skill": skill.to_json(),
+        "seed": seed,
+        "package_version": __version__,
+        "world_fields": ",".join(WORLD_FIELDS),
+        "collector": "osg_control.collect (Algorithm 1)",
+    }
+
+
+def parts_dir(out: Path, skill: SkillSpec) -> Path:
+    """Where the chunks of an unfinished collection live."""
+    return out / ".parts" / skill.name
+
+
+def collect_skill(
+    skill: SkillSpec | str,
+    episodes: int,
+    seed: int,
+    out: Path,
+    executor: TaskExecutor | None = None,
+    progress: bool = True,
+    chunk_episodes: int = CHUNK_EPISODES,
+) -> Dataset:
+    """Collect ``episodes`` scripted episodes of a skill into ``<out>/<skill>.h5``.
+
+    Finished chunks of an earlier, interrupted run with the same arguments are kept.
+
+    Returns:
+        The merged, validated data set.
+    """
+    skill = get_skill(skill) if isinstance(skill, str) else skill
+    out = Path(out)
+    final = out / f"{skill.name}.h5"
+    if final.exists():
+        existing = load_dataset(final)
+        if existing.num_episodes == episodes and int(existing.attrs["seed"]) == seed:
+            return existing
+    parts = parts_dir(out, skill)
+    tasks = []
+    for start in range(0, episodes, chunk_episodes):
+        stop = min(start + chunk_episodes, episodes)
+        path = parts / f"seed{seed}_{start:06d}_{stop:06d}.h5"
+        tasks.append(ChunkTask(skill, seed, start, stop, path))
+    todo = [t for t in tasks if not t.path.exists()]
+    done_eps = sum(t.stop - t.start for t in tasks if t.path.exists())
+    successes = sum(
+        int(load_dataset(t.path).episode_successes.sum()) for t in tasks if t.path.exists()
+    )
+    bar = tqdm(total=episodes, initial=done_eps, desc=skill.name, unit="ep", disable=not progress)
+    for count, wins in (executor or LocalExecutor()).map(_run_chunk, todo):
+        done_eps += count
+        successes += wins
+        bar.update(count)
+        bar.set_postfix(success=f"{successes / max(done_eps, 1):.2f}")
+    bar.close()
+    merged = [load_dataset(t.path) for t in tasks]
+    all_episodes = [d.episode(i) for d in merged for i in range(d.num_episodes)]
+    write_episodes(final, all_episodes, _attrs(skill, seed))
+    shutil.rmtree(parts, ignore_errors=True)
+    return load_dataset(final)
