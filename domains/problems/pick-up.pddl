@@ -1,0 +1,8 @@
+; pick the cube up; from home with door-closed cube-on-counter hand-empty
+(define (problem pick-up)
+    (:domain osg-kitchen)
+    (:requirements :action-costs :strips :typing)
+    (:init (= (total-cost) 0) (at home) (cube-on-counter) (door-closed) (hand-empty))
+    (:goal (cube-lifted))
+    (:metric minimize (total-cost))
+)

@@ -1,0 +1,111 @@
+"""``osg plan``: the cheapest skill sequence for a kitchen goal, or for any PDDL pair."""
+
+from __future__ import annotations
+
+import argparse
+import json
+from pathlib import Path
+from typing import TypeAlias
+
+from osg_control.errors import PlanningError
+from osg_control.graph import load_graph
+from osg_control.pddl_io import DEFAULT_WORLD
+from osg_control.planning.api import PLANNERS, plan_files, plan_for_goal
+from osg_control.planning.task import PlanResult
+
+Verbs: TypeAlias = "argparse._SubParsersAction[argparse.ArgumentParser]"
+NO_PLAN_EXIT = 3
+"""Exit status when the planner proves there is no plan."""
+
+
+def format_plan(result: PlanResult) -> str:
+    """A plan (or the unreached goal facts) as lines of text.
+
+    Args:
+        result: the planner's answer.
+
+    Returns:
+        The text, ending with the search statistics.
+    """
+    stats = result.stats
+    goal = " ".join(result.goal)
+    effort = (
+        f"{stats.expanded} expanded, {stats.generated} generated states in "
+        f"{stats.time_s * 1000:.1f} ms"
+    )
+    if result.steps is None:
+        return (
+            f"no plan for {goal} [{result.planner}]; goal facts unreached: "
+            f"{' '.join(result.unreached)}\n{effort}"
+        )
+    width = max((len(step.action) for step in result.steps), default=0)
+    lines = [f"plan for {goal} [{result.planner}]: {len(result.steps)} steps, cost {result.cost}"]
+    lines += [
+        f"{i:3d}. {step.action:<{width}}  {step.cost:6d}"
+        for i, step in enumerate(result.steps, start=1)
+    ]
+    return "\n".join([*lines, effort])
+
+
+def run_plan(args: argparse.Namespace) -> int:
+    """Plan and print the result.
+
+    Args:
+        args: parsed ``osg plan`` arguments.
+
+    Returns:
+        0 with a plan, ``NO_PLAN_EXIT`` without one.
+
+    Raises:
+        PlanningError: neither or both of ``--goal`` and DOMAIN PROBLEM given, or not two
+            files.
+    """
+    if args.files:
+        if args.goal is not None:
+            raise PlanningError("give either DOMAIN PROBLEM or --goal, not both")
+        if len(args.files) != 2:
+            raise PlanningError(f"give a DOMAIN and a PROBLEM file, got {len(args.files)} file(s)")
+        result = plan_files(args.files[0], args.files[1], args.planner)
+    else:
+        if args.goal is None:
+            raise PlanningError(
+                'give a goal (--goal "door-open cube-in-cabinet") or DOMAIN PROBLEM files'
+            )
+        graph = load_graph(args.graph) if args.graph else None
+        result = plan_for_goal(args.goal, args.from_node, args.facts.split(), args.planner, graph)
+    print(json.dumps(result.to_dict(), indent=2) if args.json else format_plan(result))
+    return 0 if result.solved else NO_PLAN_EXIT
+
+
+def register(subparsers: Verbs) -> None:
+    """Add ``osg plan``."""
+    parser = subparsers.add_parser(
+        "plan",
+        help="plan a skill sequence for a goal",
+        description="Find the cheapest skill sequence (operator costs from success rates) "
+        "for a kitchen goal, or solve any STRIPS/typing/action-costs PDDL pair.",
+        epilog=f"Exit status: 0 with a plan, {NO_PLAN_EXIT} when there is none, 1 on errors.",
+    )
+    parser.add_argument(
+        "files",
+        nargs="*",
+        type=Path,
+        metavar="DOMAIN PROBLEM",
+        help="PDDL domain and problem files (instead of --goal)",
+    )
+    parser.add_argument(
+        "--goal", help='facts to reach, e.g. "door-open cube-in-cabinet" or "(at home)"'
+    )
+    parser.add_argument("--from-node", default="home", help="start node (default: home)")
+    world = " ".join(DEFAULT_WORLD)
+    parser.add_argument(
+        "--facts", default=world, help=f'world facts true at the start (default: "{world}")'
+    )
+    parser.add_argument(
+        "--graph", type=Path, help="skill graph JSON with success rates (default: the skill specs)"
+    )
+    parser.add_argument(
+        "--planner", choices=sorted(PLANNERS), default="astar", help="search (default: astar)"
+    )
+    parser.add_argument("--json", action="store_true", help="print the result as JSON")
+    parser.set_defaults(func=run_plan)

@@ -1,0 +1,559 @@
+"""The skill graph: nodes (TCP regions) and skill edges with effects, from the specs or from data.
+
+The planner only needs the symbolic part (edges, pre/effects, success rates); the data-driven
+build checks the specs against what the recorded episodes actually show and lists every
+disagreement instead of failing, so a reviewer can decide which side is wrong.
+"""
+
+from __future__ import annotations
+
+import json
+from collections.abc import Iterable, Mapping, Sequence
+from dataclasses import asdict, dataclass, field, replace
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+from matplotlib.figure import Figure
+from matplotlib.patches import FancyArrowPatch
+from scipy.cluster.hierarchy import fcluster, linkage
+
+from osg_control.datasets import Dataset
+from osg_control.errors import DatasetError, SkillSpecError
+from osg_control.scene import WorldState, world_state_from_array
+from osg_control.skills import NODES, SKILLS, WORLD_FACTS, SkillSpec, get_skill
+
+GRAPH_FORMAT = "osg-skill-graph"
+GRAPH_VERSION = 1
+MATCH_RADIUS = 0.03
+"""A cluster centre farther than this from every spec node is a disagreement [m]."""
+CLUSTER_DISTANCE = 0.03
+"""Average-linkage cut: clusters whose mean point distance exceeds this stay apart [m]."""
+MAX_POINTS_PER_SET = 200
+"""Start or end positions kept per skill for clustering (a seeded subsample beyond that)."""
+EFFECT_VOTE = 0.5
+"""Fraction of successful episodes in which a fact must change to count as an effect."""
+
+
+@dataclass(frozen=True)
+class Observed:
+    """What the data says about a node or a skill's effects.
+
+    Attributes:
+        position: mean TCP position of the matched cluster [m] (nodes only).
+        points: start/end positions in that cluster (nodes) or successful episodes (skills).
+        add: facts the episodes made true (skills only).
+        delete: facts the episodes made false (skills only).
+    """
+
+    position: tuple[float, float, float] | None = None
+    points: int = 0
+    add: tuple[str, ...] = ()
+    delete: tuple[str, ...] = ()
+
+
+@dataclass(frozen=True)
+class GraphNode:
+    """A region of the skill graph, named after its spec node."""
+
+    name: str
+    position: tuple[float, float, float]
+    gripper: str = "open"
+    observed: Observed | None = None
+
+
+@dataclass(frozen=True)
+class SkillEdge:
+    """A skill as a graph edge: start node -> end node, world pre/effects, success rate."""
+
+    name: str
+    start: str
+    end: str
+    preconditions: tuple[str, ...] = ()
+    add_effects: tuple[str, ...] = ()
+    del_effects: tuple[str, ...] = ()
+    success_rate: float | None = None
+    observed: Observed | None = None
+
+
+@dataclass(frozen=True)
+class Disagreement:
+    """One place where the data contradicts the specs.
+
+    Attributes:
+        kind: ``node`` (cluster/spec node mismatch), ``region`` (a skill starts or ends
+            elsewhere than its spec says), ``effects`` or ``no-data``.
+        subject: the node or skill concerned.
+        detail: a sentence for people.
+    """
+
+    kind: str
+    subject: str
+    detail: str
+
+
+@dataclass(frozen=True)
+class SkillGraph:
+    """Nodes, skill edges and world facts; what the PDDL domain is generated from."""
+
+    nodes: tuple[GraphNode, ...]
+    edges: tuple[SkillEdge, ...]
+    facts: tuple[str, ...] = WORLD_FACTS
+    disagreements: tuple[Disagreement, ...] = field(default=())
+
+    @property
+    def node_names(self) -> tuple[str, ...]:
+        """The node names, in order."""
+        return tuple(node.name for node in self.nodes)
+
+    def to_dict(self) -> dict[str, Any]:
+        """A JSON-ready dictionary (see ``save_graph``)."""
+        return {"format": GRAPH_FORMAT, "version": GRAPH_VERSION, **asdict(self)}
+
+
+def _edge_from_spec(spec: SkillSpec, success_rate: float | None) -> SkillEdge:
+    return SkillEdge(
+        name=spec.name,
+        start=spec.start,
+        end=spec.end,
+        preconditions=tuple(sorted(spec.preconditions)),
+        add_effects=tuple(sorted(spec.add_effects)),
+        del_effects=tuple(sorted(spec.del_effects)),
+        success_rate=success_rate,
+    )
+
+
+def _checked_rates(success_rates: Mapping[str, float] | None) -> dict[str, float]:
+    rates = dict(success_rates or {})
+    for name, rate in rates.items():
+        get_skill(name)
+        if not 0.0 <= rate <= 1.0:
+            raise SkillSpecError(f"skill {name!r}: success rate {rate} is outside [0, 1]")
+    return rates
+
+
+def graph_from_specs(
+    skills: Sequence[SkillSpec] = SKILLS, success_rates: Mapping[str, float] | None = None
+) -> SkillGraph:
+    """Build the graph from the skill specs alone (no data needed).
+
+    Args:
+        skills: the skills to include.
+        success_rates: measured success rate per skill name (optional, each in [0, 1]).
+
+    Returns:
+        The graph with one node per spec node used by a skill.
+
+    Raises:
+        SkillSpecError: a rate names an unknown skill or lies outside [0, 1].
+    """
+    rates = _checked_rates(success_rates)
+    used = {name for spec in skills for name in (spec.start, spec.end)}
+    nodes = tuple(
+        GraphNode(node.name, node.position, node.gripper)
+        for node in NODES.values()
+        if node.name in used
+    )
+    edges = tuple(_edge_from_spec(spec, rates.get(spec.name)) for spec in skills)
+    return SkillGraph(nodes=nodes, edges=edges)
+
+
+def world_facts(world: WorldState) -> frozenset[str]:
+    """Abstract a world state into the kitchen's PDDL facts (``skills.WORLD_FACTS``).
+
+    Args:
+        world: the simulator's world state.
+
+    Returns:
+        The facts that hold; hand-empty means neither the cube nor the handle is grasped.
+    """
+    facts = {"door-open" if world.door_open else "door-closed"}
+    named = {
+        "cube-in-cabinet": world.cube_in_cabinet,
+        "cube-on-counter": world.cube_on_counter,
+        "cube-lifted": world.cube_lifted,
+        "holding-cube": world.cube_grasped,
+        "holding-handle": world.handle_grasped,
+        "hand-empty": not (world.cube_grasped or world.handle_grasped),
+    }
+    return frozenset(facts | {name for name, holds in named.items() if holds})
+
+
+@dataclass(frozen=True)
+class _PointSet:
+    skill: str
+    role: str  # "start" or "end"
+    node: str  # the spec node it should match
+    points: np.ndarray
+
+
+def _point_sets(dataset: Dataset, spec: SkillSpec, rng: np.random.Generator) -> list[_PointSet]:
+    starts = dataset.arrays["observations"][dataset.episode_starts, :3]
+    last = dataset.episode_starts + dataset.episode_lengths - 1
+    ends = dataset.arrays["next_observations"][last[dataset.episode_successes], :3]
+    sets = []
+    for role, node, found in (("start", spec.start, starts), ("end", spec.end, ends)):
+        points = np.asarray(found, dtype=float)
+        if len(points) > MAX_POINTS_PER_SET:
+            points = points[rng.choice(len(points), MAX_POINTS_PER_SET, replace=False)]
+        if len(points):
+            sets.append(_PointSet(spec.name, role, node, points))
+    return sets
+
+
+def _cluster(
+    sets: Sequence[_PointSet], cluster_distance: float
+) -> tuple[np.ndarray, list[np.ndarray]]:
+    """Average-linkage clusters of all points; returns cluster centres and per-set labels."""
+    points = np.concatenate([s.points for s in sets])
+    if len(points) == 1:
+        labels = np.zeros(1, dtype=int)
+    else:
+        labels = fcluster(linkage(points, "average"), cluster_distance, "distance") - 1
+    centres = np.array([points[labels == k].mean(axis=0) for k in range(labels.max() + 1)])
+    bounds = np.cumsum([0] + [len(s.points) for s in sets])
+    return centres, [labels[a:b] for a, b in zip(bounds[:-1], bounds[1:], strict=True)]
+
+
+def _xyz(values: Iterable[float]) -> tuple[float, float, float]:
+    x, y, z = (float(v) for v in values)
+    return (x, y, z)
+
+
+def _fmt(position: Iterable[float]) -> str:
+    return "(" + ", ".join(f"{v:.3f}" for v in position) + ")"
+
+
+def _match_regions(
+    sets: Sequence[_PointSet], cluster_distance: float, match_radius: float
+) -> tuple[dict[str, Observed], list[Disagreement]]:
+    """Cluster the start/end positions and match clusters to the spec nodes."""
+    centres, labels = _cluster(sets, cluster_distance)
+    names = list(NODES)
+    spec_positions = np.array([NODES[name].position for name in names])
+    distances = np.linalg.norm(centres[:, None, :] - spec_positions[None, :, :], axis=2)
+    nearest = distances.argmin(axis=1)
+    counts = np.bincount(np.concatenate(labels), minlength=len(centres))
+    matched: dict[int, str] = {}
+    issues = []
+    for k, centre in enumerate(centres):
+        node, gap = names[nearest[k]], distances[k, nearest[k]]
+        if gap > match_radius:
+            issues.append(
+                Disagreement(
+                    "node",
+                    node,
+                    f"cluster at {_fmt(centre)} ({counts[k]} points) is {gap * 100:.1f} cm "
+                    f"from the nearest spec node {node!r} (limit {match_radius * 100:.0f} cm)",
+                )
+            )
+        else:
+            matched[k] = node
+    observed: dict[str, Observed] = {}
+    for k, node in matched.items():
+        best = observed.get(node)
+        if best is None or counts[k] > best.points:
+            observed[node] = Observed(_xyz(centres[k]), int(counts[k]))
+    for point_set, set_labels in zip(sets, labels, strict=True):
+        found = sorted({matched.get(int(k), "no node") for k in set_labels})
+        if found != [point_set.node]:
+            issues.append(
+                Disagreement(
+                    "region",
+                    point_set.skill,
+                    f"{point_set.role} positions fall in {', '.join(found)}; "
+                    f"spec says {point_set.node!r}",
+                )
+            )
+    used = {s.node for s in sets}
+    issues.extend(
+        Disagreement(
+            "node", name, f"spec node {name!r} has no cluster within {match_radius * 100:.0f} cm"
+        )
+        for name in names
+        if name in used and name not in observed
+    )
+    return observed, issues
+
+
+def _observed_effects(dataset: Dataset) -> Observed:
+    """Majority-vote add/delete effects over the successful episodes (first vs last step)."""
+    worlds = dataset.arrays["world_states"]
+    firsts = dataset.episode_starts[dataset.episode_successes]
+    lasts = firsts + dataset.episode_lengths[dataset.episode_successes] - 1
+    added: dict[str, int] = {}
+    deleted: dict[str, int] = {}
+    for first, last in zip(firsts, lasts, strict=True):
+        before = world_facts(world_state_from_array(worlds[first]))
+        after = world_facts(world_state_from_array(worlds[last]))
+        for fact in after - before:
+            added[fact] = added.get(fact, 0) + 1
+        for fact in before - after:
+            deleted[fact] = deleted.get(fact, 0) + 1
+    quorum = EFFECT_VOTE * len(firsts)
+    return Observed(
+        points=len(firsts),
+        add=tuple(sorted(f for f, n in added.items() if n > quorum)),
+        delete=tuple(sorted(f for f, n in deleted.items() if n > quorum)),
+    )
+
+
+def _effect_disagreement(edge: SkillEdge, observed: Observed) -> Disagreement | None:
+    if observed.points == 0:
+        return Disagreement("effects", edge.name, "no successful episode to derive effects from")
+    diffs = []
+    for label, spec, seen in (
+        ("add", edge.add_effects, observed.add),
+        ("del", edge.del_effects, observed.delete),
+    ):
+        if missing := sorted(set(spec) - set(seen)):
+            diffs.append(f"spec {label} {missing} not seen in data")
+        if extra := sorted(set(seen) - set(spec)):
+            diffs.append(f"data {label} {extra} not in spec")
+    if not diffs:
+        return None
+    return Disagreement(
+        "effects", edge.name, f"{'; '.join(diffs)} ({observed.points} successful episodes)"
+    )
+
+
+def graph_from_datasets(
+    datasets: Sequence[Dataset],
+    success_rates: Mapping[str, float] | None = None,
+    cluster_distance: float = CLUSTER_DISTANCE,
+    match_radius: float = MATCH_RADIUS,
+    seed: int = 0,
+) -> SkillGraph:
+    """Build the graph from recorded data sets and report where they contradict the specs.
+
+    Regions: the start TCP positions of all episodes and the end positions of the successful
+    ones are clustered together (average linkage) and each cluster is matched to the nearest
+    spec node. Effects: per skill, the facts that change between the first and the last step
+    of a successful episode (majority vote). Edges keep the spec's pre/effects; what the data
+    showed is stored beside them (``observed``) and every mismatch is a ``Disagreement``.
+
+    Args:
+        datasets: one loaded data set per skill (``datasets.load_dataset``).
+        success_rates: measured success rate per skill name (optional, each in [0, 1]).
+        cluster_distance: average-linkage cut [m].
+        match_radius: largest cluster-centre to spec-node distance that still matches [m].
+        seed: seeds the subsample of large point sets.
+
+    Returns:
+        The graph over all twelve skills; skills without data are listed as ``no-data``.
+
+    Raises:
+        DatasetError: no data set, or two data sets for the same skill.
+        SkillSpecError: a data set or rate names an unknown skill, or a rate is out of range.
+    """
+    if not datasets:
+        raise DatasetError("no data sets given to build the skill graph from")
+    by_skill: dict[str, Dataset] = {}
+    for dataset in datasets:
+        name = dataset.skill_name
+        if name in by_skill:
+            raise DatasetError(
+                f"{dataset.path}: skill {name!r} already read from {by_skill[name].path}"
+            )
+        get_skill(name)
+        by_skill[name] = dataset
+    usable = {name: d for name, d in by_skill.items() if d.num_episodes}
+    graph = graph_from_specs(success_rates=success_rates)
+    rng = np.random.default_rng(seed)
+    sets = [s for name, d in usable.items() for s in _point_sets(d, get_skill(name), rng)]
+    observed_nodes, issues = (
+        _match_regions(sets, cluster_distance, match_radius) if sets else ({}, [])
+    )
+    edges = []
+    for edge in graph.edges:
+        if edge.name not in usable:
+            where = (
+                f"{by_skill[edge.name].path} has no episodes"
+                if edge.name in by_skill
+                else ("no data set for this skill")
+            )
+            issues.append(Disagreement("no-data", edge.name, where))
+            edges.append(edge)
+            continue
+        observed = _observed_effects(usable[edge.name])
+        if (issue := _effect_disagreement(edge, observed)) is not None:
+            issues.append(issue)
+        edges.append(replace(edge, observed=observed))
+    nodes = tuple(replace(node, observed=observed_nodes.get(node.name)) for node in graph.nodes)
+    return replace(graph, nodes=nodes, edges=tuple(edges), disagreements=tuple(issues))
+
+
+def _observed_from(data: Mapping[str, Any] | None) -> Observed | None:
+    if data is None:
+        return None
+    position = data.get("position")
+    return Observed(
+        position=None if position is None else _xyz(position),
+        points=int(data.get("points", 0)),
+        add=tuple(data.get("add", ())),
+        delete=tuple(data.get("delete", ())),
+    )
+
+
+def graph_from_dict(data: Mapping[str, Any], source: str = "<graph>") -> SkillGraph:
+    """Rebuild a graph from ``SkillGraph.to_dict`` output.
+
+    Args:
+        data: the dictionary.
+        source: named in error messages (e.g. the file path).
+
+    Returns:
+        The graph.
+
+    Raises:
+        DatasetError: wrong format tag or version, or a missing or malformed field.
+    """
+    if data.get("format") != GRAPH_FORMAT or data.get("version") != GRAPH_VERSION:
+        raise DatasetError(
+            f"{source}: not a skill graph (expected format {GRAPH_FORMAT!r} version "
+            f"{GRAPH_VERSION}, got {data.get('format')!r} version {data.get('version')!r})"
+        )
+    try:
+        nodes = tuple(
+            GraphNode(
+                name=n["name"],
+                position=_xyz(n["position"]),
+                gripper=n.get("gripper", "open"),
+                observed=_observed_from(n.get("observed")),
+            )
+            for n in data["nodes"]
+        )
+        edges = tuple(
+            SkillEdge(
+                name=e["name"],
+                start=e["start"],
+                end=e["end"],
+                preconditions=tuple(e.get("preconditions", ())),
+                add_effects=tuple(e.get("add_effects", ())),
+                del_effects=tuple(e.get("del_effects", ())),
+                success_rate=e.get("success_rate"),
+                observed=_observed_from(e.get("observed")),
+            )
+            for e in data["edges"]
+        )
+        facts = tuple(data["facts"])
+        disagreements = tuple(Disagreement(**d) for d in data.get("disagreements", ()))
+    except (KeyError, TypeError, IndexError, ValueError) as err:
+        raise DatasetError(f"{source}: missing or malformed field: {err!r}") from err
+    _check_references(nodes, edges, facts, source)
+    return SkillGraph(nodes=nodes, edges=edges, facts=facts, disagreements=disagreements)
+
+
+def _check_references(
+    nodes: Sequence[GraphNode], edges: Sequence[SkillEdge], facts: Sequence[str], source: str
+) -> None:
+    node_names = {node.name for node in nodes}
+    for edge in edges:
+        for end in (edge.start, edge.end):
+            if end not in node_names:
+                raise DatasetError(f"{source}: skill {edge.name!r} names unknown node {end!r}")
+        unknown = sorted(set(edge.preconditions + edge.add_effects + edge.del_effects) - set(facts))
+        if unknown:
+            raise DatasetError(f"{source}: skill {edge.name!r} names unknown facts {unknown}")
+        rate = edge.success_rate
+        if rate is not None and not 0.0 <= rate <= 1.0:
+            raise DatasetError(f"{source}: skill {edge.name!r} success rate {rate} not in [0, 1]")
+
+
+def save_graph(graph: SkillGraph, path: str | Path) -> None:
+    """Write the graph as JSON (sorted keys, indented, so diffs stay readable)."""
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    path.write_text(json.dumps(graph.to_dict(), indent=2, sort_keys=True) + "\n")
+
+
+def load_graph(path: str | Path) -> SkillGraph:
+    """Read a graph written by ``save_graph``.
+
+    Raises:
+        DatasetError: the file is missing, not JSON or not a skill graph; names the file.
+    """
+    path = Path(path)
+    try:
+        data = json.loads(path.read_text())
+    except FileNotFoundError:
+        raise DatasetError(f"{path}: skill graph file not found") from None
+    except (OSError, json.JSONDecodeError) as err:
+        raise DatasetError(f"{path}: not a readable JSON skill graph ({err})") from err
+    if not isinstance(data, dict):
+        raise DatasetError(f"{path}: expected a JSON object")
+    return graph_from_dict(data, source=str(path))
+
+
+PROJECTIONS: dict[str, tuple[int, int]] = {"xy": (0, 1), "xz": (0, 2), "yz": (1, 2)}
+"""Axis pairs for ``draw_graph``; y-z (the robot seen from the front) separates the kitchen
+nodes best: several share x and y."""
+
+
+def draw_graph(graph: SkillGraph, path: str | Path, projection: str = "yz") -> None:
+    """Draw the graph as a PNG: nodes at their TCP positions, edges labelled by skill.
+
+    Args:
+        graph: the graph to draw.
+        path: the PNG file to write.
+        projection: ``xy``, ``xz`` or ``yz``, the plane the positions are projected on.
+
+    Raises:
+        ValueError: an unknown projection.
+    """
+    if projection not in PROJECTIONS:
+        raise ValueError(f"unknown projection {projection!r}; known: {', '.join(PROJECTIONS)}")
+    a, b = PROJECTIONS[projection]
+    where = {n.name: (n.position[a], n.position[b]) for n in graph.nodes}
+    fig = Figure(figsize=(10, 8))  # Agg canvas, no pyplot: never touches the global backend
+    ax = fig.subplots()
+    bend = 0.2
+    for edge in graph.edges:
+        p, q = np.array(where[edge.start]), np.array(where[edge.end])
+        ax.add_patch(
+            FancyArrowPatch(
+                where[edge.start],
+                where[edge.end],
+                connectionstyle=f"arc3,rad={bend}",
+                arrowstyle="-|>",
+                mutation_scale=14,
+                shrinkA=14,
+                shrinkB=14,
+                color="tab:gray",
+            )
+        )
+        normal = np.array([q[1] - p[1], p[0] - q[0]])  # arc3 bends towards this side
+        label = edge.name if edge.success_rate is None else f"{edge.name} ({edge.success_rate:.2f})"
+        x, y = (p + q) / 2 + bend / 2 * normal
+        ax.text(
+            x,
+            y,
+            label,
+            fontsize=7,
+            ha="center",
+            va="center",
+            bbox={"boxstyle": "round", "fc": "white", "ec": "none", "alpha": 0.8},
+        )
+    for node in graph.nodes:
+        x, y = where[node.name]
+        ax.scatter(
+            [x], [y], s=250, c="tab:orange" if node.gripper == "closed" else "tab:blue", zorder=3
+        )
+        ax.annotate(
+            node.name,
+            (x, y),
+            xytext=(0, 12),
+            textcoords="offset points",
+            ha="center",
+            fontsize=9,
+            weight="bold",
+        )
+    names = "xyz"
+    ax.set_xlabel(f"{names[a]} [m]")
+    ax.set_ylabel(f"{names[b]} [m]")
+    ax.set_aspect("equal")
+    ax.margins(0.15)
+    ax.set_title("Skill graph (blue: gripper open, orange: closed)")
+    fig.tight_layout()
+    Path(path).parent.mkdir(parents=True, exist_ok=True)
+    fig.savefig(path, dpi=120)

@@ -1,0 +1,171 @@
+"""Ground STRIPS tasks and plan results: the data the searches and backends exchange."""
+
+from __future__ import annotations
+
+from collections.abc import Iterable, Sequence
+from dataclasses import asdict, dataclass
+from functools import cached_property
+from typing import Any
+
+from osg_control.errors import PlanningError
+
+Fact = str
+"""A ground atom in PDDL syntax, e.g. ``(at home)`` or ``(door-open)``."""
+State = frozenset[Fact]
+
+
+@dataclass(frozen=True)
+class Operator:
+    """A ground action: applicable when ``pre <= state``; leads to ``(state - delete) | add``."""
+
+    name: str
+    pre: frozenset[Fact]
+    add: frozenset[Fact]
+    delete: frozenset[Fact]
+    cost: int
+
+    def applicable(self, state: State) -> bool:
+        """Whether every precondition holds in ``state``."""
+        return self.pre <= state
+
+    def apply(self, state: State) -> State:
+        """The successor state (delete first, then add, as in PDDL)."""
+        return (state - self.delete) | self.add
+
+
+@dataclass(frozen=True)
+class Task:
+    """A ground planning task.
+
+    Attributes:
+        name: the problem name.
+        init: the facts true initially (all others false).
+        goal: the facts that must hold at the end.
+        operators: the ground operators reachable in the delete relaxation.
+        reachable: every fact reachable in the delete relaxation (a superset of what any
+            plan can reach).
+    """
+
+    name: str
+    init: State
+    goal: frozenset[Fact]
+    operators: tuple[Operator, ...]
+    reachable: frozenset[Fact]
+
+    @cached_property
+    def _by_name(self) -> dict[str, Operator]:
+        return {op.name: op for op in self.operators}
+
+    def operator(self, name: str) -> Operator:
+        """Look an operator up by its name (``action arg1 arg2``).
+
+        Raises:
+            PlanningError: no such ground operator.
+        """
+        try:
+            return self._by_name[name]
+        except KeyError:
+            raise PlanningError(
+                f"task {self.name!r} has no (reachable) operator {name!r}"
+            ) from None
+
+    def simulate(self, names: Iterable[str]) -> State:
+        """Apply operators by name from ``init``, checking each is applicable.
+
+        Args:
+            names: operator names in plan order.
+
+        Returns:
+            The final state.
+
+        Raises:
+            PlanningError: an unknown operator, or one whose preconditions fail (listed).
+        """
+        state = self.init
+        for step, name in enumerate(names, start=1):
+            op = self.operator(name)
+            if not op.applicable(state):
+                missing = " ".join(sorted(op.pre - state))
+                raise PlanningError(f"step {step} ({name}): preconditions {missing} do not hold")
+            state = op.apply(state)
+        return state
+
+
+@dataclass(frozen=True)
+class PlanStep:
+    """One operator of a plan and its cost."""
+
+    action: str
+    cost: int
+
+
+@dataclass(frozen=True)
+class SearchStats:
+    """Search effort: states expanded and generated, and seconds spent."""
+
+    expanded: int
+    generated: int
+    time_s: float
+
+
+@dataclass(frozen=True)
+class PlanResult:
+    """A planner's answer.
+
+    Attributes:
+        planner: the planner's registry name.
+        task: the problem name.
+        goal: the goal facts.
+        steps: the plan, or None when there is none.
+        stats: search effort.
+        unreached: when there is no plan: the goal facts unreachable even in the delete
+            relaxation, or, if all of them are reachable there, every goal fact unmet initially.
+    """
+
+    planner: str
+    task: str
+    goal: tuple[Fact, ...]
+    steps: tuple[PlanStep, ...] | None
+    stats: SearchStats
+    unreached: tuple[Fact, ...] = ()
+
+    @property
+    def solved(self) -> bool:
+        """Whether a plan was found."""
+        return self.steps is not None
+
+    @property
+    def cost(self) -> int | None:
+        """The plan's total cost (None without a plan)."""
+        return None if self.steps is None else sum(step.cost for step in self.steps)
+
+    @property
+    def actions(self) -> tuple[str, ...]:
+        """The plan's operator names (empty without a plan)."""
+        return tuple(step.action for step in self.steps or ())
+
+    def to_dict(self) -> dict[str, Any]:
+        """A JSON-ready dictionary, with ``solved`` and ``cost`` spelled out."""
+        return {**asdict(self), "solved": self.solved, "cost": self.cost}
+
+
+def no_plan(planner: str, task: Task, stats: SearchStats) -> PlanResult:
+    """The "no plan" answer, naming the goal facts that stay unreached."""
+    unreached = task.goal - task.reachable or task.goal - task.init
+    return PlanResult(
+        planner, task.name, tuple(sorted(task.goal)), None, stats, tuple(sorted(unreached))
+    )
+
+
+def plan_result(planner: str, task: Task, names: Sequence[str], stats: SearchStats) -> PlanResult:
+    """A solved answer: look each step's cost up and check the plan reaches the goal.
+
+    Raises:
+        PlanningError: the plan is not executable or misses goal facts (a backend bug).
+    """
+    final = task.simulate(names)
+    if not task.goal <= final:
+        missing = " ".join(sorted(task.goal - final))
+        raise PlanningError(f"{planner}: plan for {task.name!r} does not reach {missing}")
+    steps = tuple(PlanStep(name, task.operator(name).cost) for name in names)
+    return PlanResult(planner, task.name, tuple(sorted(task.goal)), steps, stats)

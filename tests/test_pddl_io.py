@@ -1,0 +1,158 @@
+"""PDDL export/import: round trips, the committed domain, costs, goals, named parse errors."""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+import pytest
+from pddl.formatter import domain_to_string, problem_to_string
+
+from osg_control.errors import PDDLError, PlanningError
+from osg_control.graph import graph_from_specs
+from osg_control.pddl_io import (
+    DEFAULT_COST,
+    DEFAULT_WORLD,
+    KITCHEN_TASKS,
+    build_domain,
+    build_problem,
+    export_kitchen,
+    kitchen_problem,
+    parse_atoms,
+    read_domain,
+    read_problem,
+    skill_cost,
+    write_pddl,
+)
+from osg_control.skills import NODES, SKILLS, WORLD_FACTS
+
+REPO = Path(__file__).resolve().parents[1]
+COMMITTED = REPO / "domains"
+
+
+@pytest.fixture(scope="module")
+def exported(tmp_path_factory: pytest.TempPathFactory) -> list[Path]:
+    return export_kitchen(tmp_path_factory.mktemp("pddl"))
+
+
+def test_export_parse_export_is_stable(exported: list[Path], tmp_path: Path) -> None:
+    domain = read_domain(exported[0])
+    assert domain_to_string(domain) == domain_to_string(build_domain())
+    again = write_pddl(domain, tmp_path / "again.pddl")
+    assert domain_to_string(read_domain(again)) == domain_to_string(domain)
+    for task, path in zip(KITCHEN_TASKS, exported[1:], strict=True):
+        problem = read_problem(path)
+        assert problem_to_string(problem) == problem_to_string(
+            kitchen_problem(build_domain(), task)
+        )
+
+
+def test_committed_domain_and_problems_are_up_to_date(exported: list[Path]) -> None:
+    for path in exported:
+        committed = COMMITTED / path.relative_to(exported[0].parent)
+        assert committed.read_text() == path.read_text(), f"regenerate {committed}"
+
+
+def test_domain_has_one_operator_per_skill_with_effects_and_cost() -> None:
+    domain = build_domain()
+    assert domain.name == "osg-kitchen"
+    assert {str(r) for r in domain.requirements} == {":strips", ":typing", ":action-costs"}
+    assert {a.name for a in domain.actions} == {s.name for s in SKILLS}
+    assert {c.name for c in domain.constants} == set(NODES)
+    assert {p.name for p in domain.predicates} == {"at", *WORLD_FACTS}
+    text = domain_to_string(domain)
+    assert (
+        "(:action slide-door-open\n        :parameters ()\n"
+        "        :precondition (and (at handle) (door-closed) (holding-handle))\n"
+        "        :effect (and (door-open) (hand-empty) (not (door-closed)) "
+        "(not (holding-handle)) (at cabinet-front) (not (at handle)) "
+        f"(increase (total-cost) {DEFAULT_COST}))"
+    ) in text
+
+
+@pytest.mark.parametrize(
+    ("rate", "cost"),
+    [(None, DEFAULT_COST), (1.0, 1), (0.999999, 1), (0.5, 693), (0.9, 105), (0.0, 6908)],
+)
+def test_skill_cost_scale(rate: float | None, cost: int) -> None:
+    assert skill_cost(rate) == cost
+
+
+def test_success_rates_set_operator_costs() -> None:
+    graph = graph_from_specs(success_rates={"grab-cube": 0.8})
+    text = domain_to_string(build_domain(graph))
+    grab = text[text.index("(:action grab-cube") :]
+    assert f"(increase (total-cost) {round(-math.log(0.8) * 1000)})" in grab.split("(:action")[1]
+
+
+def test_problem_has_init_goal_and_metric() -> None:
+    problem = build_problem(build_domain(), "door-front", DEFAULT_WORLD, "door-open (at home)")
+    text = problem_to_string(problem)
+    assert "(:init (= (total-cost) 0) (at door-front) (cube-on-counter) (door-closed) " in text
+    assert "(:goal (and (door-open) (at home)))" in text
+    assert "(:metric minimize (total-cost))" in text
+
+
+def test_parse_atoms_forms() -> None:
+    assert parse_atoms("door-open (cube-in-cabinet)  (at home)") == (
+        ("door-open",),
+        ("cube-in-cabinet",),
+        ("at", "home"),
+    )
+    assert parse_atoms(["door-open", "door-open"]) == (("door-open",),)
+    with pytest.raises(PlanningError, match="cannot read atoms"):
+        parse_atoms("(at home")
+    with pytest.raises(PlanningError, match="empty atom"):
+        parse_atoms("()")
+
+
+def test_unknown_goal_fact_lists_known_ones() -> None:
+    with pytest.raises(PlanningError) as err:
+        build_problem(build_domain(), "home", DEFAULT_WORLD, "door-opn")
+    assert "unknown predicate 'door-opn'" in str(err.value)
+    assert all(fact in str(err.value) for fact in WORLD_FACTS)
+
+
+def test_unknown_node_lists_known_nodes() -> None:
+    with pytest.raises(PlanningError) as err:
+        build_problem(build_domain(), "kitchen-sink", DEFAULT_WORLD, "door-open")
+    assert "unknown object 'kitchen-sink'" in str(err.value)
+    assert all(node in str(err.value) for node in NODES)
+    with pytest.raises(PlanningError, match="takes 1 argument"):
+        build_problem(build_domain(), "home", DEFAULT_WORLD, "(at)")
+    with pytest.raises(PlanningError, match="empty goal"):
+        build_problem(build_domain(), "home", DEFAULT_WORLD, "")
+
+
+def _broken_copy(source: Path, tmp_path: Path, old: str, new: str) -> Path:
+    text = source.read_text()
+    assert old in text
+    path = tmp_path / source.name
+    path.write_text(text.replace(old, new, 1))
+    return path
+
+
+def test_syntax_error_names_file_line_and_expectation(exported: list[Path], tmp_path: Path) -> None:
+    path = _broken_copy(exported[0], tmp_path, "(hand-empty) (holding-cube)", "(hand-empty (")
+    line = next(i for i, t in enumerate(path.read_text().splitlines(), 1) if "(hand-empty (" in t)
+    with pytest.raises(PDDLError) as err:
+        read_domain(path)
+    message = str(err.value)
+    assert message.startswith(f"{path}:{line}:")
+    assert "expected" in message and "')'" in message
+
+
+def test_undefined_constant_names_its_line(exported: list[Path], tmp_path: Path) -> None:
+    path = _broken_copy(exported[0], tmp_path, "(at home) (hand-empty)", "(at hom) (hand-empty)")
+    line = next(i for i, t in enumerate(path.read_text().splitlines(), 1) if "(at hom)" in t)
+    with pytest.raises(PDDLError, match=rf"^{path}:{line}: .*'hom'"):
+        read_domain(path)
+
+
+def test_truncated_problem_and_missing_file(exported: list[Path], tmp_path: Path) -> None:
+    path = tmp_path / "cut.pddl"
+    path.write_text(exported[1].read_text().rstrip()[:-1])
+    with pytest.raises(PDDLError, match="end of file"):
+        read_problem(path)
+    with pytest.raises(PDDLError, match="not found"):
+        read_domain(tmp_path / "nope.pddl")
