@@ -116,7 +116,9 @@ class ChunkTask:
 
 
 def _run_chunk(task: ChunkTask) -> tuple[int, int]:
-    episodes = [run_scripted_episode(task.skill, task.seed, i) for i in range(task.start, task.stop)]
+    episodes = [
+        run_scripted_episode(task.skill, task.seed, i) for i in range(task.start, task.stop)
+    ]
     write_episodes(task.path, episodes, _attrs(task.skill, task.seed))
     return len(episodes), sum(e.success for e in episodes)
 

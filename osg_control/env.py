@@ -40,6 +40,11 @@ GRIPPER_OPEN_CMD = 1.0
 GRIPPER_CLOSED_CMD = -1.0
 _TOP_DOWN = np.array(TOP_DOWN_QUAT)
 _TOP_DOWN_ROT = Rotation.from_quat(np.roll(_TOP_DOWN, -1))
+_DIVERGENCE_WARNINGS = (
+    mujoco.mjtWarning.mjWARN_BADQPOS,
+    mujoco.mjtWarning.mjWARN_BADQVEL,
+    mujoco.mjtWarning.mjWARN_BADQACC,
+)
 
 
 @dataclass(frozen=True)
@@ -325,11 +330,17 @@ class KitchenEnv(gym.Env):
 
     def _simulate(self) -> str | None:
         """Run the physics substeps; return a failure reason if the simulation diverged."""
-        warnings_before = int(self.data.warning[mujoco.mjtWarning.mjWARN_BADQACC].number)
+        # MuJoCo resets the data (time back to 0) when it meets a bad qpos/qvel/qacc, so a
+        # divergence leaves a finite state behind: detect it by the warnings and the clock.
+        time_before = self.data.time
+        counts_before = [int(self.data.warning[w].number) for w in _DIVERGENCE_WARNINGS]
         for _ in range(self.n_substeps):
             mujoco.mj_step(self.model, self.data)
-        if int(self.data.warning[mujoco.mjtWarning.mjWARN_BADQACC].number) > warnings_before:
-            return "physics diverged: MuJoCo reported bad accelerations (mjWARN_BADQACC)"
+        for warning, count in zip(_DIVERGENCE_WARNINGS, counts_before, strict=True):
+            if int(self.data.warning[warning].number) > count:
+                return f"physics diverged: MuJoCo reported {warning.name} and reset the state"
+        if self.data.time < time_before:
+            return "physics diverged: MuJoCo reset the state"
         if not (np.all(np.isfinite(self.data.qpos)) and np.all(np.isfinite(self.data.qvel))):
             return "physics diverged: non-finite joint state"
         return None

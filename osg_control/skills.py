@@ -181,18 +181,18 @@ PLACE_INSIDE_POS = (0.64, 0.30, 0.135)
 """TCP where the cube is released on the cabinet's shelf."""
 
 SCRIPT_PARAMS: dict[str, ScriptParams] = {
-    "move-home-to-cube": ScriptParams(0.0656, 0.0197, 0.0, 0.006, 40),
+    "move-home-to-cube": ScriptParams(0.0616, 0.0185, 0.0, 0.006, 40),
     "move-cube-to-home": ScriptParams(0.0625, 0.0187, 0.0, 0.006, 40),
-    "move-home-to-door": ScriptParams(0.0563, 0.0169, 0.0, 0.006, 40),
+    "move-home-to-door": ScriptParams(0.0593, 0.0178, 0.0, 0.006, 40),
     "move-door-to-home": ScriptParams(0.0625, 0.0187, 0.0, 0.006, 40),
     "move-cabinet-to-cube": ScriptParams(0.0516, 0.0155, 0.0, 0.006, 40),
     "move-cabinet-to-home": ScriptParams(0.0625, 0.0187, 0.0, 0.006, 40),
-    "grab-handle": ScriptParams(0.0406, 0.0122, 0.0, 0.003, 25),
+    "grab-handle": ScriptParams(0.0386, 0.0116, 0.0, 0.003, 25),
     "slide-door-open": ScriptParams(0.0469, 0.0141, 0.0, 0.003, 25),
-    "grab-cube": ScriptParams(0.0375, 0.0113, 0.0, 0.003, 25),
-    "pick-up-cube": ScriptParams(0.0453, 0.0136, 0.0, 0.003, 25),
-    "move-cube-to-cabinet": ScriptParams(0.0375, 0.0113, 0.0, 0.003, 25),
-    "place-cube-in-cabinet": ScriptParams(0.05, 0.015, 0.0, 0.003, 25),
+    "grab-cube": ScriptParams(0.0405, 0.0121, 0.0, 0.003, 25),
+    "pick-up-cube": ScriptParams(0.0488, 0.0146, 0.0, 0.003, 25),
+    "move-cube-to-cabinet": ScriptParams(0.0405, 0.0121, 0.0, 0.003, 25),
+    "place-cube-in-cabinet": ScriptParams(0.048, 0.0144, 0.0, 0.003, 25),
 }
 """Algorithm 1's parameters per skill (threshold mean/std [m], noise mean/std, steps per
 waypoint), tuned by bisection on the threshold mean so that the scripted success rate lies

@@ -4,4 +4,12 @@ A module's ``register`` adds its parser and sets ``func`` (called with the parse
 returning the exit code). Add a module here to expose it.
 """
 
-COMMAND_MODULES: tuple[str, ...] = ("collect", "classifier", "train", "graph", "pddl", "plan",)
+COMMAND_MODULES: tuple[str, ...] = (
+    "collect",
+    "run",
+    "classifier",
+    "train",
+    "graph",
+    "pddl",
+    "plan",
+)

@@ -1,0 +1,114 @@
+"""``osg run`` (execute a task), ``osg eval-skills`` (Table I), ``osg evaluate tasks`` (IV/V)."""
+
+from __future__ import annotations
+
+import argparse
+import json
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from osg_control.env import EnvConfig, KitchenEnv
+from osg_control.evaluate import format_skill_table, skill_table, start_regions
+from osg_control.executor import load_executor
+from osg_control.paths import DEFAULTS_DIR
+from osg_control.skills import NODES
+
+
+def register(subparsers: argparse._SubParsersAction) -> None:
+    """Add ``run``, ``eval-skills`` and ``evaluate`` to the ``osg`` parser."""
+    run = subparsers.add_parser("run", help="execute a task: classify, plan, run skills")
+    run.add_argument("--goal", required=True, help='world facts, e.g. "door-open cube-in-cabinet"')
+    run.add_argument(
+        "--start",
+        default="random",
+        help="'random' (one of the 8 start regions, 15 cm / 0.2 rad) or a node name",
+    )
+    run.add_argument("--episodes", type=int, default=1)
+    run.add_argument("--noise", type=float, default=0.0, help="TCP observation noise sigma [m]")
+    run.add_argument("--seed", type=int, default=0)
+    run.add_argument("--door-opening", type=float, default=0.0, help="initial door travel [m]")
+    run.add_argument("--max-replans", type=int, default=2)
+    run.add_argument("--models", type=Path, default=None, help="defaults directory to use")
+    run.add_argument("--video", type=Path, default=None, help="write an MP4 of the first episode")
+    run.add_argument("--json", action="store_true")
+    run.set_defaults(func=run_task)
+
+    skills = subparsers.add_parser("eval-skills", help="Table I: learned skills under noise")
+    skills.add_argument("--episodes", type=int, default=200)
+    skills.add_argument("--noise", type=float, nargs="+", default=[0.0, 0.01, 0.02])
+    skills.add_argument("--seed", type=int, default=0)
+    skills.add_argument("--workers", type=int, default=2)
+    skills.add_argument("--skill", nargs="*", default=None, help="default: all twelve")
+    skills.add_argument(
+        "--models",
+        type=Path,
+        default=DEFAULTS_DIR / "skills",
+        help="skill checkpoint directory (default: shipped)",
+    )
+    skills.add_argument("--json", action="store_true")
+    skills.set_defaults(func=run_eval_skills)
+
+
+def _start_options(start: str, rng: np.random.Generator) -> dict[str, Any]:
+    if start == "random":
+        regions = start_regions()
+        _name, position = regions[int(rng.integers(len(regions)))]
+        return {"position": position, "radius": 0.15, "angle": 0.2}
+    if start not in NODES:
+        raise SystemExit(f"osg run: unknown start {start!r}; use 'random' or one of {list(NODES)}")
+    return {"node": start, "radius": 0.0, "angle": 0.0}
+
+
+def run_task(args: argparse.Namespace) -> int:
+    """Run ``--episodes`` executions of the goal and report each (exit 1 if any failed)."""
+    goal = args.goal.split()
+    executor = load_executor(args.models, max_replans=args.max_replans)
+    env = KitchenEnv(
+        config=EnvConfig(obs_noise_std=args.noise),
+        render_mode="rgb_array" if args.video else None,
+    )
+    rng = np.random.default_rng(args.seed)
+    results = []
+    frames: list[Any] = []
+    for episode in range(args.episodes):
+        options = _start_options(args.start, rng)
+        options["world"] = {"door_opening": args.door_opening}
+        obs, _ = env.reset(seed=int(rng.integers(2**31)), options=options)
+        if args.video and episode == 0:
+            executor.on_step = lambda e: frames.append(e.render())
+        else:
+            executor.on_step = None
+        result = executor.execute(goal, env, obs)
+        results.append(result.to_dict())
+        if not args.json:
+            status = "success" if result.success else f"FAILED ({result.failure})"
+            entry = f"entry {result.entry_skill}, " if result.entry_skill else ""
+            print(
+                f"episode {episode}: {status}; {entry}plan {' -> '.join(result.plan) or '(empty)'}"
+                f"; replans {result.replans}; {result.timings['total_s']:.1f} s"
+            )
+    if args.video and frames:
+        _write_video(args.video, frames)
+    successes = sum(r["success"] for r in results)
+    if args.json:
+        print(json.dumps({"episodes": results, "success_rate": successes / len(results)}, indent=2))
+    else:
+        print(f"success rate {successes}/{len(results)}")
+    return 0 if successes == len(results) else 1
+
+
+def _write_video(path: Path, frames: list[Any]) -> None:
+    import imageio.v2 as imageio
+
+    path.parent.mkdir(parents=True, exist_ok=True)
+    imageio.mimwrite(path, frames, fps=20)
+    print(f"video written to {path}")
+
+
+def run_eval_skills(args: argparse.Namespace) -> int:
+    """Print Table I."""
+    table = skill_table(args.models, args.noise, args.episodes, args.seed, args.workers, args.skill)
+    print(json.dumps(table, indent=2) if args.json else format_skill_table(table))
+    return 0

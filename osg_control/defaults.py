@@ -1,0 +1,42 @@
+"""The trained defaults shipped inside the package (skills + classifier), and their loader.
+
+``osg_control/defaults/`` holds ``skills/`` (one checkpoint per skill), ``classifier/`` and
+``manifest.json`` (the command, seeds, data-set hashes and package version that produced
+them). ``osg reproduce`` writes a directory of the same layout.
+"""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+from typing import Any
+
+from osg_control.classifier import StateClassifier
+from osg_control.errors import CheckpointError
+from osg_control.paths import DEFAULTS_DIR
+from osg_control.policy import SkillPolicy, load_policies
+
+MANIFEST = "manifest.json"
+
+
+def load_defaults(
+    directory: str | Path | None = None,
+) -> tuple[dict[str, SkillPolicy], StateClassifier]:
+    """Load skill policies and the classifier from ``directory`` (default: the shipped ones).
+
+    Raises:
+        CheckpointError: a missing or corrupt checkpoint, named.
+    """
+    root = Path(directory) if directory is not None else DEFAULTS_DIR
+    if not root.is_dir():
+        raise CheckpointError(f"{root}: defaults directory not found")
+    return load_policies(root / "skills"), StateClassifier.load(root / "classifier")
+
+
+def read_manifest(directory: str | Path | None = None) -> dict[str, Any]:
+    """The manifest of a defaults directory (how its checkpoints were made)."""
+    path = (Path(directory) if directory is not None else DEFAULTS_DIR) / MANIFEST
+    try:
+        return dict(json.loads(path.read_text()))
+    except (OSError, ValueError) as err:
+        raise CheckpointError(f"{path}: unreadable manifest ({err})") from err

@@ -1,0 +1,245 @@
+"""Run a task end to end: classify the start, plan, execute options, reset joints, replan.
+
+The only module where simulator, policies, classifier and planner meet. Given a goal (PDDL
+world facts) and the env's current state:
+
+1. if the TCP is on a graph node, plan from it; otherwise the classifier picks the entry
+   (movement) skill and the planner plans from that skill's termination node;
+2. each option runs its policy until its termination condition beta holds (the skill's
+   success predicate) or its step budget runs out; the joints are reset between skills;
+3. on a failure (timeout, or the expected effect missing from the world state) the state is
+   re-read, re-classified and re-planned, up to ``max_replans`` times.
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Callable, Iterable, Mapping
+from dataclasses import asdict, dataclass, field
+from pathlib import Path
+from typing import Any, Protocol
+
+import numpy as np
+
+from osg_control.env import GRIPPER_OPEN_CMD, KitchenEnv, world_facts
+from osg_control.planning.api import plan_for_goal
+from osg_control.skills import NODES, SKILLS_BY_NAME, SkillSpec
+
+RESULT_SCHEMA_VERSION = 1
+NODE_TOLERANCE = 0.02
+"""TCP distance [m] within which the robot counts as on a graph node."""
+
+
+class Policy(Protocol):
+    """Maps a 10-D observation to a 7-D action."""
+
+    def __call__(self, obs: np.ndarray) -> np.ndarray:
+        """The action for one observation."""
+        ...
+
+
+class EntryClassifier(Protocol):
+    """Picks the movement skill that brings a state onto the graph."""
+
+    def predict(self, states: np.ndarray) -> Any:
+        """The skill name for one state."""
+        ...
+
+
+@dataclass
+class SkillOutcome:
+    """What happened when one option ran."""
+
+    skill: str
+    success: bool
+    steps: int
+    seconds: float
+    reset_steps: int = 0
+    failure: str | None = None
+
+
+@dataclass
+class ExecutionResult:
+    """The structured result of ``Executor.execute`` (stable JSON schema, see ``to_dict``)."""
+
+    goal: list[str]
+    success: bool
+    entry_skill: str | None
+    plan: list[str]
+    outcomes: list[SkillOutcome] = field(default_factory=list)
+    replans: int = 0
+    failure: str | None = None
+    final_facts: list[str] = field(default_factory=list)
+    timings: dict[str, float] = field(default_factory=dict)
+
+    def to_dict(self) -> dict[str, Any]:
+        """A JSON-ready dictionary (``schema_version`` first)."""
+        return {"schema_version": RESULT_SCHEMA_VERSION, **asdict(self)}
+
+
+def node_at(obs: np.ndarray, facts: Iterable[str]) -> str | None:
+    """The graph node the TCP is on (within ``NODE_TOLERANCE``, gripper matching), if any.
+
+    A node reached only while holding something (e.g. ``cube-lifted``) counts only when the
+    gripper is closed; empty-handed nodes only when the hand is empty.
+    """
+    facts = set(facts)
+    gripper = "open" if obs[7] == GRIPPER_OPEN_CMD else "closed"
+    best, best_distance = None, NODE_TOLERANCE
+    for node in NODES.values():
+        if node.gripper != gripper or (gripper == "open") != ("hand-empty" in facts):
+            continue
+        distance = float(np.linalg.norm(obs[:3] - np.asarray(node.position)))
+        if distance <= best_distance:
+            best, best_distance = node.name, distance
+    return best
+
+
+class Executor:
+    """Classify, plan and run options on a ``KitchenEnv``.
+
+    Args:
+        policies: skill name -> policy (e.g. ``policy.load_policies(dir)``).
+        classifier: the state->skill classifier for starts off the graph.
+        planner: a planner registry name (``"astar"`` default).
+        max_replans: how many times a failed plan is re-planned (0 = the paper's executor).
+        reset_joints: run the joint reset between skills.
+    """
+
+    def __init__(
+        self,
+        policies: Mapping[str, Policy],
+        classifier: EntryClassifier,
+        planner: str = "astar",
+        max_replans: int = 2,
+        reset_joints: bool = True,
+    ) -> None:
+        missing = sorted(set(SKILLS_BY_NAME) - set(policies))
+        if missing:
+            raise ValueError(f"no policy for skills {missing}")
+        self.policies = policies
+        self.classifier = classifier
+        self.planner = planner
+        self.max_replans = max_replans
+        self.reset_joints = reset_joints
+        self.on_step: Callable[[KitchenEnv], Any] | None = None
+        """Called after every env step (e.g. to record video frames)."""
+
+    def plan(
+        self, goal: Iterable[str], obs: np.ndarray, facts: Iterable[str]
+    ) -> tuple[str | None, list[str], Any]:
+        """Choose the entry skill (if off the graph) and plan the rest.
+
+        Returns:
+            ``(entry skill or None, plan, planner result)``.
+        """
+        facts = set(facts)
+        node = node_at(obs, facts)
+        entry = None
+        if node is None:
+            entry = self._entry_skill(obs, facts)
+            node = SKILLS_BY_NAME[entry].end
+        result = plan_for_goal(list(goal), node, sorted(facts), self.planner)
+        return entry, list(result.actions), result
+
+    def _entry_skill(self, obs: np.ndarray, facts: set[str]) -> str:
+        """Off the graph: the classifier's movement skill when the hand is empty, else the
+        applicable skill whose start node is nearest (retry from where it failed)."""
+        if "hand-empty" in facts:
+            return str(self.classifier.predict(obs))
+        applicable = [s for s in SKILLS_BY_NAME.values() if s.preconditions <= facts]
+        return min(
+            applicable or SKILLS_BY_NAME.values(),
+            key=lambda s: float(np.linalg.norm(obs[:3] - np.asarray(s.start_node.position))),
+        ).name
+
+    def run_skill(
+        self, env: KitchenEnv, skill: SkillSpec, obs: np.ndarray
+    ) -> tuple[SkillOutcome, np.ndarray]:
+        """Run one option until beta holds or its step budget runs out."""
+        policy = self.policies[skill.name]
+        started = time.perf_counter()
+        for step in range(1, skill.max_steps + 1):
+            obs, _reward, _terminated, _truncated, info = env.step(policy(obs))
+            if self.on_step is not None:
+                self.on_step(env)
+            if "failure" in info:
+                return SkillOutcome(
+                    skill.name, False, step, time.perf_counter() - started, failure=info["failure"]
+                ), obs
+            if env.skill_success(skill):
+                return SkillOutcome(skill.name, True, step, time.perf_counter() - started), obs
+        return SkillOutcome(
+            skill.name,
+            False,
+            skill.max_steps,
+            time.perf_counter() - started,
+            failure=f"timeout after {skill.max_steps} steps",
+        ), obs
+
+    def execute(self, goal: Iterable[str], env: KitchenEnv, obs: np.ndarray) -> ExecutionResult:
+        """Reach ``goal`` from the env's current state (``obs`` is its latest observation)."""
+        goal = sorted(set(goal))
+        started = time.perf_counter()
+        facts = world_facts(env.world_state())
+        result = ExecutionResult(goal=goal, success=False, entry_skill=None, plan=[])
+        planning_time = 0.0
+        for attempt in range(self.max_replans + 1):
+            if set(goal) <= facts:
+                result.success = True
+                break
+            t0 = time.perf_counter()
+            entry, plan, planned = self.plan(goal, obs, facts)
+            planning_time += time.perf_counter() - t0
+            if attempt == 0:
+                result.entry_skill, result.plan = entry, plan
+            if not planned.solved:
+                result.failure = f"no plan: unreachable goal facts {list(planned.unreached)}"
+                break
+            obs, failed = self._run_sequence(env, ([entry] if entry else []) + plan, obs, result)
+            facts = world_facts(env.world_state())
+            if not failed:
+                result.success = set(goal) <= facts
+                if not result.success:
+                    result.failure = (
+                        f"plan finished but goal facts {sorted(set(goal) - facts)} missing"
+                    )
+                break
+            result.failure = failed
+            if attempt < self.max_replans:
+                result.replans += 1
+        if result.success:
+            result.failure = None
+        result.final_facts = sorted(facts)
+        result.timings = {
+            "planning_s": round(planning_time, 6),
+            "total_s": round(time.perf_counter() - started, 4),
+        }
+        return result
+
+    def _run_sequence(
+        self, env: KitchenEnv, sequence: list[str], obs: np.ndarray, result: ExecutionResult
+    ) -> tuple[np.ndarray, str | None]:
+        """Run skills in order; stop at the first failure and return its reason."""
+        for index, name in enumerate(sequence):
+            skill = SKILLS_BY_NAME[name]
+            outcome, obs = self.run_skill(env, skill, obs)
+            facts = world_facts(env.world_state())
+            if outcome.success and not (skill.add_effects <= facts):
+                outcome.success = False
+                outcome.failure = f"expected effects {sorted(skill.add_effects - facts)} missing"
+            result.outcomes.append(outcome)
+            if not outcome.success:
+                return obs, f"{name}: {outcome.failure}"
+            if self.reset_joints and index < len(sequence) - 1:
+                outcome.reset_steps = env.joint_reset()
+                obs = env.observe()
+        return obs, None
+
+
+def load_executor(directory: str | Path | None = None, **kwargs: Any) -> Executor:
+    """An executor with the policies and classifier of ``directory`` (default: shipped)."""
+    from osg_control.defaults import load_defaults
+
+    policies, classifier = load_defaults(directory)
+    return Executor(policies, classifier, **kwargs)
