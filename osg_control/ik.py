@@ -1,34 +1,54 @@
 r"""Differential IK for the Panda: one QP per control step, two interchangeable backends.
 
-At each step we solve for joint velocities :math:`v` [rad/s]
+At each step we solve for the joint displacement :math:`\Delta q = v\,dt` [rad]
 
 .. math::
 
-    \min_v \; \|J_{tcp} v - \tfrac{g}{dt} e_{tcp}\|^2_{W_{tcp}}
-            + w_{post} \|v - \tfrac{g}{dt}(q_{home} - q)\|^2
-    \quad \text{s.t.} \quad q_{min} \le q + v\,dt \le q_{max},\;
-    |v| \le v_{max}
+    \min_{\Delta q} \; \tfrac12 \|W_{tcp} (J_{tcp} \Delta q + g\,e_{tcp})\|^2
+            + \tfrac12 w_{post}^2 \|\Delta q + g\,(q - q_{post})\|^2
+            + \tfrac12 (\lambda + \mu) \|\Delta q\|^2
+    \quad \text{s.t.} \quad
+    \max(\gamma (q_{min} - q), -v_{max} dt) \le \Delta q \le
+    \min(\gamma (q_{max} - q), v_{max} dt)
 
-with a TCP frame task and a low-weight posture task, joint position and velocity limits
-always enforced. Backends:
+with a TCP frame task (error :math:`e_{tcp} = \log(T_{bt})`, a body twist in the TCP
+frame, and Jacobian :math:`J_{tcp} = -\mathrm{Jlog}_6(T_{tb})\,{}_bJ_{0b}(q)`), a
+low-weight posture task, Tikhonov damping :math:`\lambda`, Levenberg-Marquardt damping
+:math:`\mu = \epsilon_{lm} \|g W_{tcp} e_{tcp}\|^2`, and joint position and velocity limits
+always enforced. This is exactly the QP that ``mink.build_ik`` and ``pink.build_ik`` build
+from a ``FrameTask``, a ``PostureTask``, a ``ConfigurationLimit`` (gain :math:`\gamma`) and
+a ``VelocityLimit``; the two limits are merged into one box because both are bounds on
+:math:`\Delta q`. In a joint reset (``hard_tcp``) the TCP task becomes the equality
+:math:`J_{tcp} \Delta q = -g\,e_{tcp}` and leaves the objective.
 
-- ``mink``: mink on the arm-only MuJoCo model compiled from the URDF (default);
-- ``pinocchio``: Pink on the Pinocchio model loaded from the same URDF (no simulator).
+Backends compute :math:`e_{tcp}` and :math:`J_{tcp}`; the QP around them is assembled by
+shared code, so both backends build the same QP by construction:
 
-Both build the same QP (same task errors ``log(T_bt)`` in the TCP frame, same limits) and
-solve it through qpsolvers; ``daqp`` is the default solver, ``osqp`` is supported.
+- ``mink``: mink's ``FrameTask`` on the arm-only MuJoCo model compiled from the URDF
+  (default);
+- ``pinocchio``: Pink's frame-task formulas evaluated directly with Pinocchio on the model
+  loaded from the same URDF (no simulator).
+
+Solvers: ``daqp`` (default; dense active set, called directly with the box as simple
+bounds) and ``osqp`` (ADMM on sparse CSC matrices, absolute and relative tolerance
+``IKConfig.osqp_eps``). The QP is strongly convex but ill-conditioned: along the arm's 1-D
+null space its curvature is only ``posture_cost**2 + damping`` (about 1e-6 by default), so
+OSQP's residual tolerance pins the null-space part of its answer only loosely. With the
+default ``osqp_eps = 1e-9``, OSQP's TCP velocity ``J v`` matches DAQP's exact active-set
+solution to about 1e-6 and joint-reset velocities (posture cost 1) to about 1e-7 rad/s,
+while the null-space part of ``v`` can differ by a few 1e-2 rad/s.
 """
 
 from __future__ import annotations
 
 from collections.abc import Callable
 from dataclasses import dataclass, replace
-from typing import Any, Protocol
+from typing import Any
 
 import mujoco
 import numpy as np
 import qpsolvers
-from scipy.spatial.transform import Rotation
+from scipy import sparse
 
 from osg_control.errors import ControllerError
 from osg_control.robot import HOME_Q, TCP_FRAME, TCP_SITE, load_pinocchio_arm, panda_spec
@@ -41,8 +61,8 @@ class IKConfig:
     """Weights, gains and limits of the differential-IK QP.
 
     Attributes:
-        backend: ``"mink"`` (MuJoCo model) or ``"pinocchio"`` (Pink on the URDF).
-        solver: a qpsolvers solver name: ``"daqp"`` (default) or ``"osqp"``.
+        backend: ``"mink"`` (MuJoCo model) or ``"pinocchio"`` (Pinocchio on the URDF).
+        solver: the QP solver: ``"daqp"`` (default) or ``"osqp"``.
         dt: integration step of one solve [s] (the env's control period).
         position_cost: TCP position task weight [1/m].
         orientation_cost: TCP orientation task weight [1/rad].
@@ -53,6 +73,7 @@ class IKConfig:
         limit_gain: configuration-limit gain in (0, 1] (how fast limits may be approached).
         velocity_scale: fraction of the URDF's joint velocity limits allowed.
         posture: nominal arm configuration [rad]; the home pose by default.
+        osqp_eps: OSQP's absolute and relative tolerance (only with ``solver="osqp"``).
     """
 
     backend: str = "mink"
@@ -67,6 +88,7 @@ class IKConfig:
     limit_gain: float = 0.95
     velocity_scale: float = 1.0
     posture: tuple[float, ...] = tuple(HOME_Q)
+    osqp_eps: float = 1e-9
 
     def __post_init__(self) -> None:
         if self.backend not in BACKENDS:
@@ -84,36 +106,95 @@ class IKConfig:
             raise ControllerError(f"IKConfig: posture has {len(self.posture)} values, expected 7")
 
 
-class Backend(Protocol):
-    """What a kinematics backend provides to the controller."""
+class Backend:
+    """Kinematics of the TCP frame task plus the QP assembly shared by every backend.
 
-    lower: np.ndarray
-    upper: np.ndarray
-    velocity_limit: np.ndarray
+    Subclasses implement ``tcp_pose`` and ``frame_residual``; ``build_qp`` is common, so
+    all backends build the same QP.
+
+    Attributes:
+        config: the controller's configuration.
+        lower: joint lower limits [rad] (7,).
+        upper: joint upper limits [rad] (7,).
+        velocity_limit: joint velocity limits [rad/s] (7,), the URDF's times
+            ``velocity_scale``.
+    """
+
+    def __init__(self, config: IKConfig, lower: np.ndarray, upper: np.ndarray) -> None:
+        self.config = config
+        self.lower = np.array(lower, dtype=float)
+        self.upper = np.array(upper, dtype=float)
+        self.velocity_limit = _urdf_velocity_limits() * config.velocity_scale
+        # Constants of the QP, so that build_qp does the per-step arithmetic only.
+        cost = np.array([config.position_cost] * 3 + [config.orientation_cost] * 3)
+        self._cost_column = cost[:, None]
+        self._gain_cost = config.gain * cost
+        self._posture = np.asarray(config.posture, dtype=float)
+        self._posture_gain = config.posture_cost**2 * config.gain
+        self._diagonal = config.posture_cost**2 + config.damping
+        self._step_limit = self.velocity_limit * config.dt
+        self._minus_step_limit = -self._step_limit
 
     def tcp_pose(self, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """TCP position [m] and rotation matrix in the base frame at ``q``."""
-        ...
+        raise NotImplementedError
+
+    def frame_residual(
+        self, q: np.ndarray, target_pos: np.ndarray, target_rot: np.ndarray
+    ) -> tuple[np.ndarray, np.ndarray]:
+        """TCP task error ``log(T_bt)`` (6,) and its Jacobian (6, 7) at ``q``.
+
+        The error is a body twist in the TCP frame, linear part first.
+        """
+        raise NotImplementedError
 
     def build_qp(
         self, q: np.ndarray, target_pos: np.ndarray, target_rot: np.ndarray, hard_tcp: bool
     ) -> qpsolvers.Problem:
-        """Assemble the QP at ``q`` toward the target (``hard_tcp``: TCP as an equality)."""
-        ...
+        """Assemble the QP in ``dq = v dt`` at ``q`` toward the target.
+
+        Args:
+            q: arm configuration [rad] (7,).
+            target_pos: TCP target position [m] (3,).
+            target_rot: TCP target rotation matrix (3, 3).
+            hard_tcp: make the TCP task an equality constraint (joint reset).
+
+        Returns:
+            ``qpsolvers.Problem`` with ``P``, ``q``, box bounds ``lb``/``ub`` and, if
+            ``hard_tcp``, the equality ``A dq = b``; no general inequalities.
+        """
+        config = self.config
+        error, jacobian = self.frame_residual(q, target_pos, target_rot)
+        linear = self._posture_gain * (q - self._posture)
+        if hard_tcp:
+            hessian = np.zeros((7, 7))
+            hessian.flat[::8] = self._diagonal
+            equality_matrix: np.ndarray | None = jacobian
+            equality_vector: np.ndarray | None = -config.gain * error
+        else:
+            weighted_error = self._gain_cost * error
+            weighted_jacobian = self._cost_column * jacobian
+            hessian = weighted_jacobian.T @ weighted_jacobian
+            linear += weighted_error @ weighted_jacobian
+            lm_term = config.lm_damping * float(weighted_error @ weighted_error)
+            hessian.flat[::8] += self._diagonal + lm_term
+            equality_matrix = equality_vector = None
+        lower = np.maximum(config.limit_gain * (self.lower - q), self._minus_step_limit)
+        upper = np.minimum(config.limit_gain * (self.upper - q), self._step_limit)
+        return qpsolvers.Problem(
+            hessian, linear, A=equality_matrix, b=equality_vector, lb=lower, ub=upper
+        )
 
 
-class MinkBackend:
-    """mink on the arm-only MuJoCo model compiled from the URDF."""
+class MinkBackend(Backend):
+    """mink's ``FrameTask`` on the arm-only MuJoCo model compiled from the URDF."""
 
     def __init__(self, config: IKConfig) -> None:
         import mink
 
-        self.config = config
         self.model = panda_spec(with_fingers=False).compile()
+        super().__init__(config, self.model.jnt_range[:, 0], self.model.jnt_range[:, 1])
         self.configuration = mink.Configuration(self.model)
-        self.lower = self.model.jnt_range[:, 0].copy()
-        self.upper = self.model.jnt_range[:, 1].copy()
-        self.velocity_limit = _urdf_velocity_limits() * config.velocity_scale
         self.frame_task = mink.FrameTask(
             TCP_SITE,
             "site",
@@ -122,95 +203,62 @@ class MinkBackend:
             gain=config.gain,
             lm_damping=config.lm_damping,
         )
-        self.posture_task = mink.PostureTask(self.model, cost=config.posture_cost, gain=config.gain)
-        self.posture_task.set_target(np.asarray(config.posture))
-        names = [self.model.joint(i).name for i in range(self.model.njnt)]
-        self.limits = [
-            mink.ConfigurationLimit(self.model, gain=config.limit_gain),
-            mink.VelocityLimit(self.model, dict(zip(names, self.velocity_limit, strict=True))),
-        ]
-        self._mink = mink
+        # The task's target is this SE3, overwritten in place each step (``set_target``
+        # would build and copy a new one every time).
+        self._target = mink.SE3(np.array([1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0]))
+        self.frame_task.transform_target_to_world = self._target
+        self._site = self.model.site(TCP_SITE).id
 
     def tcp_pose(self, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         self.configuration.update(q)
         data = self.configuration.data
-        site = self.model.site(TCP_SITE).id
-        return data.site_xpos[site].copy(), data.site_xmat[site].reshape(3, 3).copy()
+        return data.site_xpos[self._site].copy(), data.site_xmat[self._site].reshape(3, 3).copy()
 
-    def build_qp(
-        self, q: np.ndarray, target_pos: np.ndarray, target_rot: np.ndarray, hard_tcp: bool
-    ) -> qpsolvers.Problem:
+    def frame_residual(
+        self, q: np.ndarray, target_pos: np.ndarray, target_rot: np.ndarray
+    ) -> tuple[np.ndarray, np.ndarray]:
         self.configuration.update(q)
-        self.frame_task.set_target(
-            self._mink.SE3.from_rotation_and_translation(
-                self._mink.SO3.from_matrix(target_rot), target_pos
-            )
-        )
-        tasks = [self.posture_task] if hard_tcp else [self.frame_task, self.posture_task]
-        return self._mink.build_ik(
-            self.configuration,
-            tasks,
-            self.config.dt,
-            damping=self.config.damping,
-            limits=self.limits,
-            constraints=[self.frame_task] if hard_tcp else None,
+        target = self._target.wxyz_xyz
+        mujoco.mju_mat2Quat(target[:4], target_rot.ravel())
+        target[4:] = target_pos
+        return (
+            self.frame_task.compute_error(self.configuration),
+            self.frame_task.compute_jacobian(self.configuration),
         )
 
 
-class PinocchioBackend:
-    """Pink on the arm-only Pinocchio model built from the same URDF (runs without MuJoCo)."""
+class PinocchioBackend(Backend):
+    """Pink's frame-task formulas, evaluated with Pinocchio on the URDF (no MuJoCo).
+
+    ``e = log6(T_bt)`` and ``J = -Jlog6(T_tb) J_b`` as in ``pink.tasks.FrameTask``, computed
+    without Pink's per-call ``Configuration`` and ``SE3`` copies.
+    """
 
     def __init__(self, config: IKConfig) -> None:
-        import pink
         import pinocchio as pin
-        from pink.limits import ConfigurationLimit, VelocityLimit
 
-        self.config = config
         self.model = load_pinocchio_arm()
-        self.model.velocityLimit = _urdf_velocity_limits() * config.velocity_scale
+        super().__init__(config, self.model.lowerPositionLimit, self.model.upperPositionLimit)
+        self.model.velocityLimit = self.velocity_limit.copy()
         self.data = self.model.createData()
-        self.lower = self.model.lowerPositionLimit.copy()
-        self.upper = self.model.upperPositionLimit.copy()
-        self.velocity_limit = self.model.velocityLimit.copy()
         self.frame_id = self.model.getFrameId(TCP_FRAME)
-        self.frame_task = pink.FrameTask(
-            TCP_FRAME,
-            position_cost=config.position_cost,
-            orientation_cost=config.orientation_cost,
-            lm_damping=config.lm_damping,
-            gain=config.gain,
-        )
-        self.posture_task = pink.PostureTask(cost=config.posture_cost, gain=config.gain)
-        self.posture_task.set_target(np.asarray(config.posture))
-        self.limits = [
-            ConfigurationLimit(self.model, config_limit_gain=config.limit_gain),
-            VelocityLimit(self.model),
-        ]
-        self._pink = pink
         self._pin = pin
-
-    def _configuration(self, q: np.ndarray) -> Any:
-        return self._pink.Configuration(self.model, self.data, q, copy_data=False)
 
     def tcp_pose(self, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         self._pin.framesForwardKinematics(self.model, self.data, q)
         placement = self.data.oMf[self.frame_id]
         return placement.translation.copy(), placement.rotation.copy()
 
-    def build_qp(
-        self, q: np.ndarray, target_pos: np.ndarray, target_rot: np.ndarray, hard_tcp: bool
-    ) -> qpsolvers.Problem:
-        configuration = self._configuration(q)
-        self.frame_task.set_target(self._pin.SE3(target_rot, target_pos))
-        tasks = [self.posture_task] if hard_tcp else [self.frame_task, self.posture_task]
-        return self._pink.build_ik(
-            configuration,
-            tasks,
-            self.config.dt,
-            damping=self.config.damping,
-            limits=self.limits,
-            constraints=[self.frame_task] if hard_tcp else None,
-        )
+    def frame_residual(
+        self, q: np.ndarray, target_pos: np.ndarray, target_rot: np.ndarray
+    ) -> tuple[np.ndarray, np.ndarray]:
+        pin = self._pin
+        pin.computeJointJacobians(self.model, self.data, q)
+        frame = pin.updateFramePlacement(self.model, self.data, self.frame_id)
+        target = pin.SE3(target_rot, target_pos)
+        error = pin.log6(frame.actInv(target)).vector
+        jacobian = pin.getFrameJacobian(self.model, self.data, self.frame_id, pin.LOCAL)
+        return error, -pin.Jlog6(target.actInv(frame)) @ jacobian
 
 
 BACKENDS: dict[str, Callable[[IKConfig], Backend]] = {
@@ -224,14 +272,120 @@ def _urdf_velocity_limits() -> np.ndarray:
     return np.asarray(load_pinocchio_arm().velocityLimit, dtype=float).copy()
 
 
+class _DaqpSolver:
+    """DAQP called directly: the box as simple bounds, the equality rows with sense 5."""
+
+    def __init__(self, config: IKConfig) -> None:
+        import daqp
+
+        del config  # DAQP runs with its defaults
+        self._solve = daqp.solve
+        self._no_rows = np.zeros((0, 7))
+        self._senses: dict[int, np.ndarray] = {}
+
+    def _sense(self, n_eq: int) -> np.ndarray:
+        sense = self._senses.get(n_eq)
+        if sense is None:
+            sense = np.zeros(7 + n_eq, dtype=np.intc)
+            sense[7:] = 5  # equality rows
+            self._senses[n_eq] = sense
+        return sense
+
+    def __call__(self, problem: qpsolvers.Problem) -> np.ndarray | None:
+        if problem.A is None:
+            rows, upper, lower = self._no_rows, problem.ub, problem.lb
+        else:
+            rows = problem.A
+            upper = np.concatenate([problem.ub, problem.b])
+            lower = np.concatenate([problem.lb, problem.b])
+        sense = self._sense(rows.shape[0])
+        x, _, exitflag, _ = self._solve(problem.P, problem.q, rows, upper, lower, sense)
+        return np.asarray(x) if exitflag > 0 else None
+
+
+class _OsqpSolver:
+    """OSQP on CSC matrices: ``l <= [I; A] dq <= u`` with the upper triangle of ``P``.
+
+    One OSQP workspace per number of equality rows is set up on first use and then only
+    updated (``Px``, ``q``, ``Ax``, ``l``, ``u``): the sparsity pattern never changes, so
+    the expensive Python-side setup runs once. Warm starting is off and the step size
+    ``rho`` is reset before each solve, so a solve does not depend on the previous ones
+    (beyond rounding).
+    """
+
+    def __init__(self, config: IKConfig) -> None:
+        import osqp
+
+        self._osqp = osqp
+        self._rho = 0.1  # OSQP's default initial step size
+        self._settings: dict[str, Any] = {
+            "eps_abs": config.osqp_eps,
+            "eps_rel": config.osqp_eps,
+            "max_iter": 20000,
+            "rho": self._rho,
+            "polishing": False,
+            "warm_starting": False,
+            "verbose": False,
+        }
+        # Upper triangle of the 7x7 Hessian in CSC (column-major) order.
+        cols, rows = np.tril_indices(7)
+        self._p_rows, self._p_cols = rows, cols
+        self._p_pattern = sparse.csc_matrix(
+            (np.ones(rows.size), rows, np.concatenate([[0], np.cumsum(np.arange(1, 8))])),
+            shape=(7, 7),
+        )
+        self._workspaces: dict[int, Any] = {}
+
+    def __call__(self, problem: qpsolvers.Problem) -> np.ndarray | None:
+        n_eq = 0 if problem.A is None else problem.A.shape[0]
+        upper, lower = problem.ub, problem.lb
+        columns = np.ones((1 + n_eq, 7))  # column j of [I; A]: 1 at row j, then A[:, j]
+        if problem.A is not None:
+            columns[1:] = problem.A
+            upper = np.concatenate([upper, problem.b])
+            lower = np.concatenate([lower, problem.b])
+        p_data = problem.P[self._p_rows, self._p_cols]
+        a_data = columns.ravel(order="F")
+        solver = self._workspaces.get(n_eq)
+        if solver is None:
+            indices = np.concatenate([[j, *range(7, 7 + n_eq)] for j in range(7)])
+            a_matrix = sparse.csc_matrix(
+                (a_data, indices, np.arange(8) * (1 + n_eq)), shape=(7 + n_eq, 7)
+            )
+            p_matrix = self._p_pattern.copy()
+            p_matrix.data = p_data
+            solver = self._osqp.OSQP()
+            solver.setup(P=p_matrix, q=problem.q, A=a_matrix, l=lower, u=upper, **self._settings)
+            self._workspaces[n_eq] = solver
+        else:
+            solver.update(q=problem.q, l=lower, u=upper, Px=p_data, Ax=a_data)
+            solver.update_settings(rho=self._rho)  # undo the previous solve's adaptation
+        result = solver.solve(raise_error=False)
+        if result.info.status_val != self._osqp.SolverStatus.OSQP_SOLVED:
+            return None
+        return np.array(result.x)
+
+
+_SOLVER_CLASSES: dict[str, Callable[[IKConfig], Callable[[qpsolvers.Problem], Any]]] = {
+    "daqp": _DaqpSolver,
+    "osqp": _OsqpSolver,
+}
+
+
 def rotation_step(rot: np.ndarray, delta: np.ndarray) -> np.ndarray:
     """Rotate ``rot`` by the world-frame rotation vector ``delta`` [rad]."""
-    return np.asarray(Rotation.from_rotvec(delta).as_matrix() @ rot)
+    quat = np.array([1.0, 0.0, 0.0, 0.0])
+    mujoco.mju_quatIntegrate(quat, np.asarray(delta, dtype=float), 1.0)
+    return quat_to_matrix(quat) @ rot
 
 
 def rotation_error(current: np.ndarray, target: np.ndarray) -> np.ndarray:
     """World-frame rotation vector [rad] taking ``current`` to ``target``."""
-    return np.asarray(Rotation.from_matrix(target @ current.T).as_rotvec())
+    quat = np.zeros(4)
+    mujoco.mju_mat2Quat(quat, (target @ current.T).ravel())
+    rotvec = np.zeros(3)
+    mujoco.mju_quat2Vel(rotvec, quat, 1.0)
+    return rotvec
 
 
 class DiffIKController:
@@ -245,6 +399,7 @@ class DiffIKController:
     def __init__(self, config: IKConfig | None = None) -> None:
         self.config = config or IKConfig()
         self.backend: Backend = BACKENDS[self.config.backend](self.config)
+        self._solve_qp = _SOLVER_CLASSES[self.config.solver](self.config)
 
     def tcp_pose(self, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Forward kinematics: TCP position [m] and rotation matrix in the base frame."""
@@ -252,7 +407,7 @@ class DiffIKController:
 
     def _check_q(self, q: np.ndarray) -> np.ndarray:
         q = np.asarray(q, dtype=float)
-        if q.shape != (7,) or not np.all(np.isfinite(q)):
+        if q.shape != (7,) or not np.isfinite(q).all():
             raise ControllerError(f"joint configuration must be 7 finite values, got {q!r}")
         return q
 
@@ -273,23 +428,34 @@ class DiffIKController:
         q = self._check_q(q)
         target_pos = np.asarray(target_pos, dtype=float)
         target_rot = np.asarray(target_rot, dtype=float)
-        if not (np.all(np.isfinite(target_pos)) and np.all(np.isfinite(target_rot))):
-            raise ControllerError("TCP target must be finite")
+        if (
+            target_pos.shape != (3,)
+            or target_rot.shape != (3, 3)
+            or not (np.isfinite(target_pos).all() and np.isfinite(target_rot).all())
+        ):
+            raise ControllerError("TCP target must be a finite position (3,) and rotation (3, 3)")
+        return self._solve(q, target_pos, target_rot, hard_tcp)
+
+    def _solve(
+        self, q: np.ndarray, target_pos: np.ndarray, target_rot: np.ndarray, hard_tcp: bool
+    ) -> np.ndarray:
+        """``solve_velocity`` on inputs already checked."""
         problem = self.backend.build_qp(q, target_pos, target_rot, hard_tcp)
-        solution = qpsolvers.solve_problem(problem, solver=self.config.solver)
-        if not solution.found or solution.x is None:
+        solution = self._solve_qp(problem)
+        if solution is None:
             raise ControllerError(
                 f"QP solver {self.config.solver!r} found no solution at q={q.round(4)}"
             )
-        return np.asarray(solution.x) / self.config.dt  # the QP's unknown is dq = v dt
+        return solution / self.config.dt  # the QP's unknown is dq = v dt
 
     def step(self, q: np.ndarray, target_pos: np.ndarray, target_rot: np.ndarray) -> np.ndarray:
         """One IK step: the next joint target ``q + v dt`` [rad], clipped to the joint limits."""
         velocity = self.solve_velocity(q, target_pos, target_rot)
-        return self._integrate(q, velocity)
+        return self._integrate(np.asarray(q, dtype=float), velocity)
 
     def _integrate(self, q: np.ndarray, velocity: np.ndarray) -> np.ndarray:
-        return np.clip(q + velocity * self.config.dt, self.backend.lower, self.backend.upper)
+        next_q = np.maximum(q + velocity * self.config.dt, self.backend.lower)
+        return np.minimum(next_q, self.backend.upper)
 
     def relative_step(self, q: np.ndarray, delta: np.ndarray) -> np.ndarray:
         """Apply a relative TCP command ``[dx, dy, dz, da, db, dg]`` ([m], [rad], base frame).
@@ -298,17 +464,17 @@ class DiffIKController:
             The next joint position target [rad].
         """
         delta = np.asarray(delta, dtype=float)
-        if delta.shape != (6,) or not np.all(np.isfinite(delta)):
+        if delta.shape != (6,) or not np.isfinite(delta).all():
             raise ControllerError(f"relative TCP command must be 6 finite values, got {delta!r}")
-        pos, rot = self.tcp_pose(q)
-        return self.step(q, pos + delta[:3], rotation_step(rot, delta[3:]))
+        q = self._check_q(q)
+        pos, rot = self.backend.tcp_pose(q)
+        velocity = self._solve(q, pos + delta[:3], rotation_step(rot, delta[3:]), False)
+        return self._integrate(q, velocity)
 
-    def reset_step(
-        self, q: np.ndarray, tcp_pos: np.ndarray, tcp_rot: np.ndarray
-    ) -> np.ndarray:
+    def reset_step(self, q: np.ndarray, tcp_pos: np.ndarray, tcp_rot: np.ndarray) -> np.ndarray:
         """One joint-reset step: move toward the posture while holding the TCP pose fixed."""
         velocity = self.solve_velocity(q, tcp_pos, tcp_rot, hard_tcp=True)
-        return self._integrate(q, velocity)
+        return self._integrate(np.asarray(q, dtype=float), velocity)
 
 
 def joint_reset_controller(config: IKConfig | None = None) -> DiffIKController:
@@ -322,6 +488,7 @@ def solve_ik(
     q0: np.ndarray,
     target_pos: np.ndarray,
     target_rot: np.ndarray,
+    *,
     iterations: int = 200,
     pos_tol: float = 1e-4,
     rot_tol: float = 1e-3,

@@ -178,13 +178,12 @@ class SceneIndex:
         self.right_finger = model.body("panda_rightfinger").id
 
     def _touches_both_fingers(self, model: mujoco.MjModel, data: mujoco.MjData, geom: int) -> bool:
-        touched = set()
-        for contact in data.contact[: data.ncon]:
-            pair = (contact.geom1, contact.geom2)
-            if geom in pair:
-                other = pair[1] if pair[0] == geom else pair[0]
-                touched.add(int(model.geom_bodyid[other]))
-        return self.left_finger in touched and self.right_finger in touched
+        # Vectorised over the contact arrays: iterating ``data.contact`` in Python costs
+        # about 10 us per contact, which dominated the env step's overhead.
+        pairs = data.contact.geom  # (ncon, 2)
+        others = np.concatenate([pairs[pairs[:, 0] == geom, 1], pairs[pairs[:, 1] == geom, 0]])
+        touched = model.geom_bodyid[others]
+        return bool(np.any(touched == self.left_finger) and np.any(touched == self.right_finger))
 
     def read(self, model: mujoco.MjModel, data: mujoco.MjData) -> WorldState:
         """Read the world state from the simulator (copies, never aliases ``data``)."""
