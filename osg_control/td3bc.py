@@ -1,0 +1,431 @@
+"""TD3+BC (Fujimoto & Gu 2021, "A Minimalist Approach to Offline RL"), batched over skills.
+
+Reads top to bottom like CORL's ``td3_bc.py``: the config, helpers, the replay buffer, the
+networks, and the trainer whose ``train_step(batch)`` returns a dict of logs.
+
+Batching: the K skills' actors (and their 2K critics) are stored as stacked weight tensors of
+shape ``(K, in, out)`` and evaluated with ``torch.baddbmm``, so one ``train_step`` updates all
+K skills at once; a single skill is K = 1. Each skill's loss is its own mean over its own
+batch and the optimised loss is the *sum* over skills, so skill k's gradients, Adam state and
+weights are exactly those it would get if trained alone.
+
+Randomness: every draw comes from per-skill ``torch.Generator`` objects seeded with that
+skill's seed (``skill_seed``): one for its initial weights, one for its batch indices and
+smoothing noise. A skill's training therefore does not depend on which skills it is batched
+with, and the same seeds give the same weights (on CPU, bit for bit).
+
+Units: the networks see normalised observations ``(obs - mean) / std`` and work in normalised
+actions in [-1, 1]; a physical action is the actor's tanh output times ``action_scale``.
+"""
+
+from __future__ import annotations
+
+import hashlib
+from collections.abc import Sequence
+from dataclasses import asdict, dataclass
+from typing import Any
+
+import numpy as np
+import torch
+
+from osg_control.datasets import ACTION_DIM, OBS_DIM, Dataset
+from osg_control.errors import DatasetError
+
+ACTION_SCALE = np.array([0.02, 0.02, 0.02, 0.1, 0.1, 0.1, 1.0], dtype=np.float32)
+"""Per-step action bounds: position [m] (x3), angles [rad] (x3), gripper command (unitless)."""
+ACTION_TOLERANCE = 1e-4
+"""Relative amount by which a stored action may exceed its bound (float rounding) [-]."""
+
+
+@dataclass(frozen=True)
+class TD3BCConfig:
+    """Hyper-parameters of TD3+BC (defaults: the paper's and CORL's)."""
+
+    hidden_sizes: tuple[int, ...] = (256, 256)  # widths of the ReLU layers of actor and critics
+    actor_lr: float = 3e-4  # Adam learning rate of the actor
+    critic_lr: float = 3e-4  # Adam learning rate of the twin critics
+    batch_size: int = 256  # transitions sampled per skill per update
+    gamma: float = 0.99  # discount factor
+    tau: float = 0.005  # Polyak rate of the target networks
+    policy_noise: float = 0.2  # std of target policy smoothing noise [normalised action]
+    noise_clip: float = 0.5  # clip of that noise [normalised action]
+    policy_freq: int = 2  # actor and target updates happen every this many critic updates
+    alpha: float = 2.5  # weight of the RL term; lambda = alpha / mean |Q|
+    obs_norm_eps: float = 1e-3  # added to the observation std before dividing by it
+
+    def to_json_dict(self) -> dict[str, Any]:
+        """The fields as a JSON-ready dict (for checkpoint sidecars)."""
+        data = asdict(self)
+        data["hidden_sizes"] = list(self.hidden_sizes)
+        return data
+
+
+# ----------------------------------------------------------------------------- helpers
+
+
+def skill_seed(seed: int, name: str) -> int:
+    """Derive a skill's own seed from the run's seed and the skill's name.
+
+    Stable across processes and platforms (unlike ``hash``), so a skill gets the same seed
+    whether it is trained alone or with others.
+
+    Args:
+        seed: the run's seed.
+        name: the skill's name.
+
+    Returns:
+        A seed in [0, 2**63).
+    """
+    digest = hashlib.sha256(f"{seed}:{name}".encode()).digest()
+    return int.from_bytes(digest[:8], "little") >> 1
+
+
+def observation_stats(observations: np.ndarray, eps: float) -> tuple[np.ndarray, np.ndarray]:
+    """Per-dimension mean and std (plus ``eps``) of a data set's observations.
+
+    Args:
+        observations: (N, obs_dim) array.
+        eps: added to the std so constant dimensions do not divide by zero.
+
+    Returns:
+        ``(mean, std)``, each (obs_dim,) float32.
+    """
+    obs = observations.astype(np.float64)
+    return obs.mean(0).astype(np.float32), (obs.std(0) + eps).astype(np.float32)
+
+
+# ----------------------------------------------------------------------------- replay buffer
+
+
+@dataclass
+class SkillData:
+    """One skill's transitions, normalised for training, and how to undo the normalisation.
+
+    Attributes:
+        name: the skill's name.
+        transitions: (N, 2 * obs_dim + action_dim + 2) float32 rows
+            ``[obs, action, reward, next_obs, done]``: obs normalised, action divided by
+            ``action_scale`` (so in [-1, 1]), done = the episode terminated by success.
+        obs_mean: (obs_dim,) observation mean.
+        obs_std: (obs_dim,) observation std plus eps.
+        action_scale: (action_dim,) physical size of a normalised action of 1.
+    """
+
+    name: str
+    transitions: np.ndarray
+    obs_mean: np.ndarray
+    obs_std: np.ndarray
+    action_scale: np.ndarray
+
+
+def prepare_skill_data(
+    dataset: Dataset, action_scale: np.ndarray = ACTION_SCALE, eps: float = 1e-3
+) -> SkillData:
+    """Normalise a loaded data set into training transitions.
+
+    Args:
+        dataset: the skill's data set (``datasets.load_dataset``).
+        action_scale: (action_dim,) per-dimension action bound, physical units.
+        eps: added to the observation std.
+
+    Returns:
+        The skill's training data.
+
+    Raises:
+        DatasetError: naming the file, if no episode succeeded (TD3+BC would learn nothing
+            from sparse rewards) or a stored action exceeds ``action_scale``.
+    """
+    arrays = dataset.arrays
+    if not dataset.episode_successes.any():
+        raise DatasetError(
+            f"{dataset.path}: no successful episode among {dataset.num_episodes}; "
+            "cannot learn a skill from it"
+        )
+    scale = np.asarray(action_scale, dtype=np.float32)
+    actions = arrays["actions"] / scale
+    worst = np.abs(actions).max(0) if len(actions) else np.zeros_like(scale)
+    if np.any(worst > 1.0 + ACTION_TOLERANCE):
+        dim = int(np.argmax(worst))
+        raise DatasetError(
+            f"{dataset.path}: action dimension {dim} reaches {worst[dim] * scale[dim]:.6g}, "
+            f"beyond its bound {scale[dim]:.6g}"
+        )
+    mean, std = observation_stats(arrays["observations"], eps)
+    columns = [
+        (arrays["observations"] - mean) / std,
+        np.clip(actions, -1.0, 1.0),
+        arrays["rewards"][:, None],
+        (arrays["next_observations"] - mean) / std,
+        arrays["terminations"][:, None],
+    ]
+    return SkillData(
+        name=dataset.skill_name,
+        transitions=np.concatenate(columns, axis=1, dtype=np.float32),
+        obs_mean=mean,
+        obs_std=std,
+        action_scale=scale,
+    )
+
+
+@dataclass
+class Batch:
+    """One update's samples for K skills (B transitions each), on the training device.
+
+    Attributes:
+        observations: (K, B, obs_dim) normalised.
+        actions: (K, B, action_dim) normalised.
+        rewards: (K, B).
+        next_observations: (K, B, obs_dim) normalised.
+        dones: (K, B) 1.0 where the episode terminated by success.
+        noise: (K, B, action_dim) standard normal draws for target policy smoothing.
+    """
+
+    observations: torch.Tensor
+    actions: torch.Tensor
+    rewards: torch.Tensor
+    next_observations: torch.Tensor
+    dones: torch.Tensor
+    noise: torch.Tensor
+
+
+class BatchedReplay:
+    """The K skills' transitions in one tensor; each skill samples from its own part.
+
+    Skill k draws its batch indices, then its smoothing noise, from its own generator
+    seeded with ``seeds[k] + 1`` (``+ 1``: distinct from its weight initialisation).
+    """
+
+    def __init__(
+        self,
+        data: Sequence[SkillData],
+        batch_size: int,
+        seeds: Sequence[int],
+        device: str | torch.device = "cpu",
+    ) -> None:
+        """Move the transitions to ``device`` and seed one generator per skill.
+
+        Args:
+            data: the K skills' training data.
+            batch_size: transitions per skill per batch.
+            seeds: the K skills' seeds.
+            device: where batches are built.
+        """
+        if not data or len(data) != len(seeds):
+            raise ValueError(f"need one seed per skill, got {len(data)} skills, {len(seeds)} seeds")
+        self.device = torch.device(device)
+        self.batch_size = batch_size
+        self.obs_dim = data[0].obs_mean.shape[0]
+        self.action_dim = data[0].action_scale.shape[0]
+        self._sizes = [len(d.transitions) for d in data]
+        offsets = np.concatenate([[0], np.cumsum(self._sizes)[:-1]])
+        self._offsets = torch.as_tensor(offsets, device=self.device)[:, None]
+        self._rows = torch.as_tensor(np.concatenate([d.transitions for d in data])).to(device)
+        self._generators = [
+            torch.Generator(device=self.device).manual_seed(seed + 1) for seed in seeds
+        ]
+
+    def sample(self) -> Batch:
+        """Draw ``batch_size`` transitions (uniformly, with replacement) for every skill.
+
+        Returns:
+            The batch, every field with leading dimensions (K, B).
+        """
+        indices, noise = [], []
+        for size, generator in zip(self._sizes, self._generators, strict=True):
+            shape = (self.batch_size,)
+            indices.append(torch.randint(size, shape, generator=generator, device=self.device))
+            noise.append(
+                torch.randn((*shape, self.action_dim), generator=generator, device=self.device)
+            )
+        rows = self._rows[torch.stack(indices) + self._offsets]
+        obs, act = self.obs_dim, self.action_dim
+        return Batch(
+            observations=rows[..., :obs],
+            actions=rows[..., obs : obs + act],
+            rewards=rows[..., obs + act],
+            next_observations=rows[..., obs + act + 1 : 2 * obs + act + 1],
+            dones=rows[..., -1],
+            noise=torch.stack(noise),
+        )
+
+
+# ----------------------------------------------------------------------------- networks
+
+
+def init_mlp(sizes: Sequence[int], generator: torch.Generator) -> list[torch.Tensor]:
+    """One MLP's parameters, initialised like ``torch.nn.Linear``.
+
+    Args:
+        sizes: layer widths from input to output, e.g. ``(10, 256, 256, 7)``.
+        generator: the source of the uniform draws.
+
+    Returns:
+        ``[w0, b0, w1, b1, ...]`` with ``w`` (in, out) and ``b`` (1, out), drawn from
+        U(-1/sqrt(in), 1/sqrt(in)).
+    """
+    params = []
+    for fan_in, fan_out in zip(sizes[:-1], sizes[1:], strict=True):
+        bound = fan_in**-0.5
+        for shape in ((fan_in, fan_out), (1, fan_out)):
+            params.append((torch.rand(shape, generator=generator) * 2 - 1) * bound)
+    return params
+
+
+def stack_mlps(mlps: Sequence[Sequence[torch.Tensor]], device: torch.device) -> list[torch.Tensor]:
+    """Stack same-shaped MLPs into batched parameters (leading dimension = MLP index).
+
+    Args:
+        mlps: each a ``init_mlp`` parameter list.
+        device: where the stacked tensors live.
+
+    Returns:
+        Leaf tensors ``[w0 (M, in, out), b0 (M, 1, out), ...]`` that require grad.
+    """
+    return [torch.stack(layer).to(device).requires_grad_() for layer in zip(*mlps, strict=True)]
+
+
+def mlp_forward(params: Sequence[torch.Tensor], x: torch.Tensor) -> torch.Tensor:
+    """Evaluate M stacked MLPs: ReLU hidden layers, linear output.
+
+    Args:
+        params: ``[w0, b0, w1, b1, ...]`` as from ``stack_mlps``.
+        x: (M, B, in) inputs, row m for MLP m.
+
+    Returns:
+        (M, B, out) outputs.
+    """
+    *hidden, last = zip(params[::2], params[1::2], strict=True)
+    for weight, bias in hidden:
+        x = torch.baddbmm(bias, x, weight).relu_()
+    return torch.baddbmm(last[1], x, last[0])
+
+
+def critic_values(
+    params: Sequence[torch.Tensor], observations: torch.Tensor, actions: torch.Tensor
+) -> torch.Tensor:
+    """Q-values of n critics per skill, stacked critic-major (critic j of skill k at j*K + k).
+
+    Args:
+        params: stacked parameters of n*K critics.
+        observations: (K, B, obs_dim) normalised.
+        actions: (K, B, action_dim) normalised.
+
+    Returns:
+        (n, K, B) Q-values.
+    """
+    x = torch.cat([observations, actions], dim=-1)
+    copies = params[0].shape[0] // x.shape[0]
+    return mlp_forward(params, x.repeat(copies, 1, 1)).view(copies, *x.shape[:2])
+
+
+# ----------------------------------------------------------------------------- trainer
+
+
+class TD3BC:
+    """K TD3+BC learners updated together; ``train_step`` is one update of all of them."""
+
+    def __init__(
+        self,
+        config: TD3BCConfig,
+        seeds: Sequence[int],
+        obs_dim: int = OBS_DIM,
+        action_dim: int = ACTION_DIM,
+        device: str | torch.device = "cpu",
+    ) -> None:
+        """Initialise each skill's actor and twin critics from its own seed.
+
+        Args:
+            config: hyper-parameters.
+            seeds: one seed per skill (K = ``len(seeds)``).
+            obs_dim: observation size.
+            action_dim: action size.
+            device: "cpu" or "cuda"; weights are drawn on the CPU, so the device does not
+                change the initial weights.
+        """
+        self.config = config
+        self.device = torch.device(device)
+        self.num_skills = len(seeds)
+        self.steps = 0
+        actors, critics = [], []
+        for seed in seeds:
+            generator = torch.Generator().manual_seed(seed)
+            actors.append(init_mlp((obs_dim, *config.hidden_sizes, action_dim), generator))
+            critic_sizes = (obs_dim + action_dim, *config.hidden_sizes, 1)
+            critics.append([init_mlp(critic_sizes, generator) for _ in range(2)])
+        twins = [critic[j] for j in range(2) for critic in critics]
+        self.actor = stack_mlps(actors, self.device)
+        self.critic = stack_mlps(twins, self.device)
+        self.actor_target = [p.detach().clone() for p in self.actor]
+        self.critic_target = [p.detach().clone() for p in self.critic]
+        fused = self.device.type in ("cpu", "cuda")
+        self.actor_optimizer = torch.optim.Adam(self.actor, lr=config.actor_lr, fused=fused)
+        self.critic_optimizer = torch.optim.Adam(self.critic, lr=config.critic_lr, fused=fused)
+
+    def actions(self, observations: torch.Tensor) -> torch.Tensor:
+        """The actors' normalised actions.
+
+        Args:
+            observations: (K, B, obs_dim) normalised observations, row k for skill k.
+
+        Returns:
+            (K, B, action_dim) actions in [-1, 1].
+        """
+        with torch.no_grad():
+            return torch.tanh(mlp_forward(self.actor, observations.to(self.device)))
+
+    def train_step(self, batch: Batch) -> dict[str, torch.Tensor]:
+        """One TD3+BC update of every skill: critics always, actors every ``policy_freq``.
+
+        Args:
+            batch: from ``BatchedReplay.sample``.
+
+        Returns:
+            Per-skill (K,) detached tensors: ``critic_loss`` and ``q_mean`` (Q1 on the data)
+            every step; ``actor_loss``, ``bc_loss`` and ``lam`` (lambda) on actor steps.
+        """
+        cfg = self.config
+        self.steps += 1
+        with torch.no_grad():
+            noise = (batch.noise * cfg.policy_noise).clamp(-cfg.noise_clip, cfg.noise_clip)
+            next_actions = torch.tanh(mlp_forward(self.actor_target, batch.next_observations))
+            next_actions = (next_actions + noise).clamp(-1.0, 1.0)
+            target_q = critic_values(self.critic_target, batch.next_observations, next_actions)
+            target_q = batch.rewards + cfg.gamma * (1.0 - batch.dones) * target_q.amin(0)
+
+        q = critic_values(self.critic, batch.observations, batch.actions)
+        critic_loss = (q - target_q).square().mean(-1).sum(0)
+        self.critic_optimizer.zero_grad(set_to_none=True)
+        critic_loss.sum().backward()
+        self.critic_optimizer.step()
+        logs = {"critic_loss": critic_loss.detach(), "q_mean": q[0].detach().mean(-1)}
+
+        if self.steps % cfg.policy_freq == 0:
+            pi = torch.tanh(mlp_forward(self.actor, batch.observations))
+            q1_params = [p[: self.num_skills].detach() for p in self.critic]
+            q1 = critic_values(q1_params, batch.observations, pi)[0]
+            lam = cfg.alpha / q1.abs().mean(-1).detach()
+            bc_loss = (pi - batch.actions).square().mean((1, 2))
+            actor_loss = -lam * q1.mean(-1) + bc_loss
+            self.actor_optimizer.zero_grad(set_to_none=True)
+            actor_loss.sum().backward()
+            self.actor_optimizer.step()
+            with torch.no_grad():
+                for target, source in zip(
+                    self.actor_target + self.critic_target, self.actor + self.critic, strict=True
+                ):
+                    target.lerp_(source, cfg.tau)
+            logs.update(actor_loss=actor_loss.detach(), bc_loss=bc_loss.detach(), lam=lam)
+        return logs
+
+    def actor_layers(self, skill: int) -> list[tuple[np.ndarray, np.ndarray]]:
+        """One skill's actor as numpy arrays (for checkpoints).
+
+        Args:
+            skill: index k of the skill in this trainer.
+
+        Returns:
+            ``[(weight (in, out), bias (out,)), ...]`` float32; ReLU between layers, tanh
+            after the last.
+        """
+        arrays = [p[skill].detach().cpu().numpy().copy() for p in self.actor]
+        return [(w, b.reshape(-1)) for w, b in zip(arrays[::2], arrays[1::2], strict=True)]
