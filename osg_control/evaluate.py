@@ -138,3 +138,196 @@ def format_skill_table(table: dict[str, Any]) -> str:
         rates = "".join(f" {r:10.3f}" for r in row["rates"])
         lines.append(f"{i:2d} {row['skill']:26s}{rates} {row['scripted']:9.2f}")
     return "\n".join(lines)
+
+
+@cache
+def _executor(models: str | None, max_replans: int) -> Any:
+    from osg_control.executor import load_executor
+
+    return load_executor(models, max_replans=max_replans)
+
+
+@cache
+def _plain_env(noise: float) -> KitchenEnv:
+    return KitchenEnv(config=EnvConfig(obs_noise_std=noise))
+
+
+@dataclass(frozen=True)
+class StartEpisode:
+    """One episode from a random start in one of the 8 start regions."""
+
+    models: str | None
+    region: int
+    noise: float
+    seed: int
+    cell: int
+    index: int
+
+
+def _reset_in_region(env: KitchenEnv, task: StartEpisode, door: float = 0.0) -> np.ndarray:
+    rng = np.random.default_rng(np.random.SeedSequence([task.seed, task.cell, task.index]))
+    _name, position = start_regions()[task.region]
+    obs, _ = env.reset(
+        seed=int(rng.integers(2**31)),
+        options={
+            "position": position,
+            "radius": 0.15,
+            "angle": 0.2,
+            "gripper": "open",
+            "world": {"door_opening": door},
+        },
+    )
+    return obs
+
+
+def run_reach_episode(task: StartEpisode) -> tuple[bool, bool, bool]:
+    """Table III: classify a random start, run the chosen movement skill.
+
+    Returns:
+        (success, whether the start lay outside the chosen skill's initiation region,
+        success of the nearest-start-node baseline from the same start).
+    """
+    executor = _executor(task.models, 0)
+    env = _plain_env(task.noise)
+    outcomes = []
+    outside = False
+    for chooser in ("classifier", "nearest"):
+        # Door open: every movement skill's path is then clear of the handle.
+        obs = _reset_in_region(env, task, door=0.40)
+        if chooser == "classifier":
+            name = str(executor.classifier.predict(obs))
+            skill = SKILLS_BY_NAME[name]
+            distance = np.linalg.norm(env.tcp_pose()[0] - np.asarray(skill.start_node.position))
+            outside = bool(distance > skill.start_radius)
+        else:
+            name = nearest_start_skill(env.tcp_pose()[0])
+        outcome, _ = executor.run_skill(env, SKILLS_BY_NAME[name], obs)
+        outcomes.append(outcome.success)
+    return outcomes[0], outside, outcomes[1]
+
+
+def nearest_start_skill(position: np.ndarray) -> str:
+    """The movement skill whose start node is nearest to a TCP position (the baseline)."""
+    movement = [s for s in SKILLS if s.kind == "movement"]
+    return min(
+        movement, key=lambda s: float(np.linalg.norm(position - np.asarray(s.start_node.position)))
+    ).name
+
+
+def reach_table(
+    models: str | None = None,
+    episodes: int = 200,
+    seed: int = 0,
+    workers: int = 2,
+    noise: float = 0.0,
+) -> dict[str, Any]:
+    """Table III: entry-skill success from random starts around the 8 start regions."""
+    regions = start_regions()
+    tasks = [
+        StartEpisode(models, r, noise, seed, r, i)
+        for r in range(len(regions))
+        for i in range(episodes)
+    ]
+    results = np.array(list(LocalExecutor(workers).map(run_reach_episode, tasks)), dtype=float)
+    results = results.reshape(len(regions), episodes, 3).mean(axis=1)
+    rows = [
+        {"start": name, "success": r[0], "outside_initiation": r[1], "nearest_node_success": r[2]}
+        for (name, _), r in zip(regions, results.tolist(), strict=True)
+    ]
+    return {
+        "episodes": episodes,
+        "seed": seed,
+        "noise": noise,
+        "rows": rows,
+        "average": float(results[:, 0].mean()),
+        "nearest_node_average": float(results[:, 2].mean()),
+    }
+
+
+def format_reach_table(table: dict[str, Any]) -> str:
+    """Table III as text."""
+    lines = [
+        f"Table III: reaching the graph from random starts ({table['episodes']} episodes each)",
+        f"{'#':>2} {'start region':34s} {'success':>8s} {'outside I':>10s} {'nearest-node':>13s}",
+    ]
+    for i, row in enumerate(table["rows"], 1):
+        lines.append(
+            f"{i:2d} {row['start']:34s} {row['success']:8.3f} {row['outside_initiation']:10.3f} "
+            f"{row['nearest_node_success']:13.3f}"
+        )
+    lines.append(
+        f"   {'average':34s} {table['average']:8.3f} {'':10s} {table['nearest_node_average']:13.3f}"
+    )
+    return "\n".join(lines)
+
+
+@dataclass(frozen=True)
+class TaskEpisode:
+    """One full-pipeline episode of a task from a start region."""
+
+    start: StartEpisode
+    task: str
+    max_replans: int
+
+
+def run_task_episode(episode: TaskEpisode) -> bool:
+    """Tables IV/V: run the executor on a task from a random start; True on success."""
+    spec = TASKS[episode.task]
+    env = _plain_env(episode.start.noise)
+    obs = _reset_in_region(env, episode.start, door=spec["door_opening"])
+    executor = _executor(episode.start.models, episode.max_replans)
+    return bool(executor.execute(spec["goal"], env, obs).success)
+
+
+def task_table(
+    models: str | None = None,
+    episodes: int = 100,
+    seed: int = 0,
+    workers: int = 2,
+    noise: float = 0.02,
+    tasks: Sequence[str] = tuple(TASKS),
+    replans: Sequence[int] = (0, 2),
+) -> dict[str, Any]:
+    """Tables IV and V: task success per start region, without and with replanning."""
+    regions = start_regions()
+    cells = [(t, r, k) for k in replans for t in tasks for r in range(len(regions))]
+    jobs = [
+        TaskEpisode(StartEpisode(models, r, noise, seed, 100 + ti * 10 + r, i), t, k)
+        for (t, r, k) in cells
+        for ti in [list(tasks).index(t)]
+        for i in range(episodes)
+    ]
+    outcomes = np.array(list(LocalExecutor(workers).map(run_task_episode, jobs)), dtype=float)
+    rates = outcomes.reshape(len(replans), len(tasks), len(regions), episodes).mean(axis=3)
+    return {
+        "episodes": episodes,
+        "seed": seed,
+        "noise": noise,
+        "regions": [name for name, _ in regions],
+        "tasks": list(tasks),
+        "replans": list(replans),
+        "rates": rates.tolist(),
+        "averages": rates.mean(axis=2).tolist(),
+    }
+
+
+def format_task_table(table: dict[str, Any]) -> str:
+    """Tables IV and V as text, one block per replanning budget."""
+    lines = []
+    for k, budget in enumerate(table["replans"]):
+        lines.append(
+            f"Tables IV/V: task success, sigma = {table['noise']:g} m, max replans = {budget} "
+            f"({table['episodes']} episodes per cell)"
+        )
+        lines.append(
+            f"{'#':>2} {'start region':34s}" + "".join(f" {t:>19s}" for t in table["tasks"])
+        )
+        for r, region in enumerate(table["regions"]):
+            values = "".join(
+                f" {table['rates'][k][t][r]:19.3f}" for t in range(len(table["tasks"]))
+            )
+            lines.append(f"{r + 1:2d} {region:34s}{values}")
+        averages = "".join(f" {v:19.3f}" for v in table["averages"][k])
+        lines.append(f"   {'average':34s}{averages}")
+        lines.append("")
+    return "\n".join(lines)

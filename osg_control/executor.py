@@ -188,6 +188,8 @@ class Executor:
             if set(goal) <= facts:
                 result.success = True
                 break
+            if "hand-empty" in facts and obs[7] != GRIPPER_OPEN_CMD:
+                obs = _open_gripper(env)
             t0 = time.perf_counter()
             entry, plan, planned = self.plan(goal, obs, facts)
             planning_time += time.perf_counter() - t0
@@ -235,6 +237,15 @@ class Executor:
                 outcome.reset_steps = env.joint_reset()
                 obs = env.observe()
         return obs, None
+
+
+def _open_gripper(env: KitchenEnv, steps: int = 5) -> np.ndarray:
+    """Open an empty but closed gripper in place (recovery before a movement skill, whose
+    termination needs it open)."""
+    obs = env.observe()
+    for _ in range(steps):
+        obs, *_ = env.step(np.array([0.0, 0.0, 0.0, 0.0, 0.0, 0.0, GRIPPER_OPEN_CMD]))
+    return obs
 
 
 def load_executor(directory: str | Path | None = None, **kwargs: Any) -> Executor:

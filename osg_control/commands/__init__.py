@@ -7,9 +7,11 @@ returning the exit code). Add a module here to expose it.
 COMMAND_MODULES: tuple[str, ...] = (
     "collect",
     "run",
+    "evaluate",
     "classifier",
     "train",
     "graph",
     "pddl",
     "plan",
+    "reproduce",
 )

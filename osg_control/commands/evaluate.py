@@ -1,0 +1,46 @@
+"""``osg evaluate tasks``: the paper's Tables IV and V over the 8 start regions."""
+
+from __future__ import annotations
+
+import argparse
+import json
+from pathlib import Path
+
+from osg_control.evaluate import TASKS, format_task_table, task_table
+
+
+def register(subparsers: argparse._SubParsersAction) -> None:
+    """Add ``evaluate`` (verb ``tasks``) to the ``osg`` parser."""
+    evaluate = subparsers.add_parser("evaluate", help="full-pipeline evaluations")
+    verbs = evaluate.add_subparsers(dest="evaluate_command", metavar="VERB", required=True)
+    tasks = verbs.add_parser("tasks", help="Tables IV and V: the five tasks from 8 start regions")
+    tasks.add_argument("--episodes", type=int, default=100, help="episodes per cell")
+    tasks.add_argument("--noise", type=float, default=0.02, help="TCP observation noise [m]")
+    tasks.add_argument("--seed", type=int, default=0)
+    tasks.add_argument("--workers", type=int, default=2)
+    tasks.add_argument("--task", nargs="*", default=list(TASKS), choices=list(TASKS))
+    tasks.add_argument(
+        "--replans",
+        type=int,
+        nargs="+",
+        default=[0, 2],
+        help="replanning budgets to compare (default: 0 and 2)",
+    )
+    tasks.add_argument("--models", type=Path, default=None, help="defaults directory")
+    tasks.add_argument("--json", action="store_true")
+    tasks.set_defaults(func=run_tasks)
+
+
+def run_tasks(args: argparse.Namespace) -> int:
+    """Print Tables IV and V."""
+    table = task_table(
+        str(args.models) if args.models else None,
+        args.episodes,
+        args.seed,
+        args.workers,
+        args.noise,
+        args.task,
+        args.replans,
+    )
+    print(json.dumps(table, indent=2) if args.json else format_task_table(table))
+    return 0

@@ -1,0 +1,240 @@
+"""``osg reproduce``: the whole pipeline from nothing to Tables I-V, with a report.
+
+Stages: collect -> train (TD3+BC, all skills batched) -> skill graph + PDDL -> classifier ->
+Table I -> Table II -> Table III -> Tables IV/V -> report. Each stage's time is printed and
+recorded. The output directory's ``defaults/`` has the layout of the shipped defaults
+(``skills/``, ``classifier/``, ``manifest.json``); the shipped ones are a copy of it.
+"""
+
+from __future__ import annotations
+
+import argparse
+import hashlib
+import json
+import shlex
+import subprocess
+import sys
+import time
+from collections.abc import Callable
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+from osg_control import __version__
+from osg_control.defaults import MANIFEST
+from osg_control.paths import PACKAGE_DIR
+
+
+@dataclass(frozen=True)
+class Scale:
+    """How big each stage is."""
+
+    episodes: int
+    train_steps: int
+    table_i_episodes: int
+    reach_episodes: int
+    task_episodes: int
+
+
+FULL = Scale(
+    episodes=300, train_steps=20000, table_i_episodes=200, reach_episodes=200, task_episodes=100
+)
+QUICK = Scale(episodes=40, train_steps=300, table_i_episodes=4, reach_episodes=2, task_episodes=1)
+
+
+def register(subparsers: argparse._SubParsersAction) -> None:
+    """Add ``reproduce`` to the ``osg`` parser."""
+    parser = subparsers.add_parser("reproduce", help="run the whole pipeline and write a report")
+    parser.add_argument("--quick", action="store_true", help="a few-minute smoke run")
+    parser.add_argument("--out", type=Path, default=Path("osg-reproduction"))
+    parser.add_argument("--seed", type=int, default=0)
+    parser.add_argument("--workers", type=int, default=2)
+    parser.add_argument("--noise", type=float, default=0.02, help="noise for Tables IV/V [m]")
+    parser.add_argument("--json", action="store_true", help="print the figures as JSON")
+    parser.set_defaults(func=run)
+
+
+def _sha256(path: Path) -> str:
+    return hashlib.sha256(path.read_bytes()).hexdigest()
+
+
+def _git_commit() -> str | None:
+    try:
+        result = subprocess.run(
+            ["git", "rev-parse", "HEAD"],
+            cwd=PACKAGE_DIR.parent,
+            capture_output=True,
+            text=True,
+            check=True,
+        )
+    except (OSError, subprocess.CalledProcessError):
+        return None
+    return result.stdout.strip()
+
+
+def run(args: argparse.Namespace) -> int:
+    """Run every stage, print each stage's time, write the report."""
+    from osg_control.cli import main as osg
+
+    scale = QUICK if args.quick else FULL
+    out: Path = args.out
+    data, defaults = out / "data", out / "defaults"
+    seed, workers = str(args.seed), str(args.workers)
+    stage_seconds: dict[str, float] = {}
+    figures: dict[str, Any] = {}
+
+    def stage(name: str, action: Callable[[], Any]) -> Any:
+        print(f"== {name}", flush=True)
+        started = time.perf_counter()
+        value = action()
+        stage_seconds[name] = round(time.perf_counter() - started, 1)
+        print(f"== {name}: {stage_seconds[name]} s", flush=True)
+        return value
+
+    def cli(*argv: str) -> int:
+        code = osg(list(argv))
+        if code:
+            raise SystemExit(f"osg reproduce: stage 'osg {' '.join(argv)}' exited {code}")
+        return code
+
+    stage(
+        "collect",
+        lambda: cli(
+            "collect",
+            "--skill",
+            "all",
+            "--episodes",
+            str(scale.episodes),
+            "--workers",
+            workers,
+            "--seed",
+            seed,
+            "--out",
+            str(data),
+        ),
+    )
+    stage(
+        "train",
+        lambda: cli(
+            "train",
+            "--skill",
+            "all",
+            "--steps",
+            str(scale.train_steps),
+            "--seed",
+            seed,
+            "--data",
+            str(data),
+            "--out",
+            str(defaults / "skills"),
+            "--threads",
+            "1",
+        ),
+    )
+    stage(
+        "graph+pddl",
+        lambda: (
+            cli(
+                "graph",
+                "--data",
+                str(data),
+                "--out",
+                str(out / "graph.json"),
+                "--png",
+                str(out / "graph.png"),
+            ),
+            cli("pddl", "export", "--out", str(out / "pddl"), "--graph", str(out / "graph.json")),
+        ),
+    )
+    stage(
+        "classifier",
+        lambda: cli(
+            "classifier",
+            "train",
+            "--data",
+            str(data),
+            "--out",
+            str(defaults / "classifier"),
+            "--seed",
+            seed,
+        ),
+    )
+    _write_manifest(defaults, data, args, scale)
+    figures["table_i"] = stage("table I", lambda: _table_i(defaults, scale, args))
+    figures["table_ii"] = stage("table II", lambda: _table_ii(defaults, data, args.seed))
+    figures["table_iii"] = stage("table III", lambda: _table_iii(defaults, scale, args))
+    figures["tables_iv_v"] = stage("tables IV/V", lambda: _tables_iv_v(defaults, scale, args))
+    figures["stage_seconds"] = stage_seconds
+    figures["run"] = {
+        "command": "osg " + " ".join(map(shlex.quote, sys.argv[1:])),
+        "quick": args.quick,
+        "seed": args.seed,
+        "workers": args.workers,
+        "package_version": __version__,
+        "total_seconds": round(sum(stage_seconds.values()), 1),
+    }
+    from osg_control.report import write_report
+
+    written = write_report(figures, out)
+    if args.json:
+        print(json.dumps(figures, indent=2))
+    else:
+        for name, seconds in stage_seconds.items():
+            print(f"{name:14s} {seconds:8.1f} s")
+        print("report: " + ", ".join(map(str, written)))
+    return 0
+
+
+def _write_manifest(defaults: Path, data: Path, args: argparse.Namespace, scale: Scale) -> None:
+    manifest = {
+        "command": f"osg reproduce{' --quick' if args.quick else ''} --seed {args.seed} "
+        f"--out {args.out}",
+        "seed": args.seed,
+        "scale": scale.__dict__,
+        "package_version": __version__,
+        "git_commit": _git_commit(),
+        "datasets_sha256": {p.name: _sha256(p) for p in sorted(data.glob("*.h5"))},
+    }
+    (defaults / MANIFEST).write_text(json.dumps(manifest, indent=2))
+
+
+def _table_i(defaults: Path, scale: Scale, args: argparse.Namespace) -> dict[str, Any]:
+    from osg_control.evaluate import format_skill_table, skill_table
+
+    table = skill_table(
+        defaults / "skills",
+        (0.0, 0.01, 0.02),
+        scale.table_i_episodes,
+        args.seed,
+        args.workers,
+        scripted_episodes=max(scale.table_i_episodes, 20),
+    )
+    print(format_skill_table(table))
+    return table
+
+
+def _table_ii(defaults: Path, data: Path, seed: int) -> dict[str, Any]:
+    from osg_control.classifier import StateClassifier, evaluate
+    from osg_control.classifier_data import load_classifier_data, movement_classes
+    from osg_control.classifier_metrics import format_report
+
+    model = StateClassifier.load(defaults / "classifier")
+    report = evaluate(model, load_classifier_data(data, movement_classes(), seed).test)
+    print(format_report(report))
+    return dict(report.to_dict())
+
+
+def _table_iii(defaults: Path, scale: Scale, args: argparse.Namespace) -> dict[str, Any]:
+    from osg_control.evaluate import format_reach_table, reach_table
+
+    table = reach_table(str(defaults), scale.reach_episodes, args.seed, args.workers)
+    print(format_reach_table(table))
+    return table
+
+
+def _tables_iv_v(defaults: Path, scale: Scale, args: argparse.Namespace) -> dict[str, Any]:
+    from osg_control.evaluate import format_task_table, task_table
+
+    table = task_table(str(defaults), scale.task_episodes, args.seed, args.workers, args.noise)
+    print(format_task_table(table))
+    return table

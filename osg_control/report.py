@@ -1,0 +1,136 @@
+"""The reproduction report: Markdown beside the paper's numbers, JSON, and bar plots."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+from typing import Any
+
+PAPER_TABLE_I = [
+    (1.0, 1.0, 1.0), (1.0, 1.0, 1.0), (1.0, 1.0, 1.0), (1.0, 1.0, 1.0), (1.0, 1.0, 1.0),
+    (1.0, 0.99, 0.99), (0.96, 0.96, 0.83), (1.0, 0.94, 0.28), (1.0, 1.0, 1.0), (1.0, 1.0, 1.0),
+    (0.99, 0.98, 0.98), (0.95, 0.77, 0.65),
+]  # fmt: skip
+"""Table I of the paper: skills 1-12 at sigma = 0, 1 cm, 2 cm."""
+PAPER_TABLE_II = {"accuracy": 0.84, "corrected_accuracy": 0.927}
+PAPER_TABLE_III = [0.96, 0.96, 1.0, 0.97, 1.0, 1.0, 1.0, 1.0]
+PAPER_TASK_AVERAGES = {
+    "pick-up": 0.92,
+    "open-door": 0.84,
+    "open+pick-up": 0.85,
+    "pick-up+place": 0.82,
+    "open+pick-up+place": 0.78,
+}
+"""Averages of the paper's Tables IV and V."""
+
+
+def _md_table(header: list[str], rows: list[list[Any]]) -> list[str]:
+    lines = ["| " + " | ".join(header) + " |", "|" + "---|" * len(header)]
+    for row in rows:
+        cells = [f"{v:.3f}" if isinstance(v, float) else str(v) for v in row]
+        lines.append("| " + " | ".join(cells) + " |")
+    return lines
+
+
+def markdown(figures: dict[str, Any]) -> str:
+    """The report as Markdown: every table that was computed, beside the paper's."""
+    out = ["# osg-control reproduction report", ""]
+    out += [f"- {k}: {v}" for k, v in figures.get("run", {}).items()]
+    out.append("")
+    if "stage_seconds" in figures:
+        out += ["## Stage times", ""]
+        out += _md_table(
+            ["stage", "seconds"], [[k, v] for k, v in figures["stage_seconds"].items()]
+        )
+        out.append("")
+    if "table_i" in figures:
+        t = figures["table_i"]
+        header = (
+            ["#", "skill"] + [f"σ={n:g}" for n in t["noise"]] + ["scripted", "paper σ=0/1/2 cm"]
+        )
+        rows = [
+            [i + 1, r["skill"], *r["rates"], r["scripted"], "/".join(map(str, PAPER_TABLE_I[i]))]
+            for i, r in enumerate(t["rows"])
+        ]
+        out += [f"## Table I: skills under observation noise ({t['episodes']} episodes/cell)", ""]
+        out += _md_table(header, rows) + [""]
+    if "table_ii" in figures:
+        t = figures["table_ii"]
+        out += ["## Table II: classifier", ""]
+        out += _md_table(
+            ["metric", "ours", "paper"],
+            [
+                ["accuracy", t["accuracy"], PAPER_TABLE_II["accuracy"]],
+                [
+                    "corrected accuracy",
+                    t["corrected_accuracy"],
+                    PAPER_TABLE_II["corrected_accuracy"],
+                ],
+            ],
+        ) + [""]
+    if "table_iii" in figures:
+        t = figures["table_iii"]
+        rows = [
+            [i + 1, r["start"], r["success"], r["nearest_node_success"], PAPER_TABLE_III[i]]
+            for i, r in enumerate(t["rows"])
+        ]
+        rows.append(["", "average", t["average"], t["nearest_node_average"], 0.99])
+        out += [f"## Table III: reaching the graph ({t['episodes']} episodes/start)", ""]
+        out += _md_table(["#", "start", "classifier", "nearest node", "paper"], rows) + [""]
+    if "tables_iv_v" in figures:
+        t = figures["tables_iv_v"]
+        for k, budget in enumerate(t["replans"]):
+            out += [f"## Tables IV/V: tasks, σ = {t['noise']} m, max replans = {budget}", ""]
+            rows = [
+                [r + 1, region, *[t["rates"][k][ti][r] for ti in range(len(t["tasks"]))]]
+                for r, region in enumerate(t["regions"])
+            ]
+            rows.append(["", "average", *t["averages"][k]])
+            rows.append(["", "paper average", *[PAPER_TASK_AVERAGES[x] for x in t["tasks"]]])
+            out += _md_table(["#", "start", *t["tasks"]], rows) + [""]
+    return "\n".join(out)
+
+
+def bar_plots(figures: dict[str, Any], out_dir: Path) -> list[Path]:
+    """One PNG of success bars per table that was computed."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    written = []
+    plots: list[tuple[str, list[str], list[float]]] = []
+    if "table_i" in figures:
+        t = figures["table_i"]
+        plots.append(
+            ("table_i.png", [r["skill"] for r in t["rows"]], [r["rates"][-1] for r in t["rows"]])
+        )
+    if "table_iii" in figures:
+        t = figures["table_iii"]
+        plots.append(
+            ("table_iii.png", [r["start"] for r in t["rows"]], [r["success"] for r in t["rows"]])
+        )
+    if "tables_iv_v" in figures:
+        t = figures["tables_iv_v"]
+        plots.append(("tables_iv_v.png", t["tasks"], t["averages"][-1]))
+    for name, labels, values in plots:
+        fig, ax = plt.subplots(figsize=(8, 3.5))
+        ax.bar(range(len(values)), values, color="tab:blue")
+        ax.set_xticks(range(len(values)), labels, rotation=45, ha="right", fontsize=7)
+        ax.set_ylim(0, 1.05)
+        ax.axhline(0.95, color="tab:red", lw=0.8, ls="--")
+        ax.set_ylabel("success rate")
+        fig.tight_layout()
+        path = out_dir / name
+        fig.savefig(path, dpi=110)
+        plt.close(fig)
+        written.append(path)
+    return written
+
+
+def write_report(figures: dict[str, Any], out_dir: Path) -> list[Path]:
+    """Write ``report.md``, ``figures.json`` and the plots into ``out_dir``."""
+    out_dir.mkdir(parents=True, exist_ok=True)
+    (out_dir / "figures.json").write_text(json.dumps(figures, indent=2))
+    (out_dir / "report.md").write_text(markdown(figures))
+    return [out_dir / "report.md", out_dir / "figures.json", *bar_plots(figures, out_dir)]
