@@ -1,0 +1,217 @@
+"""Labelled states for the state->skill classifier: class order, merged data sets, split.
+
+The classes are the movement skills, ordered along the skill graph (``class_order``) so that
+skills sharing a start or end node sit next to each other; the corrected accuracy of
+``osg_control.classifier_metrics`` relies on that order. Every step of ``<DIR>/<skill>.h5``
+contributes its ``observations`` row (the state before the step) labelled with the index of
+its skill in that order. The train/test split is by episode, within each data set, so no
+test state shares an episode with a training state.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import itertools
+from collections.abc import Sequence
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from osg_control.datasets import load_dataset
+from osg_control.errors import DatasetError
+from osg_control.skills import MOVEMENT_SKILLS, SkillSpec, get_skill
+
+MAX_ORDERED_CLASSES = 9
+"""``class_order`` tries every permutation; 9! = 362,880 is the most it accepts."""
+
+
+def _shared_nodes(a: SkillSpec, b: SkillSpec) -> int:
+    return len({a.start, a.end} & {b.start, b.end})
+
+
+def class_order(skills: Sequence[SkillSpec]) -> list[str]:
+    """Order skills so that skills sharing a start or end node are adjacent.
+
+    Tries every permutation and keeps the best by, in turn:
+
+    1. the number of adjacent pairs that share a node;
+    2. the number of nodes shared over adjacent pairs (a skill sits next to its reverse);
+    3. the number of adjacent pairs that end at the same node: a policy slows down into
+       its termination pose, so skills ending together have the most similar states;
+    4. the first in permutation order of ``skills`` (deterministic).
+
+    Args:
+        skills: the skills to order, at most ``MAX_ORDERED_CLASSES``.
+
+    Returns:
+        Their names in the chosen order.
+
+    Raises:
+        ValueError: for more than ``MAX_ORDERED_CLASSES`` skills.
+    """
+    if len(skills) > MAX_ORDERED_CLASSES:
+        raise ValueError(
+            f"class_order tries every permutation; {len(skills)} skills is too many "
+            f"(at most {MAX_ORDERED_CLASSES})"
+        )
+
+    def score(order: tuple[SkillSpec, ...]) -> tuple[int, int, int]:
+        pairs = list(itertools.pairwise(order))
+        shared = [_shared_nodes(a, b) for a, b in pairs]
+        same_end = sum(a.end == b.end for a, b in pairs)
+        return sum(1 for s in shared if s), sum(shared), same_end
+
+    best = max(itertools.permutations(skills), key=score)
+    return [skill.name for skill in best]
+
+
+def movement_classes() -> tuple[str, ...]:
+    """The classifier's classes: the movement skills in ``class_order``."""
+    return tuple(class_order([get_skill(name) for name in MOVEMENT_SKILLS]))
+
+
+@dataclass(frozen=True)
+class LabelledStates:
+    """States with their class labels.
+
+    Attributes:
+        observations: (N, 10) float32 states.
+        labels: (N,) int64 class indices.
+    """
+
+    observations: np.ndarray
+    labels: np.ndarray
+
+    def __len__(self) -> int:
+        return len(self.labels)
+
+
+@dataclass(frozen=True)
+class ClassifierData:
+    """The merged movement data sets, split into train and test states.
+
+    Attributes:
+        classes: class names; a label is an index into it.
+        train: training states.
+        test: held-out states (whole episodes).
+        sha256: hex digest of each data set file, by skill name.
+        seed: the seed of the split.
+        test_fraction: fraction of each data set's episodes held out.
+    """
+
+    classes: tuple[str, ...]
+    train: LabelledStates
+    test: LabelledStates
+    sha256: dict[str, str]
+    seed: int
+    test_fraction: float
+
+
+def file_sha256(path: Path) -> str:
+    """Hex SHA-256 digest of a file's contents.
+
+    Args:
+        path: the file.
+
+    Returns:
+        The digest.
+    """
+    digest = hashlib.sha256()
+    with open(path, "rb") as f:
+        for block in iter(lambda: f.read(1 << 20), b""):
+            digest.update(block)
+    return digest.hexdigest()
+
+
+def dataset_path(data_dir: Path, skill: str) -> Path:
+    """Where a skill's data set lives: ``<data_dir>/<skill>.h5``."""
+    return Path(data_dir) / f"{skill}.h5"
+
+
+def held_out_episodes(num_episodes: int, test_fraction: float, seed: int, skill: str) -> np.ndarray:
+    """Choose the held-out episodes of one skill's data set.
+
+    The choice depends only on the arguments, not on which other data sets are loaded or
+    in what order.
+
+    Args:
+        num_episodes: episodes in the data set, at least 2.
+        test_fraction: fraction to hold out, in (0, 1); rounded, but at least one episode
+            on each side.
+        seed: non-negative split seed.
+        skill: the skill's name, mixed into the seed.
+
+    Returns:
+        (num_episodes,) bool, True for a test episode.
+    """
+    n_test = min(max(round(num_episodes * test_fraction), 1), num_episodes - 1)
+    mask = np.zeros(num_episodes, dtype=bool)
+    skill_key = int.from_bytes(hashlib.sha256(skill.encode()).digest()[:8], "little")
+    rng = np.random.default_rng([seed, skill_key])
+    mask[rng.permutation(num_episodes)[:n_test]] = True
+    return mask
+
+
+def _merge(parts: list[LabelledStates]) -> LabelledStates:
+    return LabelledStates(
+        observations=np.concatenate([p.observations for p in parts]).astype(np.float32),
+        labels=np.concatenate([p.labels for p in parts]).astype(np.int64),
+    )
+
+
+def load_classifier_data(
+    data_dir: Path,
+    classes: Sequence[str],
+    seed: int,
+    test_fraction: float = 0.2,
+) -> ClassifierData:
+    """Load, label, merge and split the data sets of ``classes``.
+
+    Args:
+        data_dir: folder holding ``<skill>.h5`` for every class.
+        classes: skill names; the label of a state is its skill's index here.
+        seed: non-negative seed of the episode split (same seed, same file: same split).
+        test_fraction: fraction of each data set's episodes held out, in (0, 1).
+
+    Returns:
+        The split data with the files' digests.
+
+    Raises:
+        ValueError: ``test_fraction`` outside (0, 1) or a negative seed.
+        DatasetError: a file is missing or malformed, records another skill, or has fewer
+            than two episodes; the message names the file.
+    """
+    if not 0.0 < test_fraction < 1.0:
+        raise ValueError(f"test_fraction must be in (0, 1), got {test_fraction}")
+    if seed < 0:
+        raise ValueError(f"seed must be non-negative, got {seed}")
+    train_parts: list[LabelledStates] = []
+    test_parts: list[LabelledStates] = []
+    digests: dict[str, str] = {}
+    for label, skill in enumerate(classes):
+        path = dataset_path(data_dir, skill)
+        dataset = load_dataset(path)
+        if dataset.skill_name != skill:
+            raise DatasetError(f"{path}: records skill {dataset.skill_name!r}, expected {skill!r}")
+        if dataset.num_episodes < 2:
+            raise DatasetError(
+                f"{path}: {dataset.num_episodes} episode(s); the train/test split needs at least 2"
+            )
+        observations = dataset.arrays["observations"]
+        in_test = np.repeat(
+            held_out_episodes(dataset.num_episodes, test_fraction, seed, skill),
+            dataset.episode_lengths,
+        )
+        labels = np.full(len(observations), label, dtype=np.int64)
+        train_parts.append(LabelledStates(observations[~in_test], labels[~in_test]))
+        test_parts.append(LabelledStates(observations[in_test], labels[in_test]))
+        digests[skill] = file_sha256(path)
+    return ClassifierData(
+        classes=tuple(classes),
+        train=_merge(train_parts),
+        test=_merge(test_parts),
+        sha256=digests,
+        seed=seed,
+        test_fraction=test_fraction,
+    )

@@ -1,0 +1,184 @@
+"""``osg classifier``: train and evaluate the state->skill classifier (the paper's Table II).
+
+Each verb is one ``add_<verb>(verbs)`` function listed in ``VERBS`` that adds its parser and
+sets ``func``; a new verb (e.g. the simulation test ``reach``) is one more such function.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+from collections.abc import Callable
+from pathlib import Path
+from typing import Any, TypeAlias
+
+from osg_control.classifier import StateClassifier, evaluate, reload_split
+from osg_control.classifier_data import load_classifier_data, movement_classes
+from osg_control.classifier_metrics import format_report
+from osg_control.classifier_train import TrainConfig, train_classifier
+from osg_control.paths import cache_dir
+
+Verbs: TypeAlias = "argparse._SubParsersAction[argparse.ArgumentParser]"
+
+
+def _int_at_least(minimum: int) -> Callable[[str], int]:
+    def parse(text: str) -> int:
+        value = int(text)
+        if value < minimum:
+            raise argparse.ArgumentTypeError(f"must be an integer >= {minimum}, got {value}")
+        return value
+
+    return parse
+
+
+def _data_dir(path: Path | None) -> Path:
+    return Path(path) if path else cache_dir() / "data"
+
+
+def _model_dir(path: Path | None) -> Path:
+    return Path(path) if path else cache_dir() / "classifier"
+
+
+def _add_data_argument(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument(
+        "--data",
+        type=Path,
+        help="folder of the movement data sets <skill>.h5 (default: $OSG_CACHE_DIR/data)",
+    )
+
+
+def _emit(args: argparse.Namespace, payload: dict[str, Any], text: str) -> None:
+    print(json.dumps(payload, indent=2) if args.json else text)
+
+
+def run_train(args: argparse.Namespace) -> int:
+    """Train on the movement data sets, save the checkpoint, print Table II on the test split.
+
+    Args:
+        args: parsed ``osg classifier train`` arguments.
+
+    Returns:
+        0.
+    """
+    config = TrainConfig(
+        epochs=args.epochs, batch_size=args.batch_size, seed=args.seed, threads=args.threads
+    )
+    data = load_classifier_data(_data_dir(args.data), movement_classes(), args.seed)
+    model = train_classifier(data, config, progress=True)
+    out = _model_dir(args.out)
+    sidecar = model.save(out)
+    report = evaluate(model, data.test)
+    losses = model.info["training"]["epoch_losses"]
+    text = (
+        f"trained on {len(data.train)} states, tested on {len(data.test)} held-out states "
+        f"(split by episode, seed {args.seed}); final training loss {losses[-1]:.4f}\n"
+        f"{format_report(report)}\nsaved {out}"
+    )
+    payload = {"model": str(out), "sidecar": str(sidecar), **model.info, **report.to_dict()}
+    _emit(args, payload, text)
+    return 0
+
+
+def run_eval(args: argparse.Namespace) -> int:
+    """Print Table II of a saved classifier on the test split it was trained with.
+
+    Args:
+        args: parsed ``osg classifier eval`` arguments.
+
+    Returns:
+        0.
+    """
+    model_dir = _model_dir(args.model)
+    model = StateClassifier.load(model_dir)
+    data, same_data = reload_split(model, _data_dir(args.data))
+    if not same_data:
+        print(
+            "osg: warning: the data sets differ from those the classifier was trained on "
+            "(sha256); the test split may overlap its training states",
+            file=sys.stderr,
+        )
+    report = evaluate(model, data.test)
+    payload = {"model": str(model_dir), "same_data": same_data, **report.to_dict()}
+    _emit(args, payload, format_report(report))
+    return 0
+
+
+def add_train(verbs: Verbs) -> None:
+    """Add ``osg classifier train``."""
+    parser = verbs.add_parser(
+        "train",
+        help="train the classifier on the movement data sets",
+        description="Merge the movement skills' data sets (states labelled by skill), split "
+        "them 80/20 by episode, train the MLP and save it; prints Table II on the test split.",
+    )
+    _add_data_argument(parser)
+    parser.add_argument(
+        "--out", type=Path, help="checkpoint folder (default: $OSG_CACHE_DIR/classifier)"
+    )
+    parser.add_argument(
+        "--seed",
+        type=_int_at_least(0),
+        default=0,
+        help="split, init and shuffle seed (default: %(default)s)",
+    )
+    defaults = TrainConfig()
+    parser.add_argument(
+        "--epochs", type=_int_at_least(1), default=defaults.epochs, help="(default: %(default)s)"
+    )
+    parser.add_argument(
+        "--batch-size",
+        type=_int_at_least(1),
+        default=defaults.batch_size,
+        help="states per step (default: %(default)s)",
+    )
+    parser.add_argument(
+        "--threads",
+        type=_int_at_least(1),
+        default=defaults.threads,
+        help="torch CPU threads (default: %(default)s)",
+    )
+    parser.add_argument("--json", action="store_true", help="print JSON instead of a table")
+    parser.set_defaults(func=run_train)
+
+
+def add_eval(verbs: Verbs) -> None:
+    """Add ``osg classifier eval``."""
+    parser = verbs.add_parser(
+        "eval",
+        help="print Table II of a saved classifier",
+        description="Confusion matrix on the checkpoint's held-out episodes, accuracy, "
+        "corrected accuracy and the nearest-start-node baseline.",
+    )
+    _add_data_argument(parser)
+    parser.add_argument(
+        "--model", type=Path, help="checkpoint folder (default: $OSG_CACHE_DIR/classifier)"
+    )
+    parser.add_argument("--json", action="store_true", help="print JSON instead of a table")
+    parser.set_defaults(func=run_eval)
+
+
+VERBS: tuple[Callable[[Verbs], None], ...] = (add_train, add_eval)
+"""The ``osg classifier`` verbs, in help order."""
+
+
+def register(subparsers: Verbs) -> None:
+    """Add ``osg classifier`` and its verbs.
+
+    Args:
+        subparsers: the ``osg`` sub-command group.
+    """
+    parser = subparsers.add_parser(
+        "classifier",
+        help="state->skill classifier: train, eval",
+        description="The state->skill classifier of the Offline Skill Graph paper.",
+    )
+
+    def show_help(_args: argparse.Namespace) -> int:
+        parser.print_help()
+        return 0
+
+    parser.set_defaults(func=show_help)
+    verbs = parser.add_subparsers(dest="classifier_command", metavar="VERB")
+    for add_verb in VERBS:
+        add_verb(verbs)

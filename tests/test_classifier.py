@@ -1,0 +1,374 @@
+"""State->skill classifier: data split, training, metrics, class order, checkpoint, CLI."""
+
+from __future__ import annotations
+
+import dataclasses
+import hashlib
+import itertools
+import json
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from osg_control.classifier import (
+    SIDECAR_FILE,
+    WEIGHTS_FILE,
+    StateClassifier,
+    evaluate,
+    reload_split,
+)
+from osg_control.classifier_data import (
+    ClassifierData,
+    class_order,
+    dataset_path,
+    load_classifier_data,
+    movement_classes,
+)
+from osg_control.classifier_metrics import (
+    accuracy,
+    confusion_matrix,
+    corrected_accuracy,
+    format_report,
+    nearest_node_predict,
+)
+from osg_control.classifier_train import TrainConfig, train_classifier
+from osg_control.cli import main
+from osg_control.datasets import ACTION_DIM, OBS_DIM, Episode, write_episodes
+from osg_control.errors import CheckpointError, DatasetError
+from osg_control.skills import MOVEMENT_SKILLS, SKILLS, TOP_DOWN_QUAT, SkillSpec, get_skill
+
+EPISODES = 20
+STEPS = 25
+FAST = TrainConfig(epochs=20, batch_size=64, seed=0)
+
+
+def _episode(skill: SkillSpec, rng: np.random.Generator, t_range: tuple[float, float]) -> Episode:
+    """States along the skill's start->end segment (fraction ``t_range``) with 5 mm noise."""
+    start = np.array(skill.start_node.position)
+    end = np.array(skill.end_node.position)
+    t = np.linspace(*t_range, STEPS + 1)[:, None]
+    states = np.zeros((STEPS + 1, OBS_DIM), dtype=np.float32)
+    states[:, :3] = start + t * (end - start) + rng.normal(0.0, 0.005, (STEPS + 1, 3))
+    states[:, 3:7] = TOP_DOWN_QUAT
+    states[:, 9] = 0.08
+    rewards = np.zeros(STEPS, dtype=np.float32)
+    rewards[-1] = 1.0
+    return Episode(
+        observations=states[:-1],
+        next_observations=states[1:],
+        actions=np.zeros((STEPS, ACTION_DIM), dtype=np.float32),
+        rewards=rewards,
+        terminations=rewards > 0,
+        truncations=np.zeros(STEPS, dtype=bool),
+        world_states=np.zeros((STEPS, 11), dtype=np.float32),
+    )
+
+
+def write_movement_datasets(
+    data_dir: Path, t_range: tuple[float, float] = (0.25, 0.5), seed: int = 0
+) -> None:
+    """One synthetic data set per movement skill; the default range keeps them separable."""
+    rng = np.random.default_rng(seed)
+    for name in MOVEMENT_SKILLS:
+        skill = get_skill(name)
+        episodes = [_episode(skill, rng, t_range) for _ in range(EPISODES)]
+        write_episodes(
+            dataset_path(data_dir, name), episodes, {"skill": skill.to_json(), "seed": 0}
+        )
+
+
+@pytest.fixture(scope="module")
+def data_dir(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    path = tmp_path_factory.mktemp("movement-data")
+    write_movement_datasets(path)
+    return path
+
+
+@pytest.fixture(scope="module")
+def data(data_dir: Path) -> ClassifierData:
+    return load_classifier_data(data_dir, movement_classes(), seed=0)
+
+
+@pytest.fixture(scope="module")
+def model(data: ClassifierData) -> StateClassifier:
+    return train_classifier(data, FAST)
+
+
+def _shares_node(a: SkillSpec, b: SkillSpec) -> bool:
+    return bool({a.start, a.end} & {b.start, b.end})
+
+
+def _sharing_pairs(order: list[str] | tuple[SkillSpec, ...]) -> int:
+    skills = [get_skill(s) if isinstance(s, str) else s for s in order]
+    return sum(_shares_node(a, b) for a, b in itertools.pairwise(skills))
+
+
+# --- data ---------------------------------------------------------------------------------
+
+
+def test_split_is_by_episode_and_seeded(data_dir: Path, data: ClassifierData) -> None:
+    held_out = round(EPISODES * 0.2)
+    assert len(data.test) == len(MOVEMENT_SKILLS) * held_out * STEPS
+    assert len(data.train) == len(MOVEMENT_SKILLS) * (EPISODES - held_out) * STEPS
+    assert np.bincount(data.test.labels).tolist() == [held_out * STEPS] * len(MOVEMENT_SKILLS)
+    again = load_classifier_data(data_dir, movement_classes(), seed=0)
+    np.testing.assert_array_equal(again.test.observations, data.test.observations)
+    other = load_classifier_data(data_dir, movement_classes(), seed=1)
+    assert not np.array_equal(other.test.observations, data.test.observations)
+    assert set(data.sha256) == set(MOVEMENT_SKILLS)
+    # a skill's held-out episodes do not depend on the class order
+    reordered = load_classifier_data(data_dir, movement_classes()[::-1], seed=0)
+    assert sorted(map(tuple, reordered.test.observations.tolist())) == sorted(
+        map(tuple, data.test.observations.tolist())
+    )
+    with pytest.raises(ValueError, match="seed must be non-negative"):
+        load_classifier_data(data_dir, movement_classes(), seed=-1)
+
+
+def test_missing_or_mislabelled_data_set_is_named(tmp_path: Path, data_dir: Path) -> None:
+    with pytest.raises(DatasetError, match=f"{movement_classes()[0]}.h5: data set file not found"):
+        load_classifier_data(tmp_path, movement_classes(), seed=0)
+    (tmp_path / "move-home-to-door.h5").write_bytes(
+        dataset_path(data_dir, "move-home-to-cube").read_bytes()
+    )
+    with pytest.raises(DatasetError, match="records skill 'move-home-to-cube'"):
+        load_classifier_data(tmp_path, ["move-home-to-door"], seed=0)
+
+
+# --- training and prediction --------------------------------------------------------------
+
+
+def test_training_separates_synthetic_skills(model: StateClassifier, data: ClassifierData) -> None:
+    report = evaluate(model, data.test)
+    assert report.accuracy >= 0.95
+    assert report.corrected_accuracy >= report.accuracy
+    losses = model.info["training"]["epoch_losses"]
+    assert len(losses) == FAST.epochs and losses[-1] < losses[0]
+
+
+def test_same_seed_same_weights(data: ClassifierData, model: StateClassifier) -> None:
+    again = train_classifier(data, FAST)
+    for (w1, b1), (w2, b2) in zip(model.layers, again.layers, strict=True):
+        np.testing.assert_array_equal(w1, w2)
+        np.testing.assert_array_equal(b1, b2)
+    other = train_classifier(data, dataclasses.replace(FAST, seed=1, epochs=1))
+    assert not np.array_equal(other.layers[0][0], model.layers[0][0])
+
+
+def test_predict_single_and_batch(model: StateClassifier, data: ClassifierData) -> None:
+    states = data.test.observations[:5]
+    names = model.predict(states)
+    assert isinstance(names, list) and len(names) == 5
+    assert model.predict(states[0]) == names[0]
+    assert model.predict(states[0].tolist()) == names[0]
+    proba = model.predict_proba(states)
+    assert proba.shape == (5, len(model.classes))
+    np.testing.assert_allclose(proba.sum(axis=1), 1.0, rtol=1e-5)
+    assert model.predict_proba(states[0]).shape == (len(model.classes),)
+
+
+@pytest.mark.parametrize(
+    ("state", "message"),
+    [
+        (np.zeros(9), r"shape \(10,\) or \(B, 10\), got \(9,\)"),
+        (np.zeros((2, 3)), r"got \(2, 3\)"),
+        (np.zeros((1, 2, 10)), r"got \(1, 2, 10\)"),
+        (np.array([*np.zeros(9), np.nan]), r"NaN or inf \(row\(s\) \[0\]\)"),
+        (np.vstack([np.zeros(10), np.full(10, np.inf)]), r"NaN or inf \(row\(s\) \[1\]\)"),
+    ],
+)
+def test_bad_states_refused(model: StateClassifier, state: np.ndarray, message: str) -> None:
+    for method in (model.predict, model.predict_proba):
+        with pytest.raises(ValueError, match=message):
+            method(state)
+
+
+# --- metrics ------------------------------------------------------------------------------
+
+
+def test_confusion_matrix_sums_to_one_and_trace_is_accuracy(
+    model: StateClassifier, data: ClassifierData
+) -> None:
+    rng = np.random.default_rng(0)
+    labels, predictions = rng.integers(0, 6, 500), rng.integers(0, 6, 500)
+    matrix = confusion_matrix(labels, predictions, 6)
+    assert matrix.sum() == pytest.approx(1.0)
+    assert accuracy(matrix) == pytest.approx(np.mean(labels == predictions))
+    report = evaluate(model, data.test)
+    assert report.confusion.sum() == pytest.approx(1.0)
+    predicted = model.predict_index(data.test.observations)
+    assert report.accuracy == pytest.approx(np.mean(predicted == data.test.labels))
+    with pytest.raises(ValueError, match="class indices"):
+        confusion_matrix(np.array([0, 6]), np.array([0, 1]), 6)
+
+
+def test_corrected_accuracy_hand_example() -> None:
+    counts = np.array(
+        [
+            [10, 2, 1, 0],
+            [3, 12, 0, 1],
+            [0, 2, 8, 4],
+            [1, 0, 1, 5],
+        ],
+        dtype=float,
+    )
+    matrix = counts / counts.sum()  # 50 points
+    assert accuracy(matrix) == pytest.approx(35 / 50)
+    # main diagonal 35 + upper neighbours (2, 0, 4) + lower neighbours (3, 2, 1) = 47
+    assert corrected_accuracy(matrix) == pytest.approx(47 / 50)
+
+
+def test_nearest_node_baseline(model: StateClassifier, data: ClassifierData) -> None:
+    classes = movement_classes()
+    states = np.zeros((len(classes), OBS_DIM))
+    states[:, :3] = [get_skill(name).start_node.position for name in classes]
+    predicted = nearest_node_predict(states, classes)
+    first_with_start: dict[str, int] = {}
+    for i, name in enumerate(classes):
+        first_with_start.setdefault(get_skill(name).start, i)
+    assert predicted.tolist() == [first_with_start[get_skill(n).start] for n in classes]
+    report = evaluate(model, data.test)
+    assert 0.0 < report.baseline_accuracy < report.accuracy
+
+
+def test_format_report_lists_classes_and_accuracies(
+    model: StateClassifier, data: ClassifierData
+) -> None:
+    report = evaluate(model, data.test)
+    text = format_report(report)
+    for name in report.classes:
+        assert name in text
+    assert f"{report.accuracy:.3f}" in text and f"{report.corrected_accuracy:.3f}" in text
+    assert f"{report.baseline_accuracy:.3f}" in text
+
+
+# --- class order --------------------------------------------------------------------------
+
+
+def test_class_order_of_real_skills_keeps_node_sharing_skills_adjacent() -> None:
+    movement = [s for s in SKILLS if s.kind == "movement"]
+    order = class_order(movement)
+    assert sorted(order) == sorted(MOVEMENT_SKILLS)
+    assert tuple(order) == movement_classes()
+    best = max(_sharing_pairs(p) for p in itertools.permutations(movement))
+    assert _sharing_pairs(order) == best == len(order) - 1
+    # a skill and its reverse share both nodes, so they are adjacent
+    position = {name: i for i, name in enumerate(order)}
+    for a, b in itertools.combinations(movement, 2):
+        if {a.start, a.end} == {b.start, b.end}:
+            assert abs(position[a.name] - position[b.name]) == 1
+    # with both reverse pairs adjacent, at most 3 adjacent pairs can end at one node
+    # (the two ending above the cube, and two of the three pairs ending at home)
+    ends = [get_skill(name).end for name in order]
+    assert sum(a == b for a, b in itertools.pairwise(ends)) == 3
+
+
+def test_class_order_recovers_a_chain_and_is_deterministic() -> None:
+    base = get_skill(MOVEMENT_SKILLS[0])
+    nodes = ["n0", "n1", "n2", "n3", "n4", "n5", "n6"]
+    chain = [
+        dataclasses.replace(base, name=f"s{i}", start=nodes[i], end=nodes[i + 1]) for i in range(6)
+    ]
+    shuffled = [chain[i] for i in (3, 0, 5, 1, 4, 2)]
+    order = class_order(shuffled)
+    assert order in (["s0", "s1", "s2", "s3", "s4", "s5"], ["s5", "s4", "s3", "s2", "s1", "s0"])
+    assert class_order(shuffled) == order
+    with pytest.raises(ValueError, match="too many"):
+        class_order([dataclasses.replace(base, name=f"x{i}") for i in range(10)])
+
+
+# --- checkpoint ---------------------------------------------------------------------------
+
+
+def test_checkpoint_round_trip(
+    tmp_path: Path, model: StateClassifier, data: ClassifierData
+) -> None:
+    model.save(tmp_path)
+    assert sorted(p.name for p in tmp_path.iterdir()) == sorted([SIDECAR_FILE, WEIGHTS_FILE])
+    loaded = StateClassifier.load(tmp_path)
+    states = data.test.observations
+    np.testing.assert_array_equal(loaded.predict_proba(states), model.predict_proba(states))
+    assert loaded.predict(states) == model.predict(states)
+    sidecar = json.loads((tmp_path / SIDECAR_FILE).read_text())
+    for key in ("classes", "normalisation", "config", "seed", "datasets", "package_version"):
+        assert key in sidecar
+    assert sidecar["datasets"] == data.sha256
+    assert sidecar["config"]["batch_size"] == FAST.batch_size
+
+
+def test_checkpoint_class_mismatch_names_both_lists(tmp_path: Path, model: StateClassifier) -> None:
+    model.save(tmp_path)
+    sidecar_path = tmp_path / SIDECAR_FILE
+    sidecar = json.loads(sidecar_path.read_text())
+    stale = list(reversed(sidecar["classes"]))
+    sidecar["classes"] = stale
+    sidecar_path.write_text(json.dumps(sidecar))
+    with pytest.raises(CheckpointError) as err:
+        StateClassifier.load(tmp_path)
+    assert str(stale) in str(err.value) and str(list(movement_classes())) in str(err.value)
+
+
+def test_checkpoint_missing_or_corrupt_file_is_named(
+    tmp_path: Path, model: StateClassifier
+) -> None:
+    with pytest.raises(CheckpointError, match=f"{SIDECAR_FILE}: .*not found"):
+        StateClassifier.load(tmp_path / "nowhere")
+    model.save(tmp_path)
+    weights = tmp_path / WEIGHTS_FILE
+    weights.write_bytes(b"not safetensors")
+    with pytest.raises(CheckpointError, match=f"{WEIGHTS_FILE}: contents do not match"):
+        StateClassifier.load(tmp_path)
+    sidecar_path = tmp_path / SIDECAR_FILE
+    sidecar = json.loads(sidecar_path.read_text())
+    sidecar["weights_sha256"] = hashlib.sha256(weights.read_bytes()).hexdigest()
+    sidecar_path.write_text(json.dumps(sidecar))
+    with pytest.raises(CheckpointError, match=f"{WEIGHTS_FILE}: corrupt"):
+        StateClassifier.load(tmp_path)
+    sidecar_path.write_text("{ truncated")
+    with pytest.raises(CheckpointError, match=f"{SIDECAR_FILE}: corrupt"):
+        StateClassifier.load(tmp_path)
+    weights.unlink()
+    with pytest.raises(CheckpointError, match=f"{WEIGHTS_FILE}: .*not found"):
+        StateClassifier.load(tmp_path)
+
+
+def test_reload_split_recreates_the_test_set_and_flags_changed_data(
+    tmp_path: Path, model: StateClassifier, data: ClassifierData, data_dir: Path
+) -> None:
+    again, same = reload_split(model, data_dir)
+    assert same
+    np.testing.assert_array_equal(again.test.observations, data.test.observations)
+    write_movement_datasets(tmp_path, seed=1)
+    assert reload_split(model, tmp_path)[1] is False
+
+
+# --- CLI ----------------------------------------------------------------------------------
+
+
+def test_cli_train_then_eval(
+    tmp_path: Path, data_dir: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    out = tmp_path / "clf"
+    args = ["classifier", "train", "--data", str(data_dir), "--out", str(out)]
+    assert main([*args, "--epochs", "3", "--batch-size", "256", "--json"]) == 0
+    trained = json.loads(capsys.readouterr().out)
+    assert trained["classes"] == list(movement_classes())
+    assert trained["config"]["epochs"] == 3
+    assert main(["classifier", "eval", "--data", str(data_dir), "--model", str(out), "--json"]) == 0
+    evaluated = json.loads(capsys.readouterr().out)
+    assert evaluated["same_data"] is True
+    assert evaluated["accuracy"] == pytest.approx(trained["accuracy"])
+    np.testing.assert_allclose(evaluated["confusion"], trained["confusion"])
+    assert main(["classifier", "eval", "--data", str(data_dir), "--model", str(out)]) == 0
+    assert "corrected accuracy" in capsys.readouterr().out
+
+
+def test_cli_defaults_to_cache_dir_and_reports_errors(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
+) -> None:
+    monkeypatch.setenv("OSG_CACHE_DIR", str(tmp_path))
+    assert main(["classifier", "eval"]) == 1
+    assert str(tmp_path / "classifier" / SIDECAR_FILE) in capsys.readouterr().err
+    assert main(["classifier", "train"]) == 1
+    assert str(tmp_path / "data") in capsys.readouterr().err
