@@ -7,8 +7,9 @@ A skill ``NAME`` in a directory is two files:
     as ``x @ weight + bias`` with ReLU between layers and tanh after the last.
 ``NAME.json``
     Everything else: ``obs_dim``, ``action_dim``, ``hidden_sizes``, ``obs_mean`` and ``obs_std``
-    (the actor sees ``(obs - obs_mean) / obs_std``), ``action_scale`` (a physical action is
-    the tanh output times this), ``skill_spec`` (``SkillSpec.to_json`` as an object),
+    (the actor sees ``normalise_observations(obs, obs_mean, obs_std)``), ``action_scale``
+    (a physical action is the tanh output times this), ``skill_spec`` (``SkillSpec.to_json``
+    as an object),
     ``train_config``, ``steps``, ``seed``, ``dataset_sha256``, ``weights_sha256`` (of the
     safetensors file, to detect corruption), ``package_version`` and ``format_version``.
 
@@ -36,6 +37,9 @@ from osg_control.errors import CheckpointError, SkillSpecError
 from osg_control.skills import SkillSpec, skill_from_json
 
 FORMAT_VERSION = 1
+OBS_CLIP = 10.0
+"""Normalised observations are clipped to this many std: a state far outside a skill's data
+(e.g. a gripper command never seen in it) stays a bounded input."""
 WEIGHTS_SUFFIX = ".safetensors"
 SIDECAR_SUFFIX = ".json"
 _SIDECAR_KEYS = (
@@ -277,3 +281,10 @@ def load_checkpoint(
         dataset_sha256=str(sidecar["dataset_sha256"]),
         package_version=str(sidecar["package_version"]),
     )
+
+
+def normalise_observations(
+    observations: np.ndarray, mean: np.ndarray, std: np.ndarray
+) -> np.ndarray:
+    """The actor's and critics' input: ``(obs - mean) / std`` clipped to ``±OBS_CLIP``."""
+    return np.clip((observations - mean) / std, -OBS_CLIP, OBS_CLIP)

@@ -6,7 +6,12 @@ from pathlib import Path
 
 import numpy as np
 
-from osg_control.checkpoints import SIDECAR_SUFFIX, Checkpoint, load_checkpoint
+from osg_control.checkpoints import (
+    SIDECAR_SUFFIX,
+    Checkpoint,
+    load_checkpoint,
+    normalise_observations,
+)
 from osg_control.datasets import ACTION_DIM, OBS_DIM
 from osg_control.errors import CheckpointError
 
@@ -65,7 +70,7 @@ class SkillPolicy:
             )
         if not np.all(np.isfinite(x)):
             raise ValueError(f"skill {self.skill.name!r}: non-finite observation {x}")
-        x = (x - ckpt.obs_mean) / ckpt.obs_std
+        x = normalise_observations(x, ckpt.obs_mean, ckpt.obs_std)
         *hidden, (weight, bias) = ckpt.layers
         for w, b in hidden:
             x = np.maximum(x @ w + b, 0.0)

@@ -14,8 +14,9 @@ skill's seed (``skill_seed``): one for its initial weights, one for its batch in
 smoothing noise. A skill's training therefore does not depend on which skills it is batched
 with, and the same seeds give the same weights (on CPU, bit for bit).
 
-Units: the networks see normalised observations ``(obs - mean) / std`` and work in normalised
-actions in [-1, 1]; a physical action is the actor's tanh output times ``action_scale``.
+Units: the networks see normalised observations (``checkpoints.normalise_observations``:
+``(obs - mean) / std`` clipped to ±``OBS_CLIP``) and work in normalised actions in [-1, 1];
+a physical action is the actor's tanh output times ``action_scale``.
 """
 
 from __future__ import annotations
@@ -28,6 +29,7 @@ from typing import Any
 import numpy as np
 import torch
 
+from osg_control.checkpoints import normalise_observations
 from osg_control.datasets import ACTION_DIM, OBS_DIM, Dataset
 from osg_control.errors import DatasetError
 
@@ -51,12 +53,22 @@ class TD3BCConfig:
     noise_clip: float = 0.5  # clip of that noise [normalised action]
     policy_freq: int = 2  # actor and target updates happen every this many critic updates
     alpha: float = 2.5  # weight of the RL term; lambda = alpha / mean |Q|
-    obs_norm_eps: float = 1e-3  # added to the observation std before dividing by it
+    # Added to the observation std before dividing by it. 1e-2 rather than CORL's 1e-3:
+    # features nearly constant in a skill's data (gripper command, grip force, finger gap
+    # in movement skills) otherwise turn small deviations into inputs of hundreds of std.
+    obs_norm_eps: float = 1e-2
+    # Bounds of the TD target. The reward is sparse (1 once, on the terminal success step),
+    # so every true return lies in [0, 1]; clipping the bootstrapped target to that range
+    # stops the critic from diverging on out-of-data actions (seen here without it:
+    # critic loss 1e5 after 15k updates). None disables the clip.
+    target_q_range: tuple[float, float] | None = (0.0, 1.0)
 
     def to_json_dict(self) -> dict[str, Any]:
         """The fields as a JSON-ready dict (for checkpoint sidecars)."""
         data = asdict(self)
         data["hidden_sizes"] = list(self.hidden_sizes)
+        if self.target_q_range is not None:
+            data["target_q_range"] = list(self.target_q_range)
         return data
 
 
@@ -119,14 +131,16 @@ class SkillData:
 
 
 def prepare_skill_data(
-    dataset: Dataset, action_scale: np.ndarray = ACTION_SCALE, eps: float = 1e-3
+    dataset: Dataset,
+    action_scale: np.ndarray = ACTION_SCALE,
+    eps: float = TD3BCConfig.obs_norm_eps,
 ) -> SkillData:
     """Normalise a loaded data set into training transitions.
 
     Args:
         dataset: the skill's data set (``datasets.load_dataset``).
         action_scale: (action_dim,) per-dimension action bound, physical units.
-        eps: added to the observation std.
+        eps: added to the observation std (default: ``TD3BCConfig``'s).
 
     Returns:
         The skill's training data.
@@ -152,10 +166,10 @@ def prepare_skill_data(
         )
     mean, std = observation_stats(arrays["observations"], eps)
     columns = [
-        (arrays["observations"] - mean) / std,
+        normalise_observations(arrays["observations"], mean, std),
         np.clip(actions, -1.0, 1.0),
         arrays["rewards"][:, None],
-        (arrays["next_observations"] - mean) / std,
+        normalise_observations(arrays["next_observations"], mean, std),
         arrays["terminations"][:, None],
     ]
     return SkillData(
@@ -391,6 +405,8 @@ class TD3BC:
             next_actions = (next_actions + noise).clamp(-1.0, 1.0)
             target_q = critic_values(self.critic_target, batch.next_observations, next_actions)
             target_q = batch.rewards + cfg.gamma * (1.0 - batch.dones) * target_q.amin(0)
+            if cfg.target_q_range is not None:
+                target_q = target_q.clamp(*cfg.target_q_range)
 
         q = critic_values(self.critic, batch.observations, batch.actions)
         critic_loss = (q - target_q).square().mean(-1).sum(0)

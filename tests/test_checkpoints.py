@@ -14,9 +14,11 @@ from test_td3bc import OTHER_SKILL, SKILL, SMALL, toy_data, train
 
 from osg_control import __version__
 from osg_control.checkpoints import (
+    OBS_CLIP,
     Checkpoint,
     checkpoint_paths,
     load_checkpoint,
+    normalise_observations,
     save_checkpoint,
     sha256_file,
 )
@@ -61,12 +63,12 @@ def test_policy_reproduces_the_torch_actor(trained: tuple[TD3BC, SkillData, Path
     policy = SkillPolicy.load(directory, SKILL)
     obs = np.random.default_rng(0).normal(size=(32, 10)).astype(np.float32)
     obs[:, :3] = obs[:, :3] * 0.1 + np.array([0.5, -0.2, 0.15], dtype=np.float32)
-    normalised = torch.as_tensor((obs - data.obs_mean) / data.obs_std)[None]
-    expected = trainer.actions(normalised)[0].numpy() * data.action_scale
+    normalised = torch.as_tensor(normalise_observations(obs, data.obs_mean, data.obs_std))
+    expected = trainer.actions(normalised[None])[0].numpy() * data.action_scale
     batch = policy(obs)
     assert batch.shape == (32, 7) and batch.dtype == np.float32
     np.testing.assert_allclose(batch, expected, rtol=0, atol=1e-6)
-    np.testing.assert_array_equal(policy(obs[3]), batch[3])
+    np.testing.assert_allclose(policy(obs[3]), batch[3], rtol=1e-5, atol=1e-7)
     assert np.all(np.abs(batch) <= data.action_scale)
 
 
@@ -154,6 +156,15 @@ def test_policy_validates_observations(trained: tuple[TD3BC, SkillData, Path]) -
             policy(bad)
     with pytest.raises(ValueError, match="non-finite"):
         policy(np.full(10, np.nan))
+
+
+def test_policy_bounds_observations_far_outside_the_data(
+    trained: tuple[TD3BC, SkillData, Path],
+) -> None:
+    _, _, directory = trained
+    policy = SkillPolicy.load(directory, SKILL)
+    mean, std = policy.checkpoint.obs_mean, policy.checkpoint.obs_std
+    np.testing.assert_allclose(policy(mean + 1e3 * std), policy(mean + OBS_CLIP * std), atol=1e-6)
 
 
 def test_load_policies_loads_every_skill_of_a_directory(

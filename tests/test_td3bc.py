@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 import torch
 
-from osg_control.checkpoints import Checkpoint
+from osg_control.checkpoints import Checkpoint, normalise_observations
 from osg_control.cli import main
 from osg_control.datasets import Episode, load_dataset, write_episodes
 from osg_control.errors import DatasetError
@@ -129,7 +129,7 @@ def test_learns_to_move_toward_goal_from_noisy_demos(tmp_path: Path) -> None:
     distances = rng.uniform(0.03, START_DISTANCE[1], (200, 1))
     offsets *= distances / np.linalg.norm(offsets, axis=1, keepdims=True)
     expert = np.clip(-offsets, -ACTION_SCALE[:3], ACTION_SCALE[:3])  # the noise-free demo
-    obs = (toy_obs(GOAL + offsets) - data.obs_mean) / data.obs_std
+    obs = normalise_observations(toy_obs(GOAL + offsets), data.obs_mean, data.obs_std)
     actions = trainer.actions(torch.as_tensor(obs)[None])[0, :, :3].numpy()
     norms = np.linalg.norm(actions, axis=1) * np.linalg.norm(expert, axis=1)
     cosine = np.sum(actions * expert, axis=1) / norms

@@ -12,6 +12,8 @@ temporary directory instead. Each configuration runs ``--warmup`` updates, then
 ``--repeats`` timed runs of ``--steps`` updates; the best run is reported (the machine may
 be shared). A skill-update is one skill's TD3+BC update (batch 256 by default), so
 skill-updates/s = updates/s x skills. ``GFLOP/s`` counts the matmul work only.
+Skill-updates per CPU-second (process time, all threads) is the figure that other jobs on
+the machine disturb least; with one thread it is what one idle core would reach.
 """
 
 from __future__ import annotations
@@ -108,24 +110,25 @@ def bench(names: list[str], data_dir: Path, args: argparse.Namespace) -> dict[st
     seeds = [skill_seed(0, name) for name in names]
     replay = BatchedReplay([i.data for i in inputs], config.batch_size, seeds, args.device)
     trainer = TD3BC(config, seeds, device=args.device)
-    best = float("inf")
+    wall, cpu = float("inf"), float("inf")
     for run in range(args.repeats + 1):
         steps = args.warmup if run == 0 else args.steps
-        start = time.perf_counter()
+        start_wall, start_cpu = time.perf_counter(), time.process_time()
         for _ in range(steps):
             trainer.train_step(replay.sample())
         if args.device == "cuda":
             torch.cuda.synchronize()
         if run:
-            best = min(best, time.perf_counter() - start)
-    updates_per_s = args.steps / best
-    skill_updates_per_s = updates_per_s * len(names)
+            wall = min(wall, time.perf_counter() - start_wall)
+            cpu = min(cpu, time.process_time() - start_cpu)
+    skill_updates = args.steps * len(names)
     return {
         "skills": len(names),
-        "updates_per_s": updates_per_s,
-        "skill_updates_per_s": skill_updates_per_s,
-        "x_d3rlpy": skill_updates_per_s / D3RLPY_UPDATES_PER_S,
-        "gflop_per_s": skill_updates_per_s * matmul_gflop_per_update(config),
+        "updates_per_s": args.steps / wall,
+        "skill_updates_per_s": skill_updates / wall,
+        "x_d3rlpy": skill_updates / wall / D3RLPY_UPDATES_PER_S,
+        "gflop_per_s": skill_updates / wall * matmul_gflop_per_update(config),
+        "skill_updates_per_cpu_s": skill_updates / cpu,
     }
 
 
@@ -175,11 +178,14 @@ def main() -> None:
         f"TD3+BC, batch {config.batch_size}, hidden {config.hidden_sizes}, {args.device}, "
         f"{report['threads']} thread(s), data: {source}"
     )
-    print(f"{'skills':>6} {'updates/s':>10} {'skill-updates/s':>16} {'x d3rlpy':>9} {'GFLOP/s':>8}")
+    print(
+        f"{'skills':>6} {'updates/s':>10} {'skill-updates/s':>16} {'x d3rlpy':>9} "
+        f"{'GFLOP/s':>8} {'skill-updates/CPU-s':>20}"
+    )
     for r in results:
         print(
             f"{r['skills']:>6} {r['updates_per_s']:>10.1f} {r['skill_updates_per_s']:>16.1f} "
-            f"{r['x_d3rlpy']:>9.2f} {r['gflop_per_s']:>8.1f}"
+            f"{r['x_d3rlpy']:>9.2f} {r['gflop_per_s']:>8.1f} {r['skill_updates_per_cpu_s']:>20.1f}"
         )
 
 
