@@ -158,7 +158,36 @@ def add_eval(verbs: Verbs) -> None:
     parser.set_defaults(func=run_eval)
 
 
-VERBS: tuple[Callable[[Verbs], None], ...] = (add_train, add_eval)
+def run_reach(args: argparse.Namespace) -> int:
+    """Print Table III: classify random starts, run the chosen movement skill."""
+    from osg_control.evaluate import format_reach_table, reach_table
+
+    models = str(args.models) if args.models else None
+    table = reach_table(models, args.episodes, args.seed, args.workers, args.noise)
+    _emit(args, table, format_reach_table(table))
+    return 0
+
+
+def add_reach(verbs: Verbs) -> None:
+    """Add ``osg classifier reach``."""
+    parser = verbs.add_parser(
+        "reach",
+        help="print Table III: reaching the graph from random starts",
+        description="From 8 start regions (4 nodes, 4 edge midpoints), random starts within "
+        "15 cm and 0.2 rad: classify, run the chosen movement skill, count arrivals at its "
+        "termination node; beside it, how often the start lay outside the chosen skill's "
+        "initiation region and the success of the nearest-start-node baseline.",
+    )
+    parser.add_argument("--episodes", type=_int_at_least(1), default=200, help="per start region")
+    parser.add_argument("--seed", type=int, default=0)
+    parser.add_argument("--workers", type=_int_at_least(1), default=2)
+    parser.add_argument("--noise", type=float, default=0.0, help="TCP observation noise [m]")
+    parser.add_argument("--models", type=Path, help="defaults folder (default: shipped)")
+    parser.add_argument("--json", action="store_true", help="print JSON instead of a table")
+    parser.set_defaults(func=run_reach)
+
+
+VERBS: tuple[Callable[[Verbs], None], ...] = (add_train, add_eval, add_reach)
 """The ``osg classifier`` verbs, in help order."""
 
 
@@ -170,7 +199,7 @@ def register(subparsers: Verbs) -> None:
     """
     parser = subparsers.add_parser(
         "classifier",
-        help="state->skill classifier: train, eval",
+        help="state->skill classifier: train, eval, reach",
         description="The state->skill classifier of the Offline Skill Graph paper.",
     )
 

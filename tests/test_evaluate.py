@@ -1,0 +1,55 @@
+"""Evaluation helpers and the report: start regions, table shapes, Markdown/JSON/plots."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import numpy as np
+
+from osg_control.evaluate import TASKS, nearest_start_skill, start_regions
+from osg_control.report import PAPER_TABLE_I, markdown, write_report
+from osg_control.skills import NODES, SKILLS
+
+
+def test_eight_start_regions_four_nodes_four_edge_midpoints() -> None:
+    regions = start_regions()
+    assert len(regions) == 8
+    names = [name for name, _ in regions]
+    assert names[:4] == ["home", "above-cube", "door-front", "cabinet-front"]
+    for name, position in regions[4:]:
+        assert name.startswith("mid(")
+        nearest = min(np.linalg.norm(np.subtract(position, n.position)) for n in NODES.values())
+        assert nearest > 0.075, f"{name} should lie away from every node"
+
+
+def test_nearest_start_skill_picks_a_movement_skill_starting_at_the_nearest_node() -> None:
+    name = nearest_start_skill(np.asarray(NODES["door-front"].position) + 0.01)
+    assert name == "move-door-to-home"
+
+
+def test_tasks_match_the_paper() -> None:
+    assert list(TASKS) == [
+        "pick-up", "open-door", "open+pick-up", "pick-up+place", "open+pick-up+place",
+    ]  # fmt: skip
+    assert TASKS["pick-up+place"]["door_opening"] > 0.3
+
+
+def test_report_writes_markdown_json_and_plots(tmp_path: Path) -> None:
+    figures = {
+        "run": {"command": "osg reproduce --quick"},
+        "stage_seconds": {"collect": 1.0},
+        "table_i": {
+            "noise": [0.0, 0.02],
+            "episodes": 4,
+            "rows": [{"skill": s.name, "rates": [1.0, 0.5], "scripted": 0.45} for s in SKILLS],
+        },
+        "table_ii": {"accuracy": 0.7, "corrected_accuracy": 0.9},
+    }
+    written = write_report(figures, tmp_path)
+    assert json.loads((tmp_path / "figures.json").read_text()) == figures
+    text = (tmp_path / "report.md").read_text()
+    assert "Table I" in text and "0.927" in text
+    assert "/".join(map(str, PAPER_TABLE_I[0])) in markdown(figures)
+    assert (tmp_path / "table_i.png").stat().st_size > 1000
+    assert len(written) == 3
