@@ -37,7 +37,7 @@ class Scale:
 
 
 FULL = Scale(
-    episodes=300, train_steps=20000, table_i_episodes=200, reach_episodes=200, task_episodes=100
+    episodes=300, train_steps=10000, table_i_episodes=200, reach_episodes=200, task_episodes=100
 )
 QUICK = Scale(episodes=40, train_steps=300, table_i_episodes=4, reach_episodes=2, task_episodes=1)
 

@@ -1,0 +1,155 @@
+"""The executor end to end on real MuJoCo with the shipped default skills and classifier."""
+
+from __future__ import annotations
+
+import json
+from collections.abc import Mapping
+
+import numpy as np
+import pytest
+
+from osg_control.defaults import load_defaults, read_manifest
+from osg_control.env import EnvConfig, KitchenEnv
+from osg_control.executor import RESULT_SCHEMA_VERSION, Executor, node_at
+from osg_control.skills import NODES, SKILLS
+
+
+@pytest.fixture(scope="module")
+def defaults() -> tuple[dict, object]:
+    return load_defaults()
+
+
+def test_shipped_defaults_have_a_manifest_and_every_skill(defaults: tuple[dict, object]) -> None:
+    policies, _classifier = defaults
+    assert set(policies) == {s.name for s in SKILLS}
+    manifest = read_manifest()
+    assert manifest["command"].startswith("osg collect")
+    assert len(manifest["datasets_sha256"]) == len(SKILLS)
+
+
+def test_node_at_recognises_nodes_and_gripper_state() -> None:
+    obs = np.zeros(10)
+    obs[:3] = NODES["home"].position
+    obs[7] = 1.0
+    assert node_at(obs, {"hand-empty"}) == "home"
+    obs[:3] += [0.05, 0, 0]
+    assert node_at(obs, {"hand-empty"}) is None
+    obs[:3] = NODES["cube-lifted"].position
+    obs[7] = -1.0
+    assert node_at(obs, {"holding-cube", "cube-lifted"}) == "cube-lifted"
+
+
+def _run(
+    executor: Executor, goal: list[str], seed: int, door: float = 0.0
+) -> tuple[KitchenEnv, dict]:
+    env = KitchenEnv(config=EnvConfig(obs_noise_std=0.0))
+    obs, _ = env.reset(
+        seed=seed,
+        options={"node": "home", "radius": 0.15, "angle": 0.2, "world": {"door_opening": door}},
+    )
+    return env, executor.execute(goal, env, obs).to_dict()
+
+
+def test_pick_up_from_a_random_start(defaults: tuple[dict, object]) -> None:
+    # The three-stage task is not tested here because the shipped slide-door-open and
+    # place-cube-in-cabinet skills do not succeed yet (see docs/results.md).
+    policies, classifier = defaults
+    env, result = _run(Executor(policies, classifier), ["cube-lifted"], seed=3)
+    assert result["success"], result
+    assert env.world_state().cube_lifted
+    assert result["entry_skill"] is not None
+    assert result["plan"][-2:] == ["grab-cube", "pick-up-cube"]
+    assert all(outcome["success"] for outcome in result["outcomes"])
+
+
+def test_three_stage_plan_is_the_eight_skill_chain(defaults: tuple[dict, object]) -> None:
+    policies, classifier = defaults
+    env = KitchenEnv()
+    obs, _ = env.reset(seed=0, options={"node": "home"})
+    entry, plan, _planned = Executor(policies, classifier).plan(
+        ["door-open", "cube-in-cabinet"], obs, {"hand-empty", "door-closed", "cube-on-counter"}
+    )
+    assert entry is None
+    assert plan == [
+        "move-home-to-door", "grab-handle", "slide-door-open", "move-cabinet-to-cube",
+        "grab-cube", "pick-up-cube", "move-cube-to-cabinet", "place-cube-in-cabinet",
+    ]  # fmt: skip
+
+
+def test_goal_already_true_gives_an_empty_plan(defaults: tuple[dict, object]) -> None:
+    policies, classifier = defaults
+    _env, result = _run(Executor(policies, classifier), ["door-closed"], seed=0)
+    assert result["success"] and result["plan"] == [] and result["outcomes"] == []
+
+
+def test_unreachable_goal_reports_no_plan_without_moving(defaults: tuple[dict, object]) -> None:
+    policies, classifier = defaults
+    env = KitchenEnv()
+    obs, _ = env.reset(seed=0, options={"node": "home"})
+    q_before = env.arm_q
+    # The cube cannot go into the cabinet while the world says it is already lifted and the
+    # only lifting skill needs it on the counter: use a world with no cube-on-counter fact.
+    env.data.qpos[env.scene.cube_qpos + 2] = 0.5  # cube floating high: neither fact holds
+    result = Executor(policies, classifier).execute(["cube-in-cabinet"], env, obs)
+    assert not result.success and result.failure and result.failure.startswith("no plan")
+    assert result.outcomes == []
+    np.testing.assert_allclose(env.arm_q, q_before)
+
+
+class _DropOnce(Mapping):
+    """Policies where the first pick-up opens the gripper (the cube is knocked out)."""
+
+    def __init__(self, policies: dict) -> None:
+        self.policies = policies
+        self.dropped = 0
+
+    def __getitem__(self, name: str):  # type: ignore[no-untyped-def]
+        policy = self.policies[name]
+        if name != "pick-up-cube":
+            return policy
+
+        def dropping(obs: np.ndarray) -> np.ndarray:
+            action = policy(obs)
+            if self.dropped < 3:
+                self.dropped += 1
+                action = action.copy()
+                action[6] = 1.0
+            return action
+
+        return dropping
+
+    def __iter__(self):  # type: ignore[no-untyped-def]
+        return iter(self.policies)
+
+    def __len__(self) -> int:
+        return len(self.policies)
+
+
+def test_a_dropped_cube_triggers_replanning_from_the_re_read_state(
+    defaults: tuple[dict, object],
+) -> None:
+    # The shipped skills do not yet recover (the re-grasp of a displaced cube fails; see
+    # docs/results.md), so this checks the mechanism: the failure is detected from the
+    # world state, the state is re-read and re-classified, and the budget is respected.
+    policies, classifier = defaults
+    injected = _DropOnce(policies)
+    env, result = _run(Executor(injected, classifier, max_replans=2), ["cube-lifted"], seed=1)
+    assert injected.dropped == 3
+    outcomes = [o["skill"] for o in result["outcomes"]]
+    assert outcomes[:4] == ["move-door-to-home", "move-home-to-cube", "grab-cube", "pick-up-cube"]
+    assert not result["outcomes"][3]["success"]
+    assert result["replans"] == 2
+    assert len(outcomes) > 4, "a new plan must run after the failure"
+    assert not env.world_state().cube_grasped
+    assert result["success"] == env.world_state().cube_lifted
+
+
+def test_result_schema_is_stable(defaults: tuple[dict, object]) -> None:
+    policies, classifier = defaults
+    _env, result = _run(Executor(policies, classifier), ["door-closed"], seed=0)
+    assert result["schema_version"] == RESULT_SCHEMA_VERSION
+    assert list(result) == [
+        "schema_version", "goal", "success", "entry_skill", "plan", "outcomes", "replans",
+        "failure", "final_facts", "timings",
+    ]  # fmt: skip
+    json.dumps(result)
