@@ -21,10 +21,10 @@ from safetensors import SafetensorError
 from safetensors.numpy import load_file, save_file
 
 from osg_control import __version__
+from osg_control.checkpoints import sha256_file
 from osg_control.classifier_data import (
     ClassifierData,
     LabelledStates,
-    file_sha256,
     load_classifier_data,
     movement_classes,
 )
@@ -188,7 +188,7 @@ class StateClassifier:
             "format_version": CHECKPOINT_VERSION,
             "classes": list(self.classes),
             "normalisation": {"mean": self.mean.tolist(), "std": self.std.tolist()},
-            "weights_sha256": file_sha256(weights_path),
+            "weights_sha256": sha256_file(weights_path),
             "package_version": __version__,
         }
         sidecar_path = directory / SIDECAR_FILE
@@ -239,7 +239,7 @@ class StateClassifier:
                 f"{sidecar_path}: checkpoint classes {sidecar['classes']} do not match the "
                 f"current movement skills {expected}; retrain with `osg classifier train`"
             )
-        if file_sha256(weights_path) != sidecar["weights_sha256"]:
+        if sha256_file(weights_path) != sidecar["weights_sha256"]:
             raise CheckpointError(
                 f"{weights_path}: contents do not match the sha256 recorded in {sidecar_path}"
             )

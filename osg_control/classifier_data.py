@@ -18,6 +18,7 @@ from pathlib import Path
 
 import numpy as np
 
+from osg_control.checkpoints import sha256_file
 from osg_control.datasets import load_dataset
 from osg_control.errors import DatasetError
 from osg_control.skills import MOVEMENT_SKILLS, SkillSpec, get_skill
@@ -108,22 +109,6 @@ class ClassifierData:
     test_fraction: float
 
 
-def file_sha256(path: Path) -> str:
-    """Hex SHA-256 digest of a file's contents.
-
-    Args:
-        path: the file.
-
-    Returns:
-        The digest.
-    """
-    digest = hashlib.sha256()
-    with open(path, "rb") as f:
-        for block in iter(lambda: f.read(1 << 20), b""):
-            digest.update(block)
-    return digest.hexdigest()
-
-
 def dataset_path(data_dir: Path, skill: str) -> Path:
     """Where a skill's data set lives: ``<data_dir>/<skill>.h5``."""
     return Path(data_dir) / f"{skill}.h5"
@@ -206,7 +191,7 @@ def load_classifier_data(
         labels = np.full(len(observations), label, dtype=np.int64)
         train_parts.append(LabelledStates(observations[~in_test], labels[~in_test]))
         test_parts.append(LabelledStates(observations[in_test], labels[in_test]))
-        digests[skill] = file_sha256(path)
+        digests[skill] = sha256_file(path)
     return ClassifierData(
         classes=tuple(classes),
         train=_merge(train_parts),

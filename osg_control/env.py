@@ -29,8 +29,16 @@ from scipy.spatial.transform import Rotation
 from osg_control.errors import SimulationError
 from osg_control.ik import DiffIKController, IKConfig, joint_reset_controller, solve_ik
 from osg_control.robot import ARM_JOINTS, FINGER_JOINTS, FINGER_OPEN, HOME_Q, TCP_SITE
-from osg_control.scene import CUBE_HALF_SIZE, SceneIndex, WorldState, build_kitchen_model
+from osg_control.scene import (
+    CUBE_HALF_SIZE,
+    SceneIndex,
+    WorldState,
+    build_kitchen_model,
+    world_facts,
+)
 from osg_control.skills import NODES, TOP_DOWN_QUAT, SkillSpec, get_skill
+
+__all__ = ["ACTION_BOUNDS", "EnvConfig", "KitchenEnv", "world_facts"]
 
 OBS_DIM = 10
 ACTION_BOUNDS = np.array([0.02, 0.02, 0.02, 0.1, 0.1, 0.1, 1.0])
@@ -410,22 +418,3 @@ class KitchenEnv(gym.Env):
         if self._renderer is not None:
             self._renderer.close()
             self._renderer = None
-
-
-def world_facts(world: WorldState) -> set[str]:
-    """The PDDL world facts (``skills.WORLD_FACTS``) true in a world state."""
-    facts = set()
-    facts.add("door-open" if world.door_open else "door-closed")
-    if world.cube_grasped:
-        facts.add("holding-cube")
-    if world.handle_grasped:
-        facts.add("holding-handle")
-    if not (world.cube_grasped or world.handle_grasped):
-        facts.add("hand-empty")
-    if world.cube_on_counter:
-        facts.add("cube-on-counter")
-    if world.cube_lifted:
-        facts.add("cube-lifted")
-    if world.cube_in_cabinet:
-        facts.add("cube-in-cabinet")
-    return facts

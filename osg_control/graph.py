@@ -20,7 +20,7 @@ from scipy.cluster.hierarchy import fcluster, linkage
 
 from osg_control.datasets import Dataset
 from osg_control.errors import DatasetError, SkillSpecError
-from osg_control.scene import WorldState, world_state_from_array
+from osg_control.scene import world_facts, world_state_from_array
 from osg_control.skills import NODES, SKILLS, WORLD_FACTS, SkillSpec, get_skill
 
 GRAPH_FORMAT = "osg-skill-graph"
@@ -156,27 +156,6 @@ def graph_from_specs(
     )
     edges = tuple(_edge_from_spec(spec, rates.get(spec.name)) for spec in skills)
     return SkillGraph(nodes=nodes, edges=edges)
-
-
-def world_facts(world: WorldState) -> frozenset[str]:
-    """Abstract a world state into the kitchen's PDDL facts (``skills.WORLD_FACTS``).
-
-    Args:
-        world: the simulator's world state.
-
-    Returns:
-        The facts that hold; hand-empty means neither the cube nor the handle is grasped.
-    """
-    facts = {"door-open" if world.door_open else "door-closed"}
-    named = {
-        "cube-in-cabinet": world.cube_in_cabinet,
-        "cube-on-counter": world.cube_on_counter,
-        "cube-lifted": world.cube_lifted,
-        "holding-cube": world.cube_grasped,
-        "holding-handle": world.handle_grasped,
-        "hand-empty": not (world.cube_grasped or world.handle_grasped),
-    }
-    return frozenset(facts | {name for name, holds in named.items() if holds})
 
 
 @dataclass(frozen=True)

@@ -137,6 +137,27 @@ class WorldState:
         )
 
 
+def world_facts(world: WorldState) -> frozenset[str]:
+    """Abstract a world state into the kitchen's PDDL facts (``skills.WORLD_FACTS``).
+
+    Args:
+        world: the simulator's world state.
+
+    Returns:
+        The facts that hold; hand-empty means neither the cube nor the handle is grasped.
+    """
+    facts = {"door-open" if world.door_open else "door-closed"}
+    named = {
+        "cube-in-cabinet": world.cube_in_cabinet,
+        "cube-on-counter": world.cube_on_counter,
+        "cube-lifted": world.cube_lifted,
+        "holding-cube": world.cube_grasped,
+        "holding-handle": world.handle_grasped,
+        "hand-empty": not (world.cube_grasped or world.handle_grasped),
+    }
+    return frozenset(facts | {name for name, holds in named.items() if holds})
+
+
 WORLD_FIELDS: tuple[str, ...] = (
     "door_opening",
     "valve_angle",
