@@ -87,7 +87,7 @@ def run_task(args: argparse.Namespace) -> int:
             entry = f"entry {result.entry_skill}, " if result.entry_skill else ""
             print(
                 f"episode {episode}: {status}; {entry}plan {' -> '.join(result.plan) or '(empty)'}"
-                f"; replans {result.replans}; {result.timings['total_s']:.1f} s"
+                f"; replans {result.replans}; {result.timings['total_s']:.2f} s"
             )
     if args.video and frames:
         _write_video(args.video, frames)
