@@ -10,12 +10,11 @@ import numpy as np
 import pytest
 import torch
 from safetensors.numpy import load_file
-from test_td3bc import OTHER_SKILL, SKILL, SMALL, toy_data, train
+from test_td3bc import OTHER_SKILL, SKILL, SMALL, toy_checkpoint, toy_data, train
 
 from osg_control import __version__
 from osg_control.checkpoints import (
     OBS_CLIP,
-    Checkpoint,
     checkpoint_paths,
     load_checkpoint,
     normalise_observations,
@@ -34,17 +33,7 @@ def trained_once(tmp_path_factory: pytest.TempPathFactory) -> tuple[TD3BC, Skill
     root = tmp_path_factory.mktemp("trained")
     data = toy_data(root)
     trainer = train([data], [7], steps=10)
-    checkpoint = Checkpoint(
-        skill=get_skill(SKILL),
-        layers=trainer.actor_layers(0),
-        obs_mean=data.obs_mean,
-        obs_std=data.obs_std,
-        action_scale=data.action_scale,
-        train_config=SMALL.to_json_dict(),
-        steps=10,
-        seed=7,
-        dataset_sha256="ab" * 32,
-    )
+    checkpoint = toy_checkpoint(trainer, data, steps=10, seed=7)
     save_checkpoint(root / "skills", checkpoint)
     return trainer, data, root / "skills"
 

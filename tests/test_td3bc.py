@@ -136,17 +136,7 @@ def test_learns_to_move_toward_goal_from_noisy_demos(tmp_path: Path) -> None:
     assert np.median(cosine) > 0.95 and np.quantile(cosine, 0.1) > 0.7, cosine
 
     # Closed loop, through the run-time policy made from the trainer's actor.
-    checkpoint = Checkpoint(
-        skill=get_skill(SKILL),
-        layers=trainer.actor_layers(0),
-        obs_mean=data.obs_mean,
-        obs_std=data.obs_std,
-        action_scale=data.action_scale,
-        train_config=SMALL.to_json_dict(),
-        steps=4000,
-        seed=1,
-        dataset_sha256="",
-    )
+    checkpoint = toy_checkpoint(trainer, data, steps=4000, seed=1)
     policy = SkillPolicy(checkpoint)
     positions, reached = GOAL + offsets, np.zeros(len(offsets), dtype=bool)
     for _ in range(TOY_STEPS):
@@ -258,3 +248,18 @@ def test_default_action_scale_is_the_env_bounds() -> None:
     from osg_control.env import ACTION_BOUNDS
 
     np.testing.assert_array_equal(ACTION_SCALE, ACTION_BOUNDS.astype(np.float32))
+
+
+def toy_checkpoint(trainer: TD3BC, data: SkillData, steps: int, seed: int) -> Checkpoint:
+    """A checkpoint of skill 0 of ``trainer`` trained on the toy data."""
+    return Checkpoint(
+        skill=get_skill(SKILL),
+        layers=trainer.actor_layers(0),
+        obs_mean=data.obs_mean,
+        obs_std=data.obs_std,
+        action_scale=data.action_scale,
+        train_config=SMALL.to_json_dict(),
+        steps=steps,
+        seed=seed,
+        dataset_sha256="ab" * 32,
+    )
