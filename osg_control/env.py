@@ -319,10 +319,11 @@ class KitchenEnv(gym.Env):
         )
         failure = self._simulate()
         self._steps += 1
+        world = self.world_state()
         reward = 0.0
         terminated = False
         if failure is None and self.skill is not None and not self._succeeded:
-            if self.skill_success():
+            if self.skill_success(world=world):
                 self._succeeded = True
                 reward = 1.0
                 terminated = True
@@ -330,7 +331,7 @@ class KitchenEnv(gym.Env):
             terminated = True
         budget = self.skill.max_steps if self.skill else self.config.max_steps
         truncated = not terminated and self._steps >= budget
-        info = self._info()
+        info = self._info(world)
         info["action_applied"] = action
         if failure is not None:
             info["failure"] = failure
@@ -353,8 +354,15 @@ class KitchenEnv(gym.Env):
             return "physics diverged: non-finite joint state"
         return None
 
-    def skill_success(self, skill: SkillSpec | None = None) -> bool:
-        """The success predicate: TCP within tolerance of beta, gripper state, world effect."""
+    def skill_success(
+        self, skill: SkillSpec | None = None, world: WorldState | None = None
+    ) -> bool:
+        """The success predicate: TCP within tolerance of beta, gripper state, world effect.
+
+        Args:
+            skill: the skill to check (default: the env's own).
+            world: the current world state, if the caller has read it already.
+        """
         skill = skill or self.skill
         if skill is None:
             return False
@@ -365,11 +373,11 @@ class KitchenEnv(gym.Env):
         wanted = GRIPPER_OPEN_CMD if end.gripper == "open" else GRIPPER_CLOSED_CMD
         if self._gripper_cmd != wanted:
             return False
-        facts = world_facts(self.world_state())
+        facts = world_facts(world or self.world_state())
         return skill.add_effects <= facts and not (skill.del_effects & facts)
 
-    def _info(self) -> dict[str, Any]:
-        world = self.world_state()
+    def _info(self, world: WorldState | None = None) -> dict[str, Any]:
+        world = world or self.world_state()
         return {
             "world": world,
             "world_facts": sorted(world_facts(world)),

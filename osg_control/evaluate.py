@@ -16,7 +16,7 @@ import numpy as np
 
 from osg_control.collect import LocalExecutor, run_scripted_episode
 from osg_control.env import EnvConfig, KitchenEnv
-from osg_control.skills import NODES, SKILLS, SKILLS_BY_NAME, get_skill
+from osg_control.skills import NODES, SKILLS, SKILLS_BY_NAME, get_skill, nearest_start
 
 TASKS: dict[str, dict[str, Any]] = {
     "pick-up": {"goal": ["cube-lifted"], "door_opening": 0.0},
@@ -208,10 +208,7 @@ def run_reach_episode(task: StartEpisode) -> tuple[bool, bool, bool]:
 
 def nearest_start_skill(position: np.ndarray) -> str:
     """The movement skill whose start node is nearest to a TCP position (the baseline)."""
-    movement = [s for s in SKILLS if s.kind == "movement"]
-    return min(
-        movement, key=lambda s: float(np.linalg.norm(position - np.asarray(s.start_node.position)))
-    ).name
+    return nearest_start((s for s in SKILLS if s.kind == "movement"), position).name
 
 
 def reach_table(

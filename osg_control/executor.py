@@ -23,7 +23,7 @@ import numpy as np
 
 from osg_control.env import GRIPPER_OPEN_CMD, KitchenEnv, world_facts
 from osg_control.planning.api import plan_for_goal
-from osg_control.skills import NODES, SKILLS_BY_NAME, SkillSpec
+from osg_control.skills import NODES, SKILLS_BY_NAME, SkillSpec, nearest_start
 
 RESULT_SCHEMA_VERSION = 1
 NODE_TOLERANCE = 0.02
@@ -148,10 +148,7 @@ class Executor:
         if "hand-empty" in facts:
             return str(self.classifier.predict(obs))
         applicable = [s for s in SKILLS_BY_NAME.values() if s.preconditions <= facts]
-        return min(
-            applicable or SKILLS_BY_NAME.values(),
-            key=lambda s: float(np.linalg.norm(obs[:3] - np.asarray(s.start_node.position))),
-        ).name
+        return nearest_start(applicable or SKILLS_BY_NAME.values(), obs[:3]).name
 
     def run_skill(
         self, env: KitchenEnv, skill: SkillSpec, obs: np.ndarray

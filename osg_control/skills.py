@@ -12,7 +12,7 @@ All poses are TCP positions in the robot base frame [m] with the top-down orient
 from __future__ import annotations
 
 import json
-from collections.abc import Mapping
+from collections.abc import Iterable, Mapping
 from dataclasses import asdict, dataclass, field, replace
 from typing import Any, Literal
 
@@ -301,6 +301,13 @@ def get_skill(name: str) -> SkillSpec:
     except KeyError:
         known = ", ".join(SKILLS_BY_NAME)
         raise SkillSpecError(f"unknown skill {name!r}; known skills: {known}") from None
+
+
+def nearest_start(skills: Iterable[SkillSpec], position: np.ndarray) -> SkillSpec:
+    """The skill whose start node is nearest to a TCP position [m] (first on ties)."""
+    return min(
+        skills, key=lambda s: float(np.linalg.norm(position - np.asarray(s.start_node.position)))
+    )
 
 
 def in_workspace(position: tuple[float, float, float] | np.ndarray) -> bool:

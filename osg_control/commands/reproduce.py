@@ -9,7 +9,6 @@ recorded. The output directory's ``defaults/`` has the layout of the shipped def
 from __future__ import annotations
 
 import argparse
-import hashlib
 import json
 import shlex
 import subprocess
@@ -21,6 +20,7 @@ from pathlib import Path
 from typing import Any
 
 from osg_control import __version__
+from osg_control.checkpoints import sha256_file
 from osg_control.defaults import MANIFEST
 from osg_control.paths import PACKAGE_DIR
 
@@ -52,10 +52,6 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     parser.add_argument("--noise", type=float, default=0.02, help="noise for Tables IV/V [m]")
     parser.add_argument("--json", action="store_true", help="print the figures as JSON")
     parser.set_defaults(func=run)
-
-
-def _sha256(path: Path) -> str:
-    return hashlib.sha256(path.read_bytes()).hexdigest()
 
 
 def _git_commit() -> str | None:
@@ -193,7 +189,7 @@ def _write_manifest(defaults: Path, data: Path, args: argparse.Namespace, scale:
         "scale": scale.__dict__,
         "package_version": __version__,
         "git_commit": _git_commit(),
-        "datasets_sha256": {p.name: _sha256(p) for p in sorted(data.glob("*.h5"))},
+        "datasets_sha256": {p.name: sha256_file(p) for p in sorted(data.glob("*.h5"))},
     }
     (defaults / MANIFEST).write_text(json.dumps(manifest, indent=2))
 
