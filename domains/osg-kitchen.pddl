@@ -5,7 +5,7 @@
     (:types
         node - object
     )
-    (:constants above-cube cabinet-front cube-grasped cube-lifted door-front handle home place-front - node)
+    (:constants above-cube cabinet-front cube-grasped cube-inside cube-lifted door-front handle handle-open home place-front - node)
     (:predicates (at ?n - node)  (cube-in-cabinet) (cube-lifted) (cube-on-counter) (door-closed) (door-open) (hand-empty) (holding-cube) (holding-handle))
     (:functions (total-cost))
     (:action grab-cube
@@ -61,11 +61,21 @@
      (:action place-cube-in-cabinet
         :parameters ()
         :precondition (and (at place-front) (cube-lifted) (door-open) (holding-cube))
-        :effect (and (cube-in-cabinet) (hand-empty) (not (cube-lifted)) (not (holding-cube)) (at cabinet-front) (not (at place-front)) (increase (total-cost) 100))
+        :effect (and (at cube-inside) (not (at place-front)) (increase (total-cost) 100))
+    )
+     (:action release-cube
+        :parameters ()
+        :precondition (and (at cube-inside) (cube-lifted) (door-open) (holding-cube))
+        :effect (and (cube-in-cabinet) (hand-empty) (not (cube-lifted)) (not (holding-cube)) (at cabinet-front) (not (at cube-inside)) (increase (total-cost) 100))
+    )
+     (:action release-handle
+        :parameters ()
+        :precondition (and (at handle-open) (door-open) (holding-handle))
+        :effect (and (hand-empty) (not (holding-handle)) (at cabinet-front) (not (at handle-open)) (increase (total-cost) 100))
     )
      (:action slide-door-open
         :parameters ()
         :precondition (and (at handle) (door-closed) (holding-handle))
-        :effect (and (door-open) (hand-empty) (not (door-closed)) (not (holding-handle)) (at cabinet-front) (not (at handle)) (increase (total-cost) 100))
+        :effect (and (door-open) (not (door-closed)) (at handle-open) (not (at handle)) (increase (total-cost) 100))
     )
 )

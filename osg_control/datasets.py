@@ -103,11 +103,7 @@ class Dataset:
         start = int(self.episode_starts[index])
         stop = start + int(self.episode_lengths[index])
         return Episode(
-            **{
-                key: self.arrays[key][start:stop]
-                for key in STEP_FIELDS
-                if key != "episode_ids"
-            }
+            **{key: self.arrays[key][start:stop] for key in STEP_FIELDS if key != "episode_ids"}
         )
 
 

@@ -6,7 +6,7 @@ Episodes run in parallel workers; episode ``i`` of a cell draws its start from
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from functools import cache
 from pathlib import Path
@@ -16,6 +16,7 @@ import numpy as np
 
 from osg_control.collect import LocalExecutor, run_scripted_episode
 from osg_control.env import EnvConfig, KitchenEnv
+from osg_control.estimator import FilteredPolicy
 from osg_control.skills import NODES, SKILLS, SKILLS_BY_NAME, get_skill, nearest_start
 
 TASKS: dict[str, dict[str, Any]] = {
@@ -65,12 +66,15 @@ class SkillEpisode:
     seed: int
     cell: int
     index: int
+    filter_gain: float | None = None
 
 
 def run_skill_episode(task: SkillEpisode) -> bool:
     """Run a learned skill from a random start in its initiation region; True on success."""
     skill = get_skill(task.skill)
-    policy = _policies(task.policy_dir)[task.skill]
+    policy: Callable[[np.ndarray], np.ndarray] = _policies(task.policy_dir)[task.skill]
+    if task.filter_gain is not None:
+        policy = FilteredPolicy(policy, task.filter_gain)
     env = _env(task.skill, task.noise)
     rng = np.random.default_rng(np.random.SeedSequence([task.seed, task.cell, task.index]))
     obs, _ = env.reset(
@@ -96,17 +100,22 @@ def skill_table(
     workers: int = 2,
     skills: Sequence[str] | None = None,
     scripted_episodes: int = 100,
+    filter_gain: float | None = None,
 ) -> dict[str, Any]:
     """Table I: success rate of every learned skill at each observation-noise level.
 
+    Args:
+        filter_gain: run the policies on ``estimator.TcpFilter`` estimates with this gain;
+            None (the paper's protocol) feeds them the raw noisy observation.
+
     Returns:
-        ``{"noise": [...], "episodes": N, "rows": [{"skill", "rates": [...],
-        "scripted": rate}]}``.
+        ``{"noise": [...], "episodes": N, "filter_gain": g, "rows": [{"skill",
+        "rates": [...], "scripted": rate}]}``.
     """
     names = list(skills or SKILLS_BY_NAME)
     executor = LocalExecutor(workers)
     tasks = [
-        SkillEpisode(name, str(policy_dir), float(noise), seed, cell, index)
+        SkillEpisode(name, str(policy_dir), float(noise), seed, cell, index, filter_gain)
         for cell, (name, noise) in enumerate((n, s) for n in names for s in noise_levels)
         for index in range(episodes)
     ]
@@ -119,6 +128,7 @@ def skill_table(
         "noise": list(noise_levels),
         "episodes": episodes,
         "seed": seed,
+        "filter_gain": filter_gain,
         "rows": [
             {"skill": n, "rates": rates[i].tolist(), "scripted": float(scripted_rates[i])}
             for i, n in enumerate(names)
@@ -133,7 +143,15 @@ def format_skill_table(table: dict[str, Any]) -> str:
         + "".join(f" {'sigma=' + format(n, 'g'):>10s}" for n in table["noise"])
         + f" {'scripted':>9s}"
     )
-    lines = [f"Table I: learned skill success ({table['episodes']} episodes per cell)", header]
+    observed = (
+        "raw observations"
+        if table.get("filter_gain") is None
+        else f"TCP filter gain {table['filter_gain']:g}"
+    )
+    lines = [
+        f"Table I: learned skill success ({table['episodes']} episodes per cell, {observed})",
+        header,
+    ]
     for i, row in enumerate(table["rows"], 1):
         rates = "".join(f" {r:10.3f}" for r in row["rates"])
         lines.append(f"{i:2d} {row['skill']:26s}{rates} {row['scripted']:9.2f}")
@@ -141,10 +159,10 @@ def format_skill_table(table: dict[str, Any]) -> str:
 
 
 @cache
-def _executor(models: str | None, max_replans: int) -> Any:
+def _executor(models: str | None, max_replans: int, filter_gain: float | None) -> Any:
     from osg_control.executor import load_executor
 
-    return load_executor(models, max_replans=max_replans)
+    return load_executor(models, max_replans=max_replans, filter_gain=filter_gain)
 
 
 @cache
@@ -187,7 +205,7 @@ def run_reach_episode(task: StartEpisode) -> tuple[bool, bool, bool]:
         (success, whether the start lay outside the chosen skill's initiation region,
         success of the nearest-start-node baseline from the same start).
     """
-    executor = _executor(task.models, 0)
+    executor = _executor(task.models, 0, None)
     env = _plain_env(task.noise)
     outcomes = []
     outside = False
@@ -265,6 +283,7 @@ class TaskEpisode:
     start: StartEpisode
     task: str
     max_replans: int
+    filter_gain: float | None = None
 
 
 def run_task_episode(episode: TaskEpisode) -> bool:
@@ -272,7 +291,7 @@ def run_task_episode(episode: TaskEpisode) -> bool:
     spec = TASKS[episode.task]
     env = _plain_env(episode.start.noise)
     obs = _reset_in_region(env, episode.start, door=spec["door_opening"])
-    executor = _executor(episode.start.models, episode.max_replans)
+    executor = _executor(episode.start.models, episode.max_replans, episode.filter_gain)
     return bool(executor.execute(spec["goal"], env, obs).success)
 
 
@@ -284,12 +303,16 @@ def task_table(
     noise: float = 0.02,
     tasks: Sequence[str] = tuple(TASKS),
     replans: Sequence[int] = (0, 2),
+    filter_gain: float | None = None,
 ) -> dict[str, Any]:
-    """Tables IV and V: task success per start region, without and with replanning."""
+    """Tables IV and V: task success per start region, without and with replanning.
+
+    ``filter_gain``: the executor's ``TcpFilter`` gain (None: raw observations).
+    """
     regions = start_regions()
     cells = [(t, r, k) for k in replans for t in tasks for r in range(len(regions))]
     jobs = [
-        TaskEpisode(StartEpisode(models, r, noise, seed, 100 + ti * 10 + r, i), t, k)
+        TaskEpisode(StartEpisode(models, r, noise, seed, 100 + ti * 10 + r, i), t, k, filter_gain)
         for (t, r, k) in cells
         for ti in [list(tasks).index(t)]
         for i in range(episodes)
@@ -300,6 +323,7 @@ def task_table(
         "episodes": episodes,
         "seed": seed,
         "noise": noise,
+        "filter_gain": filter_gain,
         "regions": [name for name, _ in regions],
         "tasks": list(tasks),
         "replans": list(replans),

@@ -22,6 +22,7 @@ from typing import Any, Protocol
 import numpy as np
 
 from osg_control.env import GRIPPER_OPEN_CMD, KitchenEnv, world_facts
+from osg_control.estimator import TcpFilter
 from osg_control.planning.api import plan_for_goal
 from osg_control.skills import NODES, SKILLS_BY_NAME, SkillSpec, nearest_start
 
@@ -104,6 +105,9 @@ class Executor:
         planner: a planner registry name (``"astar"`` default).
         max_replans: how many times a failed plan is re-planned (0 = the paper's executor).
         reset_joints: run the joint reset between skills.
+        filter_gain: feed the policies a filtered TCP position (``estimator.TcpFilter``
+            with this gain, carried across the skills of an execution); None feeds the raw
+            observation (the paper's protocol).
     """
 
     def __init__(
@@ -113,6 +117,7 @@ class Executor:
         planner: str = "astar",
         max_replans: int = 2,
         reset_joints: bool = True,
+        filter_gain: float | None = None,
     ) -> None:
         missing = sorted(set(SKILLS_BY_NAME) - set(policies))
         if missing:
@@ -122,6 +127,7 @@ class Executor:
         self.planner = planner
         self.max_replans = max_replans
         self.reset_joints = reset_joints
+        self.filter_gain = filter_gain
         self.on_step: Callable[[KitchenEnv], Any] | None = None
         """Called after every env step (e.g. to record video frames)."""
 
@@ -151,13 +157,24 @@ class Executor:
         return nearest_start(applicable or SKILLS_BY_NAME.values(), obs[:3]).name
 
     def run_skill(
-        self, env: KitchenEnv, skill: SkillSpec, obs: np.ndarray
+        self,
+        env: KitchenEnv,
+        skill: SkillSpec,
+        obs: np.ndarray,
+        tcp_filter: TcpFilter | None = None,
     ) -> tuple[SkillOutcome, np.ndarray]:
-        """Run one option until beta holds or its step budget runs out."""
+        """Run one option until beta holds or its step budget runs out.
+
+        ``tcp_filter``, if given, turns each observation into the policy's input; it is fed
+        every reading and every action of the skill.
+        """
         policy = self.policies[skill.name]
         started = time.perf_counter()
+        action = None
         for step in range(1, skill.max_steps + 1):
-            obs, _reward, _terminated, _truncated, info = env.step(policy(obs))
+            seen = obs if tcp_filter is None else tcp_filter.update(obs, action)
+            action = policy(seen)
+            obs, _reward, _terminated, _truncated, info = env.step(action)
             if self.on_step is not None:
                 self.on_step(env)
             if "failure" in info:
@@ -180,6 +197,7 @@ class Executor:
         started = time.perf_counter()
         facts = world_facts(env.world_state())
         result = ExecutionResult(goal=goal, success=False, entry_skill=None, plan=[])
+        tcp_filter = TcpFilter(self.filter_gain) if self.filter_gain is not None else None
         planning_time = 0.0
         for attempt in range(self.max_replans + 1):
             if set(goal) <= facts:
@@ -195,7 +213,9 @@ class Executor:
             if not planned.solved:
                 result.failure = f"no plan: unreachable goal facts {list(planned.unreached)}"
                 break
-            obs, failed = self._run_sequence(env, ([entry] if entry else []) + plan, obs, result)
+            obs, failed = self._run_sequence(
+                env, ([entry] if entry else []) + plan, obs, result, tcp_filter
+            )
             facts = world_facts(env.world_state())
             if not failed:
                 result.success = set(goal) <= facts
@@ -217,12 +237,17 @@ class Executor:
         return result
 
     def _run_sequence(
-        self, env: KitchenEnv, sequence: list[str], obs: np.ndarray, result: ExecutionResult
+        self,
+        env: KitchenEnv,
+        sequence: list[str],
+        obs: np.ndarray,
+        result: ExecutionResult,
+        tcp_filter: TcpFilter | None,
     ) -> tuple[np.ndarray, str | None]:
         """Run skills in order; stop at the first failure and return its reason."""
         for index, name in enumerate(sequence):
             skill = SKILLS_BY_NAME[name]
-            outcome, obs = self.run_skill(env, skill, obs)
+            outcome, obs = self.run_skill(env, skill, obs, tcp_filter)
             facts = world_facts(env.world_state())
             if outcome.success and not (skill.add_effects <= facts):
                 outcome.success = False

@@ -106,6 +106,17 @@ class SkillGraph:
         """The node names, in order."""
         return tuple(node.name for node in self.nodes)
 
+    def edge(self, name: str) -> SkillEdge:
+        """The edge of a named skill.
+
+        Raises:
+            KeyError: no edge has that name.
+        """
+        for edge in self.edges:
+            if edge.name == name:
+                return edge
+        raise KeyError(f"no skill {name!r} in the graph; skills: {[e.name for e in self.edges]}")
+
     def to_dict(self) -> dict[str, Any]:
         """A JSON-ready dictionary (see ``save_graph``)."""
         return {"format": GRAPH_FORMAT, "version": GRAPH_VERSION, **asdict(self)}
@@ -319,7 +330,7 @@ def graph_from_datasets(
         seed: seeds the subsample of large point sets.
 
     Returns:
-        The graph over all twelve skills; skills without data are listed as ``no-data``.
+        The graph over all the skills; skills without data are listed as ``no-data``.
 
     Raises:
         DatasetError: no data set, or two data sets for the same skill.

@@ -109,9 +109,10 @@ class WorldState:
 
     @property
     def cube_in_cabinet(self) -> bool:
-        """The cube's centre is inside the cabinet's interior box."""
+        """The cube rests in the cabinet: its centre inside the interior box, not grasped."""
         pos = np.asarray(self.cube_pos)
-        return bool(np.all(pos > CABINET_INTERIOR_LOW) and np.all(pos < CABINET_INTERIOR_HIGH))
+        inside = np.all(pos > CABINET_INTERIOR_LOW) and np.all(pos < CABINET_INTERIOR_HIGH)
+        return bool(inside and not self.cube_grasped)
 
     @property
     def cube_on_counter(self) -> bool:

@@ -31,6 +31,9 @@ class ScriptedPolicy:
         self.rng = rng
         self.threshold = 0.0
         self._step = 0
+        budgets = [w.steps or self.params.steps_per_waypoint for w in skill.waypoints]
+        self._ends = np.cumsum(budgets)
+        """The step at which each waypoint's budget ends."""
 
     def reset(self) -> None:
         """Draw this episode's threshold and restart at the first waypoint."""
@@ -41,11 +44,14 @@ class ScriptedPolicy:
     @property
     def done(self) -> bool:
         """Every waypoint's step budget is used up."""
-        return self._step >= len(self.skill.waypoints) * self.params.steps_per_waypoint
+        return self._step >= self._ends[-1]
 
     def __call__(self, obs: np.ndarray) -> np.ndarray:
         """The noisy action for an observation (10-D, see ``osg_control.env``)."""
-        index = min(self._step // self.params.steps_per_waypoint, len(self.skill.waypoints) - 1)
+        index = min(
+            int(np.searchsorted(self._ends, self._step, side="right")),
+            len(self.skill.waypoints) - 1,
+        )
         waypoint = self.skill.waypoints[index]
         self._step += 1
         action = np.zeros(7)

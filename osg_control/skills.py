@@ -1,4 +1,4 @@
-"""The twelve skill specifications: poses, waypoints, success predicates, preconditions, effects.
+"""The fourteen skill specifications: poses, waypoints, success predicates, preconditions, effects.
 
 A skill is an option <I, pi, beta, effects>: it starts at the pose of its ``start`` node
 (initiation region I: within ``INIT_RADIUS`` of it), follows a scripted waypoint sequence
@@ -46,10 +46,12 @@ NODES: dict[str, Node] = {
         Node("above-cube", (0.50, -0.20, 0.15)),
         Node("door-front", (0.42, 0.14, 0.50)),
         Node("cabinet-front", (0.38, 0.30, 0.35)),
-        Node("handle", (0.42, 0.14, 0.335), "closed"),
+        Node("handle", (0.42, 0.14, 0.325), "closed"),
+        Node("handle-open", (0.42, 0.54, 0.325), "closed"),
         Node("cube-grasped", (0.50, -0.20, 0.03), "closed"),
         Node("cube-lifted", (0.50, -0.20, 0.20), "closed"),
         Node("place-front", (0.40, 0.30, 0.20), "closed"),
+        Node("cube-inside", (0.64, 0.30, 0.135), "closed"),
     )
 }
 """Every node of the skill graph. The first four are where the movement skills meet."""
@@ -57,10 +59,16 @@ NODES: dict[str, Node] = {
 
 @dataclass(frozen=True)
 class Waypoint:
-    """One target of the scripted policy: TCP position [m] and gripper state to reach there."""
+    """One target of the scripted policy: TCP position [m] and gripper state to reach there.
+
+    ``steps`` overrides the script's ``steps_per_waypoint`` for this waypoint; the release
+    waypoints use a short one (the fingers open in about 5 steps) so that the recorded
+    data does not idle at the release pose, which the policy would learn as a place to stop.
+    """
 
     position: tuple[float, float, float]
     gripper: Gripper
+    steps: int | None = None
 
 
 @dataclass(frozen=True)
@@ -155,8 +163,10 @@ def _wp(node: str) -> Waypoint:
     return Waypoint(NODES[node].position, NODES[node].gripper)
 
 
-def _at(position: tuple[float, float, float], gripper: Gripper) -> Waypoint:
-    return Waypoint(position, gripper)
+def _at(
+    position: tuple[float, float, float], gripper: Gripper, steps: int | None = None
+) -> Waypoint:
+    return Waypoint(position, gripper, steps)
 
 
 def _movement(name: str, start: str, end: str, door: float = 0.0) -> SkillSpec:
@@ -174,25 +184,29 @@ def _movement(name: str, start: str, end: str, door: float = 0.0) -> SkillSpec:
 
 
 DOOR_OPENED = 0.40
-"""Door travel [m] after the slide skill (the handle moves +y by as much)."""
-HANDLE_OPEN_POS = (0.42, 0.14 + DOOR_OPENED, 0.335)
-"""TCP at the handle once the door has slid open."""
-PLACE_INSIDE_POS = (0.64, 0.30, 0.135)
-"""TCP where the cube is released on the cabinet's shelf."""
+"""Door travel [m] after the slide skill: the ``handle-open`` node is the ``handle`` node
+moved +y by as much."""
+RELEASE_START_RADIUS = 0.005
+"""Start radius [m] of the release skills: they begin where the skill before them ended,
+and a start inside Algorithm 1's threshold makes the release their first recorded action."""
+RELEASE_STEPS = 5
+"""Step budget of a release waypoint: the fingers open fully in about 5 control steps."""
 
 SCRIPT_PARAMS: dict[str, ScriptParams] = {
     "move-home-to-cube": ScriptParams(0.008, 0.003, 0.0, 0.005, 14),
     "move-cube-to-home": ScriptParams(0.008, 0.003, 0.0, 0.005, 14),
     "move-home-to-door": ScriptParams(0.008, 0.003, 0.0, 0.005, 7),
-    "move-door-to-home": ScriptParams(0.008, 0.003, 0.0, 0.005, 7),
+    "move-door-to-home": ScriptParams(0.008, 0.003, 0.0, 0.0085, 7),
     "move-cabinet-to-cube": ScriptParams(0.008, 0.003, 0.0, 0.005, 23),
-    "move-cabinet-to-home": ScriptParams(0.008, 0.003, 0.0, 0.005, 14),
-    "grab-handle": ScriptParams(0.008, 0.003, 0.0, 0.005, 9),
-    "slide-door-open": ScriptParams(0.008, 0.003, 0.0, 0.005, 14),
-    "grab-cube": ScriptParams(0.008, 0.003, 0.0, 0.005, 5),
-    "pick-up-cube": ScriptParams(0.008, 0.003, 0.0, 0.005, 7),
-    "move-cube-to-cabinet": ScriptParams(0.008, 0.003, 0.0, 0.005, 22),
-    "place-cube-in-cabinet": ScriptParams(0.008, 0.003, 0.0, 0.005, 8),
+    "move-cabinet-to-home": ScriptParams(0.008, 0.003, 0.0, 0.007, 14),
+    "grab-handle": ScriptParams(0.008, 0.003, 0.0, 0.005, 10),
+    "slide-door-open": ScriptParams(0.008, 0.003, 0.0, 0.0051, 19),
+    "release-handle": ScriptParams(0.008, 0.003, 0.0, 0.005, 13),
+    "grab-cube": ScriptParams(0.008, 0.003, 0.0, 0.0055, 5),
+    "pick-up-cube": ScriptParams(0.008, 0.003, 0.0, 0.0055, 7),
+    "move-cube-to-cabinet": ScriptParams(0.008, 0.003, 0.0, 0.0045, 22),
+    "place-cube-in-cabinet": ScriptParams(0.008, 0.003, 0.0, 0.0068, 12),
+    "release-cube": ScriptParams(0.008, 0.003, 0.0, 0.0063, 13),
 }
 """Algorithm 1's parameters per skill: threshold N(8 mm, 3 mm), action noise N(0, 5 mm) (and
 25 mrad on the angles), and a per-waypoint step budget tuned by bisection so that the
@@ -222,17 +236,28 @@ _UNTUNED_SKILLS: tuple[SkillSpec, ...] = (
         name="slide-door-open",
         kind="door",
         start="handle",
+        end="handle-open",
+        waypoints=(_wp("handle-open"),),
+        preconditions=frozenset({"holding-handle", "door-closed"}),
+        add_effects=frozenset({"door-open"}),
+        del_effects=frozenset({"door-closed"}),
+    ),
+    SkillSpec(
+        name="release-handle",
+        kind="door",
+        start="handle-open",
         end="cabinet-front",
         waypoints=(
-            _at(HANDLE_OPEN_POS, "closed"),
-            _at(HANDLE_OPEN_POS, "open"),
+            _at(NODES["handle-open"].position, "open", RELEASE_STEPS),
             _at((0.42, 0.54, 0.50), "open"),
             _wp("cabinet-front"),
         ),
-        preconditions=frozenset({"holding-handle", "door-closed"}),
-        add_effects=frozenset({"door-open", "hand-empty"}),
-        del_effects=frozenset({"door-closed", "holding-handle"}),
-        max_steps=140,
+        preconditions=frozenset({"holding-handle", "door-open"}),
+        add_effects=frozenset({"hand-empty"}),
+        del_effects=frozenset({"holding-handle"}),
+        max_steps=100,
+        start_door_opening=DOOR_OPENED,
+        start_radius=RELEASE_START_RADIUS,
     ),
     SkillSpec(
         name="grab-cube",
@@ -267,25 +292,35 @@ _UNTUNED_SKILLS: tuple[SkillSpec, ...] = (
         name="place-cube-in-cabinet",
         kind="cube",
         start="place-front",
+        end="cube-inside",
+        waypoints=(_wp("cube-inside"),),
+        preconditions=frozenset({"holding-cube", "cube-lifted", "door-open"}),
+        start_door_opening=DOOR_OPENED,
+    ),
+    SkillSpec(
+        name="release-cube",
+        kind="cube",
+        start="cube-inside",
         end="cabinet-front",
         waypoints=(
-            _at(PLACE_INSIDE_POS, "closed"),
-            _at(PLACE_INSIDE_POS, "open"),
-            _at(NODES["place-front"].position, "open"),
+            _at(NODES["cube-inside"].position, "open", RELEASE_STEPS),
             _wp("cabinet-front"),
         ),
         preconditions=frozenset({"holding-cube", "cube-lifted", "door-open"}),
         add_effects=frozenset({"cube-in-cabinet", "hand-empty"}),
         del_effects=frozenset({"holding-cube", "cube-lifted"}),
-        max_steps=140,
+        max_steps=100,
         start_door_opening=DOOR_OPENED,
+        start_radius=RELEASE_START_RADIUS,
     ),
 )
 
 SKILLS: tuple[SkillSpec, ...] = tuple(
     replace(skill, script=SCRIPT_PARAMS[skill.name]) for skill in _UNTUNED_SKILLS
 )
-"""The twelve skills of the kitchen, in the paper's order (movement, door, cube)."""
+"""The kitchen's skills in the paper's order (movement, door, cube): its twelve, with the
+two that end in a gripper release (slide the door open, place the cube) each split at the
+release into two (see ``docs/learning.md``)."""
 SKILLS_BY_NAME: dict[str, SkillSpec] = {skill.name: skill for skill in SKILLS}
 MOVEMENT_SKILLS: tuple[str, ...] = tuple(s.name for s in SKILLS if s.kind == "movement")
 
@@ -336,6 +371,11 @@ def validate_skill(skill: SkillSpec) -> None:
                 f"skill {skill.name!r}: field 'waypoints[{i}]' position {waypoint.position} is "
                 "outside the Panda's workspace"
             )
+        if waypoint.steps is not None and waypoint.steps < 1:
+            raise SkillSpecError(
+                f"skill {skill.name!r}: field 'waypoints[{i}].steps' must be >= 1, "
+                f"got {waypoint.steps}"
+            )
     facts = skill.preconditions | skill.add_effects | skill.del_effects
     unknown = sorted(facts - set(WORLD_FACTS))
     if unknown:
@@ -352,7 +392,8 @@ def skill_from_json(text: str | Mapping[str, Any]) -> SkillSpec:
     name = data.get("name", "<unnamed>")
     try:
         waypoints = tuple(
-            Waypoint(tuple(w["position"]), w["gripper"]) for w in data.pop("waypoints")
+            Waypoint(tuple(w["position"]), w["gripper"], w.get("steps"))
+            for w in data.pop("waypoints")
         )
         script = ScriptParams(**data.pop("script"))
         for key in ("preconditions", "add_effects", "del_effects"):

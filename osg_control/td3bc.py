@@ -67,6 +67,12 @@ class TD3BCConfig:
     # stops the critic from diverging on out-of-data actions (seen here without it:
     # critic loss 1e5 after 15k updates). None disables the clip.
     target_q_range: tuple[float, float] | None = (0.0, 1.0)
+    # Weight of the BC error on the gripper command (the last action component) where the
+    # data switches the gripper (|a| > 0.5). Algorithm 1 records one switch per waypoint
+    # among hold (0) labels at nearly the same states, so the plain regression settles in
+    # the hold band and the skill never closes or opens (seen here: grab-handle stopped at
+    # the handle with g = -0.47 in every episode, 0.2 success at sigma = 0). 1 disables it.
+    gripper_switch_weight: float = 10.0
 
     def to_json_dict(self) -> dict[str, Any]:
         """The fields as a JSON-ready dict (for checkpoint sidecars)."""
@@ -109,6 +115,23 @@ def observation_stats(observations: np.ndarray, eps: float) -> tuple[np.ndarray,
     """
     obs = observations.astype(np.float64)
     return obs.mean(0).astype(np.float32), (obs.std(0) + eps).astype(np.float32)
+
+
+def bc_weights(actions: torch.Tensor, gripper_switch_weight: float) -> torch.Tensor:
+    """Per-element weights of the BC error: ``gripper_switch_weight`` on the gripper command
+    of transitions that switch the gripper (normalised |a| > 0.5), 1 elsewhere.
+
+    Args:
+        actions: (..., action_dim) normalised data actions, gripper command last.
+        gripper_switch_weight: see ``TD3BCConfig``.
+
+    Returns:
+        Weights broadcastable against ``actions``.
+    """
+    weights = torch.ones_like(actions)
+    switching = actions[..., -1].abs() > 0.5
+    weights[..., -1] = torch.where(switching, gripper_switch_weight, 1.0)
+    return weights
 
 
 # ----------------------------------------------------------------------------- replay buffer
@@ -425,7 +448,8 @@ class TD3BC:
             q1_params = [p[: self.num_skills].detach() for p in self.critic]
             q1 = critic_values(q1_params, batch.observations, pi)[0]
             lam = cfg.alpha / q1.abs().mean(-1).detach()
-            bc_loss = (pi - batch.actions).square().mean((1, 2))
+            weights = bc_weights(batch.actions, cfg.gripper_switch_weight)
+            bc_loss = (weights * (pi - batch.actions).square()).mean((1, 2))
             actor_loss = -lam * q1.mean(-1) + bc_loss
             self.actor_optimizer.zero_grad(set_to_none=True)
             actor_loss.sum().backward()

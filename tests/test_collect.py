@@ -70,7 +70,9 @@ def test_scripted_success_rate_is_in_a_sound_band(name: str) -> None:
     assert 0.25 <= rate <= 0.65, f"{name}: scripted success rate {rate:.2f}"
 
 
-@pytest.mark.parametrize("name", ["grab-cube", "pick-up-cube", "slide-door-open"])
+@pytest.mark.parametrize(
+    "name", ["grab-cube", "pick-up-cube", "slide-door-open", "release-handle", "release-cube"]
+)
 def test_successful_episodes_end_with_their_effect(name: str) -> None:
     skill = get_skill(name)
     episodes = [run_scripted_episode(skill, 2, i) for i in range(12)]

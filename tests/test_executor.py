@@ -62,7 +62,7 @@ def test_pick_up_from_a_random_start(defaults: tuple[dict, object]) -> None:
     assert all(outcome["success"] for outcome in result["outcomes"])
 
 
-def test_three_stage_plan_is_the_eight_skill_chain(defaults: tuple[dict, object]) -> None:
+def test_three_stage_plan_is_the_ten_skill_chain(defaults: tuple[dict, object]) -> None:
     policies, classifier = defaults
     env = KitchenEnv()
     obs, _ = env.reset(seed=0, options={"node": "home"})
@@ -71,8 +71,9 @@ def test_three_stage_plan_is_the_eight_skill_chain(defaults: tuple[dict, object]
     )
     assert entry is None
     assert plan == [
-        "move-home-to-door", "grab-handle", "slide-door-open", "move-cabinet-to-cube",
-        "grab-cube", "pick-up-cube", "move-cube-to-cabinet", "place-cube-in-cabinet",
+        "move-home-to-door", "grab-handle", "slide-door-open", "release-handle",
+        "move-cabinet-to-cube", "grab-cube", "pick-up-cube", "move-cube-to-cabinet",
+        "place-cube-in-cabinet", "release-cube",
     ]  # fmt: skip
 
 

@@ -125,13 +125,17 @@ def test_graph_from_specs() -> None:
     assert graph.node_names == tuple(NODES)
     assert [e.name for e in graph.edges] == [s.name for s in SKILLS]
     assert graph.disagreements == ()
-    slide = next(e for e in graph.edges if e.name == "slide-door-open")
-    assert slide.add_effects == ("door-open", "hand-empty")
-    assert slide.del_effects == ("door-closed", "holding-handle")
+    slide = graph.edge("slide-door-open")
+    assert slide.add_effects == ("door-open",)
+    assert slide.del_effects == ("door-closed",)
+    release = graph.edge("release-handle")
+    assert (release.start, release.end) == ("handle-open", "cabinet-front")
+    assert release.add_effects == ("hand-empty",)
+    assert release.del_effects == ("holding-handle",)
 
 
 def test_rates_are_checked() -> None:
-    assert graph_from_specs(success_rates={"grab-cube": 0.7}).edges[8].success_rate == 0.7
+    assert graph_from_specs(success_rates={"grab-cube": 0.7}).edge("grab-cube").success_rate == 0.7
     with pytest.raises(SkillSpecError, match="outside"):
         graph_from_specs(success_rates={"grab-cube": 1.5})
     with pytest.raises(SkillSpecError, match="unknown skill"):
@@ -173,7 +177,7 @@ def test_graph_from_data_agrees_with_specs(data_dir: Path, tmp_path: Path) -> No
         assert edge.observed is not None and edge.observed.points == 8
         assert set(edge.observed.add) == spec.add_effects
         assert set(edge.observed.delete) == spec.del_effects
-    assert graph.edges[8].success_rate == 0.9
+    assert graph.edge("grab-cube").success_rate == 0.9
     save_graph(graph, tmp_path / "g.json")
     assert load_graph(tmp_path / "g.json") == graph
 
@@ -237,9 +241,9 @@ def test_cli_graph(data_dir: Path, tmp_path: Path, capsys: pytest.CaptureFixture
     printed = json.loads(capsys.readouterr().out)
     assert printed == json.loads(out.read_text())
     assert printed["disagreements"] == [] and png.is_file()
-    assert load_graph(out).edges[8].success_rate == 0.75
+    assert load_graph(out).edge("grab-cube").success_rate == 0.75
     assert main(["graph"]) == 0
-    assert "8 nodes, 12 skills" in capsys.readouterr().out
+    assert "10 nodes, 14 skills" in capsys.readouterr().out
     assert main(["plan", "--goal", "cube-lifted", "--graph", str(out), "--json"]) == 0
     costs = {s["action"]: s["cost"] for s in json.loads(capsys.readouterr().out)["steps"]}
     assert costs["grab-cube"] == 288  # round(-ln 0.75 * 1000)

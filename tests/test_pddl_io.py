@@ -64,8 +64,8 @@ def test_domain_has_one_operator_per_skill_with_effects_and_cost() -> None:
     assert (
         "(:action slide-door-open\n        :parameters ()\n"
         "        :precondition (and (at handle) (door-closed) (holding-handle))\n"
-        "        :effect (and (door-open) (hand-empty) (not (door-closed)) "
-        "(not (holding-handle)) (at cabinet-front) (not (at handle)) "
+        "        :effect (and (door-open) (not (door-closed)) "
+        "(at handle-open) (not (at handle)) "
         f"(increase (total-cost) {DEFAULT_COST}))"
     ) in text
 

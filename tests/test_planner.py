@@ -36,9 +36,9 @@ needs_fd = pytest.mark.skipif(
     reason="Fast Downward driver (up_fast_downward/downward/fast-downward.py) not installed",
 )
 
-OPEN = ("move-home-to-door", "grab-handle", "slide-door-open")
+OPEN = ("move-home-to-door", "grab-handle", "slide-door-open", "release-handle")
 PICK = ("grab-cube", "pick-up-cube")
-PLACE = ("move-cube-to-cabinet", "place-cube-in-cabinet")
+PLACE = ("move-cube-to-cabinet", "place-cube-in-cabinet", "release-cube")
 EXPECTED_FROM_HOME = {
     "pick-up": ("move-home-to-cube", *PICK),
     "open-door": OPEN,

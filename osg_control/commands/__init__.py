@@ -4,6 +4,8 @@ A module's ``register`` adds its parser and sets ``func`` (called with the parse
 returning the exit code). Add a module here to expose it.
 """
 
+import argparse
+
 COMMAND_MODULES: tuple[str, ...] = (
     "collect",
     "run",
@@ -15,3 +17,20 @@ COMMAND_MODULES: tuple[str, ...] = (
     "plan",
     "reproduce",
 )
+
+
+def add_filter_argument(parser: argparse.ArgumentParser) -> None:
+    """Add ``--filter [GAIN]``: run the policies on filtered TCP estimates (see
+    ``osg_control.estimator``); absent means raw observations, the paper's protocol."""
+    from osg_control.estimator import DEFAULT_GAIN
+
+    parser.add_argument(
+        "--filter",
+        type=float,
+        nargs="?",
+        const=DEFAULT_GAIN,
+        default=None,
+        metavar="GAIN",
+        help=f"feed the policies a filtered TCP position (gain in (0, 1], default "
+        f"{DEFAULT_GAIN} when the flag is given without a value); off by default",
+    )

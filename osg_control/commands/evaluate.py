@@ -6,6 +6,7 @@ import argparse
 import json
 from pathlib import Path
 
+from osg_control.commands import add_filter_argument
 from osg_control.evaluate import TASKS, format_task_table, task_table
 
 
@@ -27,6 +28,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
         help="replanning budgets to compare (default: 0 and 2)",
     )
     tasks.add_argument("--models", type=Path, default=None, help="defaults directory")
+    add_filter_argument(tasks)
     tasks.add_argument("--json", action="store_true")
     tasks.set_defaults(func=run_tasks)
 
@@ -41,6 +43,7 @@ def run_tasks(args: argparse.Namespace) -> int:
         args.noise,
         args.task,
         args.replans,
+        args.filter,
     )
     print(json.dumps(table, indent=2) if args.json else format_task_table(table))
     return 0

@@ -9,6 +9,7 @@ from typing import Any
 
 import numpy as np
 
+from osg_control.commands import add_filter_argument
 from osg_control.env import EnvConfig, KitchenEnv
 from osg_control.evaluate import format_skill_table, skill_table, start_regions
 from osg_control.executor import load_executor
@@ -32,6 +33,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     run.add_argument("--max-replans", type=int, default=2)
     run.add_argument("--models", type=Path, default=None, help="defaults directory to use")
     run.add_argument("--video", type=Path, default=None, help="write an MP4 of the first episode")
+    add_filter_argument(run)
     run.add_argument("--json", action="store_true")
     run.set_defaults(func=run_task)
 
@@ -40,13 +42,14 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     skills.add_argument("--noise", type=float, nargs="+", default=[0.0, 0.01, 0.02])
     skills.add_argument("--seed", type=int, default=0)
     skills.add_argument("--workers", type=int, default=2)
-    skills.add_argument("--skill", nargs="*", default=None, help="default: all twelve")
+    skills.add_argument("--skill", nargs="*", default=None, help="default: all")
     skills.add_argument(
         "--models",
         type=Path,
         default=DEFAULTS_DIR / "skills",
         help="skill checkpoint directory (default: shipped)",
     )
+    add_filter_argument(skills)
     skills.add_argument("--json", action="store_true")
     skills.set_defaults(func=run_eval_skills)
 
@@ -64,7 +67,7 @@ def _start_options(start: str, rng: np.random.Generator) -> dict[str, Any]:
 def run_task(args: argparse.Namespace) -> int:
     """Run ``--episodes`` executions of the goal and report each (exit 1 if any failed)."""
     goal = args.goal.split()
-    executor = load_executor(args.models, max_replans=args.max_replans)
+    executor = load_executor(args.models, max_replans=args.max_replans, filter_gain=args.filter)
     env = KitchenEnv(
         config=EnvConfig(obs_noise_std=args.noise),
         render_mode="rgb_array" if args.video else None,
@@ -109,6 +112,14 @@ def _write_video(path: Path, frames: list[Any]) -> None:
 
 def run_eval_skills(args: argparse.Namespace) -> int:
     """Print Table I."""
-    table = skill_table(args.models, args.noise, args.episodes, args.seed, args.workers, args.skill)
+    table = skill_table(
+        args.models,
+        args.noise,
+        args.episodes,
+        args.seed,
+        args.workers,
+        args.skill,
+        filter_gain=args.filter,
+    )
     print(json.dumps(table, indent=2) if args.json else format_skill_table(table))
     return 0

@@ -54,7 +54,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     parser = subparsers.add_parser(
         "train",
         help="learn skills from their offline data sets (TD3+BC)",
-        description="Train one skill, or all twelve batched in one process, with TD3+BC "
+        description="Train one skill, or all of them batched in one process, with TD3+BC "
         "from <DATA>/<skill>.h5, writing <OUT>/<skill>.safetensors and <OUT>/<skill>.json.",
     )
     parser.add_argument("--skill", required=True, help='a skill name, or "all"')
