@@ -4,7 +4,8 @@ The classes are the movement skills, ordered along the skill graph (``class_orde
 skills sharing a start or end node sit next to each other; the corrected accuracy of
 ``osg_control.classifier_metrics`` relies on that order. Every step of ``<DIR>/<skill>.h5``
 contributes its ``observations`` row (the state before the step) labelled with the index of
-its skill in that order. The train/test split is by episode, within each data set, so no
+its skill in that order, up to the step that reaches the skill's end node (the steps
+recorded after it, holding the node, are on the graph and not the classifier's business). The train/test split is by episode, within each data set, so no
 test state shares an episode with a training state.
 """
 
@@ -183,11 +184,12 @@ def load_classifier_data(
             raise DatasetError(
                 f"{path}: {dataset.num_episodes} episode(s); the train/test split needs at least 2"
             )
-        observations = dataset.arrays["observations"]
+        approach = dataset.approach_mask
+        observations = dataset.arrays["observations"][approach]
         in_test = np.repeat(
             held_out_episodes(dataset.num_episodes, test_fraction, seed, skill),
             dataset.episode_lengths,
-        )
+        )[approach]
         labels = np.full(len(observations), label, dtype=np.int64)
         train_parts.append(LabelledStates(observations[~in_test], labels[~in_test]))
         test_parts.append(LabelledStates(observations[in_test], labels[in_test]))

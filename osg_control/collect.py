@@ -28,6 +28,11 @@ from osg_control.skills import SKILLS, SkillSpec, get_skill
 
 DEFAULT_EPISODES = 300
 CHUNK_EPISODES = 25
+HOLD_STEPS = 10
+"""Steps recorded after an episode's first success, the script holding its last waypoint
+(Algorithm 1 acting on it past its budget). Without them the data ends where beta is first
+reached, and learned policies that missed the goal by a little under observation noise
+carried on past it (see docs/learning.md)."""
 T = TypeVar("T")
 R = TypeVar("R")
 
@@ -79,17 +84,24 @@ def run_scripted_episode(skill: SkillSpec, seed: int, index: int) -> Episode:
     policy = ScriptedPolicy(skill, rng)
     policy.reset()
     rows: dict[str, list[Any]] = {k: [] for k in ("obs", "next", "act", "rew", "term", "world")}
-    terminated = False
-    while not terminated and not policy.done:
+    hold_left: int | None = None  # steps still to record after the first success
+    while hold_left != 0 and (hold_left is not None or not policy.done):
         action = policy(obs)
-        next_obs, reward, terminated, _truncated, info = env.step(action)
+        next_obs, _reward, _terminated, truncated, info = env.step(action)
+        at_goal = "failure" not in info and env.skill_success(world=info["world"])
         rows["obs"].append(obs)
         rows["next"].append(next_obs)
         rows["act"].append(info["action_applied"])
-        rows["rew"].append(reward)
-        rows["term"].append(terminated and reward > 0)
+        rows["rew"].append(1.0 if at_goal else 0.0)
+        rows["term"].append(at_goal)
         rows["world"].append(info["world"].as_array())
         obs = next_obs
+        if hold_left is not None:
+            hold_left -= 1
+        elif at_goal:
+            hold_left = HOLD_STEPS
+        if "failure" in info or truncated:
+            break
     truncations = np.zeros(len(rows["act"]), dtype=bool)
     if not rows["term"][-1]:
         truncations[-1] = True

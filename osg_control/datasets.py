@@ -5,9 +5,15 @@ One file per skill. Flat step arrays (``N`` steps over all episodes)::
     observations       (N, 10) float32   state before the step
     next_observations  (N, 10) float32   state after the step
     actions            (N, 7)  float32   the action applied (after clipping)
-    rewards            (N,)    float32   1.0 on the step the success predicate first holds
-    terminations       (N,)    bool      episode ended by success
-    truncations        (N,)    bool      episode ended by the step budget
+    rewards            (N,)    float32   1.0 on every step after which the success predicate
+                                         holds (the paper: "whenever the robot achieves the
+                                         task"), else 0.0
+    terminations       (N,)    bool      the step reached beta: same as rewards > 0, so a
+                                         TD target never bootstraps past a success
+    truncations        (N,)    bool      episode ended by the step budget, not at beta
+
+An episode is successful if any step is rewarded; after its first success the recording
+continues for ``collect.HOLD_STEPS`` steps with the script holding its last waypoint.
     episode_ids        (N,)    int64     episode index of each step
     world_states       (N, 11) float32   world state after the step (``scene.WORLD_FIELDS``)
 
@@ -92,6 +98,23 @@ class Dataset:
     def success_rate(self) -> float:
         """Fraction of episodes that reached the skill's success predicate."""
         return float(self.episode_successes.mean()) if self.num_episodes else 0.0
+
+    @property
+    def first_success_steps(self) -> np.ndarray:
+        """Step index where each successful episode first reached beta, in episode order."""
+        rewarded = np.flatnonzero(self.arrays["rewards"] > 0)
+        episode = np.repeat(np.arange(self.num_episodes), self.episode_lengths)
+        _episodes, first = np.unique(episode[rewarded], return_index=True)
+        return rewarded[first]
+
+    @property
+    def approach_mask(self) -> np.ndarray:
+        """(N,) bool: True up to and including the step that first reached beta; False on
+        the steps recorded after it (``collect.HOLD_STEPS``). Failed episodes: all True."""
+        episode = np.repeat(np.arange(self.num_episodes), self.episode_lengths)
+        last = np.full(self.num_episodes, self.num_steps)
+        last[episode[self.first_success_steps]] = self.first_success_steps
+        return np.arange(self.num_steps) <= last[episode]
 
     @property
     def skill_name(self) -> str:

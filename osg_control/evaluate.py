@@ -21,7 +21,7 @@ from osg_control.skills import NODES, SKILLS, SKILLS_BY_NAME, get_skill, nearest
 
 TASKS: dict[str, dict[str, Any]] = {
     "pick-up": {"goal": ["cube-lifted"], "door_opening": 0.0},
-    "open-door": {"goal": ["door-open"], "door_opening": 0.0},
+    "open-door": {"goal": ["door-open", "hand-empty"], "door_opening": 0.0},
     "open+pick-up": {"goal": ["door-open", "cube-lifted"], "door_opening": 0.0},
     "pick-up+place": {"goal": ["cube-in-cabinet"], "door_opening": 0.40},
     "open+pick-up+place": {"goal": ["door-open", "cube-in-cabinet"], "door_opening": 0.0},

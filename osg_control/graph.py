@@ -179,8 +179,7 @@ class _PointSet:
 
 def _point_sets(dataset: Dataset, spec: SkillSpec, rng: np.random.Generator) -> list[_PointSet]:
     starts = dataset.arrays["observations"][dataset.episode_starts, :3]
-    last = dataset.episode_starts + dataset.episode_lengths - 1
-    ends = dataset.arrays["next_observations"][last[dataset.episode_successes], :3]
+    ends = dataset.arrays["next_observations"][dataset.first_success_steps, :3]
     sets = []
     for role, node, found in (("start", spec.start, starts), ("end", spec.end, ends)):
         points = np.asarray(found, dtype=float)
@@ -267,10 +266,11 @@ def _match_regions(
 
 
 def _observed_effects(dataset: Dataset) -> Observed:
-    """Majority-vote add/delete effects over the successful episodes (first vs last step)."""
+    """Majority-vote add/delete effects over the successful episodes (first step vs the step
+    that first reached beta)."""
     worlds = dataset.arrays["world_states"]
     firsts = dataset.episode_starts[dataset.episode_successes]
-    lasts = firsts + dataset.episode_lengths[dataset.episode_successes] - 1
+    lasts = dataset.first_success_steps
     added: dict[str, int] = {}
     deleted: dict[str, int] = {}
     for first, last in zip(firsts, lasts, strict=True):

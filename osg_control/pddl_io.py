@@ -219,7 +219,11 @@ class KitchenTask:
 
 KITCHEN_TASKS: tuple[KitchenTask, ...] = (
     KitchenTask("pick-up", ("cube-lifted",), description="pick the cube up"),
-    KitchenTask("open-door", ("door-open",), description="slide the cabinet door open"),
+    KitchenTask(
+        "open-door",
+        ("door-open", "hand-empty"),
+        description="slide the cabinet door open and let go of the handle",
+    ),
     KitchenTask("open-pick-up", ("door-open", "cube-lifted"), description="open the door, pick up"),
     KitchenTask(
         "pick-up-place",

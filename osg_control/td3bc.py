@@ -62,10 +62,10 @@ class TD3BCConfig:
     # features nearly constant in a skill's data (gripper command, grip force, finger gap
     # in movement skills) otherwise turn small deviations into inputs of hundreds of std.
     obs_norm_eps: float = 1e-2
-    # Bounds of the TD target. The reward is sparse (1 once, on the terminal success step),
-    # so every true return lies in [0, 1]; clipping the bootstrapped target to that range
-    # stops the critic from diverging on out-of-data actions (seen here without it:
-    # critic loss 1e5 after 15k updates). None disables the clip.
+    # Bounds of the TD target. The reward is sparse (1 on a step that reaches beta, and
+    # such a step is terminal), so every true return lies in [0, 1]; clipping the
+    # bootstrapped target to that range stops the critic from diverging on out-of-data
+    # actions (seen here without it: critic loss 1e5 after 15k updates). None disables it.
     target_q_range: tuple[float, float] | None = (0.0, 1.0)
     # Weight of the BC error on the gripper command (the last action component) where the
     # data switches the gripper (|a| > 0.5). Algorithm 1 records one switch per waypoint

@@ -10,7 +10,13 @@ import h5py
 import numpy as np
 import pytest
 
-from osg_control.collect import LocalExecutor, collect_skill, parts_dir, run_scripted_episode
+from osg_control.collect import (
+    HOLD_STEPS,
+    LocalExecutor,
+    collect_skill,
+    parts_dir,
+    run_scripted_episode,
+)
 from osg_control.datasets import load_dataset
 from osg_control.env import world_facts
 from osg_control.scene import world_state_from_array
@@ -79,11 +85,15 @@ def test_successful_episodes_end_with_their_effect(name: str) -> None:
     successes = [e for e in episodes if e.success]
     assert successes, f"{name}: no successful episode in 12"
     for episode in successes:
-        assert episode.terminations[-1] and episode.rewards[-1] == 1.0
-        assert episode.rewards.sum() == 1.0
-        facts = world_facts(world_state_from_array(episode.world_states[-1]))
+        np.testing.assert_array_equal(episode.terminations, episode.rewards > 0)
+        first = int(np.flatnonzero(episode.rewards)[0])
+        assert len(episode.rewards) - 1 - first <= HOLD_STEPS  # holds beta, then stops
+        facts = world_facts(world_state_from_array(episode.world_states[first]))
         assert skill.add_effects <= facts, (name, facts)
         assert not (skill.del_effects & facts), (name, facts)
+    for episode in episodes:
+        if not episode.success:
+            assert episode.truncations[-1] and not episode.terminations.any()
 
 
 def test_file_reads_with_plain_h5py(tmp_path: Path) -> None:

@@ -50,6 +50,10 @@ def test_report_writes_markdown_json_and_plots(tmp_path: Path) -> None:
     assert json.loads((tmp_path / "figures.json").read_text()) == figures
     text = (tmp_path / "report.md").read_text()
     assert "Table I" in text and "0.927" in text
-    assert "/".join(map(str, PAPER_TABLE_I[0])) in markdown(figures)
+    report = markdown(figures)
+    slide_row = next(line for line in report.splitlines() if "| slide-door-open |" in line)
+    assert "/".join(map(str, PAPER_TABLE_I["slide-door-open"])) in slide_row
+    release_row = next(line for line in report.splitlines() if "| release-cube |" in line)
+    assert "(split off)" in release_row
     assert (tmp_path / "table_i.png").stat().st_size > 1000
     assert len(written) == 3

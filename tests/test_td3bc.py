@@ -23,6 +23,7 @@ from osg_control.td3bc import (
     BatchedReplay,
     SkillData,
     TD3BCConfig,
+    bc_weights,
     prepare_skill_data,
     skill_seed,
 )
@@ -263,3 +264,14 @@ def toy_checkpoint(trainer: TD3BC, data: SkillData, steps: int, seed: int) -> Ch
         seed=seed,
         dataset_sha256="ab" * 32,
     )
+
+
+def test_bc_weights_single_out_gripper_switches() -> None:
+    actions = torch.tensor(
+        [[0.3, -0.2, 0.0, 0.0, 0.0, 0.0, 0.0], [0.0] * 6 + [-1.0], [0.0] * 6 + [1.0]]
+    )
+    weights = bc_weights(actions, 10.0)
+    expected = torch.ones_like(actions)
+    expected[1:, -1] = 10.0
+    torch.testing.assert_close(weights, expected)
+    torch.testing.assert_close(bc_weights(actions, 1.0), torch.ones_like(actions))

@@ -21,6 +21,7 @@ from typing import Any
 
 from osg_control import __version__
 from osg_control.checkpoints import sha256_file
+from osg_control.commands import add_filter_argument
 from osg_control.defaults import MANIFEST
 from osg_control.paths import PACKAGE_DIR
 
@@ -50,6 +51,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     parser.add_argument("--seed", type=int, default=0)
     parser.add_argument("--workers", type=int, default=2)
     parser.add_argument("--noise", type=float, default=0.02, help="noise for Tables IV/V [m]")
+    add_filter_argument(parser)
     parser.add_argument("--json", action="store_true", help="print the figures as JSON")
     parser.set_defaults(func=run)
 
@@ -204,6 +206,7 @@ def _table_i(defaults: Path, scale: Scale, args: argparse.Namespace) -> dict[str
         args.seed,
         args.workers,
         scripted_episodes=max(scale.table_i_episodes, 20),
+        filter_gain=args.filter,
     )
     print(format_skill_table(table))
     return table
@@ -231,6 +234,13 @@ def _table_iii(defaults: Path, scale: Scale, args: argparse.Namespace) -> dict[s
 def _tables_iv_v(defaults: Path, scale: Scale, args: argparse.Namespace) -> dict[str, Any]:
     from osg_control.evaluate import format_task_table, task_table
 
-    table = task_table(str(defaults), scale.task_episodes, args.seed, args.workers, args.noise)
+    table = task_table(
+        str(defaults),
+        scale.task_episodes,
+        args.seed,
+        args.workers,
+        args.noise,
+        filter_gain=args.filter,
+    )
     print(format_task_table(table))
     return table

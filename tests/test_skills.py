@@ -1,0 +1,73 @@
+"""Skill specifications: JSON round trip, validation errors, Algorithm 1's step budgets."""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+
+import numpy as np
+import pytest
+
+from osg_control.errors import SkillSpecError
+from osg_control.scene import WorldState, world_facts
+from osg_control.scripted import ScriptedPolicy
+from osg_control.skills import (
+    RELEASE_STEPS,
+    SKILLS,
+    Waypoint,
+    get_skill,
+    skill_from_json,
+    validate_skill,
+)
+
+
+@pytest.mark.parametrize("skill", SKILLS, ids=lambda s: s.name)
+def test_every_spec_round_trips_through_json(skill: object) -> None:
+    assert skill_from_json(skill.to_json()) == skill  # type: ignore[attr-defined]
+
+
+def test_pose_outside_the_workspace_names_skill_and_field() -> None:
+    skill = get_skill("grab-cube")
+    far = dataclasses.replace(skill, waypoints=(Waypoint((1.5, 0.0, 0.2), "open"),))
+    with pytest.raises(SkillSpecError, match=r"'grab-cube'.*'waypoints\[0\]'.*workspace"):
+        validate_skill(far)
+
+
+def test_missing_field_names_the_skill() -> None:
+    data = json.loads(get_skill("pick-up-cube").to_json())
+    del data["waypoints"]
+    with pytest.raises(SkillSpecError, match="'pick-up-cube'.*missing or malformed"):
+        skill_from_json(data)
+
+
+def test_waypoint_budget_below_one_is_refused() -> None:
+    skill = get_skill("release-cube")
+    bad = dataclasses.replace(skill, waypoints=(Waypoint((0.5, 0.0, 0.3), "open", 0),))
+    with pytest.raises(SkillSpecError, match=r"'waypoints\[0\].steps'"):
+        validate_skill(bad)
+
+
+def test_release_waypoint_has_its_own_budget() -> None:
+    skill = get_skill("release-cube")
+    policy = ScriptedPolicy(skill, np.random.default_rng(0))
+    policy.reset()
+    rest = skill.script.steps_per_waypoint
+    assert skill.waypoints[0].steps == RELEASE_STEPS
+    obs = np.zeros(10)
+    obs[:3] = skill.waypoints[0].position
+    obs[3:7] = (0.0, 1.0, 0.0, 0.0)
+    obs[7] = -1.0  # gripper closed: the first waypoint releases it
+    targets = []
+    while not policy.done:
+        action = policy(obs)
+        targets.append(action[6])
+        obs[7] = 1.0 if action[6] > 0.5 else obs[7]
+    assert len(targets) == RELEASE_STEPS + rest
+    assert targets[0] == 1.0 and not any(targets[1:])
+
+
+def test_a_held_cube_inside_the_cabinet_is_not_yet_placed() -> None:
+    held = WorldState(0.4, 0.0, (0.64, 0.30, 0.135), (1.0, 0.0, 0.0, 0.0), True, False)
+    released = dataclasses.replace(held, cube_grasped=False)
+    assert "cube-in-cabinet" not in world_facts(held)
+    assert {"cube-in-cabinet", "hand-empty"} <= world_facts(released)
