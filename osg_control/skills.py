@@ -62,8 +62,8 @@ class Waypoint:
     """One target of the scripted policy: TCP position [m] and gripper state to reach there.
 
     ``steps`` overrides the script's ``steps_per_waypoint`` for this waypoint; the release
-    waypoints use a short one (the fingers open in about 5 steps) so that the recorded
-    data does not idle at the release pose, which the policy would learn as a place to stop.
+    waypoints use a short one (``RELEASE_STEPS``) so that the recorded data does not idle
+    at the release pose, which the policy would learn as a place to stop.
     """
 
     position: tuple[float, float, float]
@@ -186,11 +186,9 @@ def _movement(name: str, start: str, end: str, door: float = 0.0) -> SkillSpec:
 DOOR_OPENED = 0.40
 """Door travel [m] after the slide skill: the ``handle-open`` node is the ``handle`` node
 moved +y by as much."""
-RELEASE_START_RADIUS = 0.005
-"""Start radius [m] of the release skills: they begin where the skill before them ended,
-and a start inside Algorithm 1's threshold makes the release their first recorded action."""
-RELEASE_STEPS = 5
-"""Step budget of a release waypoint: the fingers open fully in about 5 control steps."""
+RELEASE_STEPS = 7
+"""Step budget of a release waypoint: a step or two to close in on it (the skill starts up to
+2 cm away, where the skill before it may have ended) and about 5 for the fingers to open."""
 
 SCRIPT_PARAMS: dict[str, ScriptParams] = {
     "move-home-to-cube": ScriptParams(0.008, 0.003, 0.0, 0.005, 14),
@@ -201,12 +199,12 @@ SCRIPT_PARAMS: dict[str, ScriptParams] = {
     "move-cabinet-to-home": ScriptParams(0.008, 0.003, 0.0, 0.007, 14),
     "grab-handle": ScriptParams(0.008, 0.003, 0.0, 0.005, 10),
     "slide-door-open": ScriptParams(0.008, 0.003, 0.0, 0.0051, 19),
-    "release-handle": ScriptParams(0.008, 0.003, 0.0, 0.005, 13),
+    "release-handle": ScriptParams(0.008, 0.003, 0.0, 0.0047, 13),
     "grab-cube": ScriptParams(0.008, 0.003, 0.0, 0.0055, 5),
     "pick-up-cube": ScriptParams(0.008, 0.003, 0.0, 0.0055, 7),
     "move-cube-to-cabinet": ScriptParams(0.008, 0.003, 0.0, 0.0045, 22),
     "place-cube-in-cabinet": ScriptParams(0.008, 0.003, 0.0, 0.0068, 12),
-    "release-cube": ScriptParams(0.008, 0.003, 0.0, 0.0063, 13),
+    "release-cube": ScriptParams(0.008, 0.003, 0.0, 0.0068, 14),
 }
 """Algorithm 1's parameters per skill: threshold N(8 mm, 3 mm), action noise N(0, 5 mm) (and
 25 mrad on the angles), and a per-waypoint step budget tuned by bisection so that the
@@ -257,7 +255,6 @@ _UNTUNED_SKILLS: tuple[SkillSpec, ...] = (
         del_effects=frozenset({"holding-handle"}),
         max_steps=100,
         start_door_opening=DOOR_OPENED,
-        start_radius=RELEASE_START_RADIUS,
     ),
     SkillSpec(
         name="grab-cube",
@@ -311,7 +308,6 @@ _UNTUNED_SKILLS: tuple[SkillSpec, ...] = (
         del_effects=frozenset({"holding-cube", "cube-lifted"}),
         max_steps=100,
         start_door_opening=DOOR_OPENED,
-        start_radius=RELEASE_START_RADIUS,
     ),
 )
 

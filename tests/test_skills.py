@@ -71,3 +71,12 @@ def test_a_held_cube_inside_the_cabinet_is_not_yet_placed() -> None:
     released = dataclasses.replace(held, cube_grasped=False)
     assert "cube-in-cabinet" not in world_facts(held)
     assert {"cube-in-cabinet", "hand-empty"} <= world_facts(released)
+
+
+def test_every_initiation_region_covers_the_termination_regions_ending_there() -> None:
+    # A skill may start wherever a skill ending at its start node stopped (within that
+    # skill's success tolerance), so its data must cover at least that far.
+    for before in SKILLS:
+        for after in SKILLS:
+            if after.start == before.end:
+                assert after.start_radius >= before.success_tolerance, (before.name, after.name)
