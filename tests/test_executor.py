@@ -50,9 +50,28 @@ def _run(
     return env, executor.execute(goal, env, obs).to_dict()
 
 
+def test_three_stage_task_from_a_random_start(defaults: tuple[dict, object]) -> None:
+    policies, classifier = defaults
+    goal = ["door-open", "cube-in-cabinet"]
+    env, result = _run(Executor(policies, classifier, max_replans=0), goal, seed=5)
+    assert result["success"], result
+    world = env.world_state()
+    assert world.door_open and world.cube_in_cabinet and not world.cube_grasped
+    assert result["plan"][-3:] == ["move-cube-to-cabinet", "place-cube-in-cabinet", "release-cube"]
+    assert all(outcome["success"] for outcome in result["outcomes"])
+
+
+def test_three_stage_task_under_noise_with_the_tcp_filter(defaults: tuple[dict, object]) -> None:
+    policies, classifier = defaults
+    env = KitchenEnv(config=EnvConfig(obs_noise_std=0.02))
+    obs, _ = env.reset(seed=2, options={"node": "home", "radius": 0.15, "angle": 0.2})
+    executor = Executor(policies, classifier, filter_gain=0.2)
+    result = executor.execute(["door-open", "cube-in-cabinet"], env, obs)
+    assert result.success, result.to_dict()
+    assert env.world_state().cube_in_cabinet
+
+
 def test_pick_up_from_a_random_start(defaults: tuple[dict, object]) -> None:
-    # The three-stage task is not tested here because the shipped slide-door-open and
-    # place-cube-in-cabinet skills do not succeed yet (see docs/results.md).
     policies, classifier = defaults
     env, result = _run(Executor(policies, classifier), ["cube-lifted"], seed=3)
     assert result["success"], result
