@@ -5,8 +5,9 @@ skills sharing a start or end node sit next to each other; the corrected accurac
 ``osg_control.classifier_metrics`` relies on that order. Every step of ``<DIR>/<skill>.h5``
 contributes its ``observations`` row (the state before the step) labelled with the index of
 its skill in that order, up to the step that reaches the skill's end node (the steps
-recorded after it, holding the node, are on the graph and not the classifier's business). The train/test split is by episode, within each data set, so no
-test state shares an episode with a training state.
+recorded after it, holding the node, are on the graph and not the classifier's business).
+The train/test split is by episode, within each data set, so no test state shares an
+episode with a training state.
 """
 
 from __future__ import annotations

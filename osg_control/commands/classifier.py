@@ -17,7 +17,7 @@ from osg_control.classifier import StateClassifier, evaluate, reload_split
 from osg_control.classifier_data import load_classifier_data, movement_classes
 from osg_control.classifier_metrics import format_report
 from osg_control.classifier_train import TrainConfig, train_classifier
-from osg_control.paths import cache_dir
+from osg_control.paths import DEFAULTS_DIR, cache_dir
 
 Verbs: TypeAlias = "argparse._SubParsersAction[argparse.ArgumentParser]"
 
@@ -37,7 +37,11 @@ def _data_dir(path: Path | None) -> Path:
 
 
 def _model_dir(path: Path | None) -> Path:
-    return Path(path) if path else cache_dir() / "classifier"
+    """The given folder, else the one ``osg classifier train`` wrote, else the shipped one."""
+    if path:
+        return Path(path)
+    trained = cache_dir() / "classifier"
+    return trained if trained.is_dir() else DEFAULTS_DIR / "classifier"
 
 
 def _add_data_argument(parser: argparse.ArgumentParser) -> None:
@@ -152,7 +156,9 @@ def add_eval(verbs: Verbs) -> None:
     )
     _add_data_argument(parser)
     parser.add_argument(
-        "--model", type=Path, help="checkpoint folder (default: $OSG_CACHE_DIR/classifier)"
+        "--model",
+        type=Path,
+        help="checkpoint folder (default: $OSG_CACHE_DIR/classifier if trained, else shipped)",
     )
     parser.add_argument("--json", action="store_true", help="print JSON instead of a table")
     parser.set_defaults(func=run_eval)
