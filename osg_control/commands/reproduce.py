@@ -126,7 +126,7 @@ def run(args: argparse.Namespace) -> int:
             "--out",
             str(defaults / "skills"),
             "--threads",
-            "1",
+            "2",
         ),
     )
     stage(
