@@ -368,6 +368,10 @@ def test_cli_defaults_to_cache_dir_and_reports_errors(
     tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
 ) -> None:
     monkeypatch.setenv("OSG_CACHE_DIR", str(tmp_path))
+    # No classifier trained in the cache: eval falls back to the shipped one, then needs data.
+    assert main(["classifier", "eval"]) == 1
+    assert str(tmp_path / "data" / "move-home-to-door.h5") in capsys.readouterr().err
+    (tmp_path / "classifier").mkdir()
     assert main(["classifier", "eval"]) == 1
     assert str(tmp_path / "classifier" / SIDECAR_FILE) in capsys.readouterr().err
     assert main(["classifier", "train"]) == 1
