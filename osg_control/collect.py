@@ -87,8 +87,14 @@ def run_scripted_episode(skill: SkillSpec, seed: int, index: int) -> Episode:
     hold_left: int | None = None  # steps still to record after the first success
     while hold_left != 0 and (hold_left is not None or not policy.done):
         action = policy(obs)
-        next_obs, _reward, _terminated, truncated, info = env.step(action)
-        at_goal = "failure" not in info and env.skill_success(world=info["world"])
+        next_obs, reward, _terminated, truncated, info = env.step(action)
+        # Until the first success the env checks beta itself (its reward); after it, the env
+        # no longer rewards, so the hold steps are checked here.
+        at_goal = reward > 0 or (
+            hold_left is not None
+            and "failure" not in info
+            and env.skill_success(world=info["world"])
+        )
         rows["obs"].append(obs)
         rows["next"].append(next_obs)
         rows["act"].append(info["action_applied"])

@@ -103,18 +103,23 @@ class Dataset:
     def first_success_steps(self) -> np.ndarray:
         """Step index where each successful episode first reached beta, in episode order."""
         rewarded = np.flatnonzero(self.arrays["rewards"] > 0)
-        episode = np.repeat(np.arange(self.num_episodes), self.episode_lengths)
-        _episodes, first = np.unique(episode[rewarded], return_index=True)
+        _episodes, first = np.unique(self._step_episodes[rewarded], return_index=True)
         return rewarded[first]
 
     @property
     def approach_mask(self) -> np.ndarray:
         """(N,) bool: True up to and including the step that first reached beta; False on
         the steps recorded after it (``collect.HOLD_STEPS``). Failed episodes: all True."""
-        episode = np.repeat(np.arange(self.num_episodes), self.episode_lengths)
+        episode = self._step_episodes
+        firsts = self.first_success_steps
         last = np.full(self.num_episodes, self.num_steps)
-        last[episode[self.first_success_steps]] = self.first_success_steps
+        last[episode[firsts]] = firsts
         return np.arange(self.num_steps) <= last[episode]
+
+    @property
+    def _step_episodes(self) -> np.ndarray:
+        """(N,) the index (in this file) of the episode each step belongs to."""
+        return np.repeat(np.arange(self.num_episodes), self.episode_lengths)
 
     @property
     def skill_name(self) -> str:
