@@ -18,15 +18,8 @@ from osg_control.collect import LocalExecutor, run_scripted_episode
 from osg_control.env import EnvConfig, KitchenEnv
 from osg_control.estimator import FilteredPolicy
 from osg_control.skills import NODES, SKILLS, SKILLS_BY_NAME, get_skill, nearest_start
+from osg_control.tasks import TASKS_BY_NAME, get_task
 
-TASKS: dict[str, dict[str, Any]] = {
-    "pick-up": {"goal": ["cube-lifted"], "door_opening": 0.0},
-    "open-door": {"goal": ["door-open", "hand-empty"], "door_opening": 0.0},
-    "open+pick-up": {"goal": ["door-open", "cube-lifted"], "door_opening": 0.0},
-    "pick-up+place": {"goal": ["cube-in-cabinet"], "door_opening": 0.40},
-    "open+pick-up+place": {"goal": ["door-open", "cube-in-cabinet"], "door_opening": 0.0},
-}
-"""The paper's five tasks (Tables IV and V); pick-up+place starts with the door open."""
 START_NODES: tuple[str, ...] = ("home", "above-cube", "door-front", "cabinet-front")
 
 
@@ -288,11 +281,11 @@ class TaskEpisode:
 
 def run_task_episode(episode: TaskEpisode) -> bool:
     """Tables IV/V: run the executor on a task from a random start; True on success."""
-    spec = TASKS[episode.task]
+    task = get_task(episode.task)
     env = _plain_env(episode.start.noise)
-    obs = _reset_in_region(env, episode.start, door=spec["door_opening"])
+    obs = _reset_in_region(env, episode.start, door=task.door_opening)
     executor = _executor(episode.start.models, episode.max_replans, episode.filter_gain)
-    return bool(executor.execute(spec["goal"], env, obs).success)
+    return bool(executor.execute(task.goal, env, obs).success)
 
 
 def task_table(
@@ -301,7 +294,7 @@ def task_table(
     seed: int = 0,
     workers: int = 2,
     noise: float = 0.02,
-    tasks: Sequence[str] = tuple(TASKS),
+    tasks: Sequence[str] = tuple(TASKS_BY_NAME),
     replans: Sequence[int] = (0, 2),
     filter_gain: float | None = None,
 ) -> dict[str, Any]:

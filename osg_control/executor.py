@@ -3,12 +3,15 @@
 The only module where simulator, policies, classifier and planner meet. Given a goal (PDDL
 world facts) and the env's current state:
 
-1. if the TCP is on a graph node, plan from it; otherwise the classifier picks the entry
-   (movement) skill and the planner plans from that skill's termination node;
+1. if the TCP is on a graph node, plan from it; if it is part-way along a manipulation
+   skill's path (an interrupted skill), that skill is the entry; otherwise the classifier
+   picks the entry (movement) skill. The planner plans from the entry's termination node;
 2. each option runs its policy until its termination condition beta holds (the skill's
-   success predicate) or its step budget runs out; the joints are reset between skills;
-3. on a failure (timeout, or the expected effect missing from the world state) the state is
-   re-read, re-classified and re-planned, up to ``max_replans`` times.
+   success predicate), its step budget runs out, or the grasp it relies on is lost for
+   ``GRASP_GRACE_STEPS`` steps (the cube slipped out of the gripper); the joints are reset
+   between skills;
+3. on a failure (timeout, lost grasp, or the expected effect missing from the world
+   state) the state is re-read, re-classified and re-planned, up to ``max_replans`` times.
 """
 
 from __future__ import annotations
@@ -28,7 +31,15 @@ from osg_control.skills import NODES, SKILLS_BY_NAME, SkillSpec, nearest_start
 
 RESULT_SCHEMA_VERSION = 1
 NODE_TOLERANCE = 0.02
-"""TCP distance [m] within which the robot counts as on a graph node."""
+"""TCP distance [m] within which the robot counts as on a graph node or a skill's path."""
+WATCHED_FACTS = frozenset({"holding-cube"})
+"""Preconditions watched while a skill that keeps them runs; losing one stops the skill. In
+the offline data the cube's grasp holds on every step of pick-up-cube and
+move-cube-to-cabinet and drops out for at most 3 steps in place-cube-in-cabinet, so a loss
+means a dropped cube. holding-handle is not watched: the slide pushes the handle with one
+finger, so the both-finger contact is off on 94 % of its steps."""
+GRASP_GRACE_STEPS = 5
+"""Steps a watched fact may be false before the skill is stopped (above the data's 3)."""
 
 
 class Policy(Protocol):
@@ -96,6 +107,42 @@ def node_at(obs: np.ndarray, facts: Iterable[str]) -> str | None:
     return best
 
 
+def _segment_distance(point: np.ndarray, a: np.ndarray, b: np.ndarray) -> float:
+    """Distance from a point to the segment a-b."""
+    span = b - a
+    length2 = float(span @ span)
+    t = 0.0 if length2 == 0.0 else float(np.clip((point - a) @ span / length2, 0.0, 1.0))
+    return float(np.linalg.norm(point - (a + t * span)))
+
+
+def skill_on_path(obs: np.ndarray, facts: Iterable[str], skills: Iterable[SkillSpec]) -> str | None:
+    """The applicable manipulation skill whose scripted path the TCP is on, if any.
+
+    A skill's path runs from its start node through its waypoints; on each leg the gripper
+    is in the state it had on leaving (it switches only at a waypoint). Algorithm 1's data
+    follows that path, so a state within ``NODE_TOLERANCE`` of a leg with the gripper
+    matching is one the skill's policy was trained on: the skill can carry on from there
+    (e.g. grab-cube after the cube slipped out at the grasp). Movement skills are left to
+    the classifier: their legs are shared by both directions of travel.
+    """
+    facts = set(facts)
+    gripper = "open" if obs[7] == GRIPPER_OPEN_CMD else "closed"
+    position = np.asarray(obs[:3], dtype=float)
+    best, best_distance = None, NODE_TOLERANCE
+    for skill in skills:
+        if skill.kind == "movement" or not skill.preconditions <= facts:
+            continue
+        stops = [(skill.start_node.position, skill.start_node.gripper)]
+        stops += [(w.position, w.gripper) for w in skill.waypoints]
+        for (start, leg_gripper), (end, _) in zip(stops, stops[1:], strict=False):
+            if leg_gripper != gripper:
+                continue
+            distance = _segment_distance(position, np.asarray(start), np.asarray(end))
+            if distance <= best_distance:
+                best, best_distance = skill.name, distance
+    return best
+
+
 class Executor:
     """Classify, plan and run options on a ``KitchenEnv``.
 
@@ -144,13 +191,19 @@ class Executor:
         entry = None
         if node is None:
             entry = self._entry_skill(obs, facts)
-            node = SKILLS_BY_NAME[entry].end
+            skill = SKILLS_BY_NAME[entry]
+            node = skill.end
+            facts = (facts - skill.del_effects) | skill.add_effects
         result = plan_for_goal(list(goal), node, sorted(facts), self.planner)
         return entry, list(result.actions), result
 
     def _entry_skill(self, obs: np.ndarray, facts: set[str]) -> str:
-        """Off the graph: the classifier's movement skill when the hand is empty, else the
-        applicable skill whose start node is nearest (retry from where it failed)."""
+        """Off the graph: the manipulation skill whose path the TCP is on; else the
+        classifier's movement skill when the hand is empty; else the applicable skill whose
+        start node is nearest (retry from where it failed)."""
+        on_path = skill_on_path(obs, facts, SKILLS_BY_NAME.values())
+        if on_path is not None:
+            return on_path
         if "hand-empty" in facts:
             return str(self.classifier.predict(obs))
         applicable = [s for s in SKILLS_BY_NAME.values() if s.preconditions <= facts]
@@ -163,14 +216,17 @@ class Executor:
         obs: np.ndarray,
         tcp_filter: TcpFilter | None = None,
     ) -> tuple[SkillOutcome, np.ndarray]:
-        """Run one option until beta holds or its step budget runs out.
+        """Run one option until beta holds, its step budget runs out or it loses a watched
+        precondition (see ``WATCHED_FACTS``).
 
         ``tcp_filter``, if given, turns each observation into the policy's input; it is fed
         every reading and every action of the skill.
         """
         policy = self.policies[skill.name]
+        watched = (skill.preconditions - skill.del_effects) & WATCHED_FACTS
         started = time.perf_counter()
         action = None
+        lost_steps = 0
         for step in range(1, skill.max_steps + 1):
             seen = obs if tcp_filter is None else tcp_filter.update(obs, action)
             action = policy(seen)
@@ -183,6 +239,16 @@ class Executor:
                 ), obs
             if env.skill_success(skill):
                 return SkillOutcome(skill.name, True, step, time.perf_counter() - started), obs
+            lost = watched - world_facts(info["world"])
+            lost_steps = lost_steps + 1 if lost else 0
+            if lost_steps >= GRASP_GRACE_STEPS:
+                return SkillOutcome(
+                    skill.name,
+                    False,
+                    step,
+                    time.perf_counter() - started,
+                    failure=f"precondition {sorted(lost)} lost",
+                ), obs
         return SkillOutcome(
             skill.name,
             False,

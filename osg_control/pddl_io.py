@@ -12,7 +12,6 @@ from __future__ import annotations
 import math
 import re
 from collections.abc import Callable, Iterable
-from dataclasses import dataclass
 from pathlib import Path
 from typing import TypeVar
 
@@ -28,6 +27,7 @@ from pddl.requirements import Requirements
 
 from osg_control.errors import PDDLError, PlanningError
 from osg_control.graph import SkillGraph, graph_from_specs
+from osg_control.tasks import KITCHEN_TASKS, KitchenTask
 
 DOMAIN_NAME = "osg-kitchen"
 NODE_TYPE = "node"
@@ -39,8 +39,6 @@ DEFAULT_COST = 100
 MIN_SUCCESS_RATE = 1e-3
 """Rates below this are clamped (cost 6908), so a never-successful skill stays finite."""
 TOTAL_COST = NumericFunction("total-cost")
-DEFAULT_WORLD: tuple[str, ...] = ("door-closed", "cube-on-counter", "hand-empty")
-"""The kitchen at reset: door shut, cube on the counter, nothing held."""
 
 Atom = tuple[str, ...]
 """A ground atom as names: ``("door-open",)`` or ``("at", "home")``."""
@@ -204,40 +202,6 @@ def build_problem(
         goal=And(*_predicates(goal_atoms, domain)),
         metric=Metric(TOTAL_COST, Metric.MINIMIZE),
     )
-
-
-@dataclass(frozen=True)
-class KitchenTask:
-    """One of the paper's kitchen tasks as a planning problem."""
-
-    name: str
-    goal: tuple[str, ...]
-    world: tuple[str, ...] = DEFAULT_WORLD
-    node: str = "home"
-    description: str = ""
-
-
-KITCHEN_TASKS: tuple[KitchenTask, ...] = (
-    KitchenTask("pick-up", ("cube-lifted",), description="pick the cube up"),
-    KitchenTask(
-        "open-door",
-        ("door-open", "hand-empty"),
-        description="slide the cabinet door open and let go of the handle",
-    ),
-    KitchenTask("open-pick-up", ("door-open", "cube-lifted"), description="open the door, pick up"),
-    KitchenTask(
-        "pick-up-place",
-        ("cube-in-cabinet",),
-        world=("door-open", "cube-on-counter", "hand-empty"),
-        description="door already open: pick the cube up and place it in the cabinet",
-    ),
-    KitchenTask(
-        "open-pick-up-place",
-        ("door-open", "cube-in-cabinet"),
-        description="open the door, pick the cube up, place it in the cabinet",
-    ),
-)
-"""The paper's five long-horizon tasks, all starting at home."""
 
 
 def kitchen_problem(domain: Domain, task: KitchenTask) -> Problem:

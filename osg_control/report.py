@@ -28,9 +28,9 @@ PAPER_TABLE_III = [0.96, 0.96, 1.0, 0.97, 1.0, 1.0, 1.0, 1.0]
 PAPER_TASK_AVERAGES = {
     "pick-up": 0.92,
     "open-door": 0.84,
-    "open+pick-up": 0.85,
-    "pick-up+place": 0.82,
-    "open+pick-up+place": 0.78,
+    "open-pick-up": 0.85,
+    "pick-up-place": 0.82,
+    "open-pick-up-place": 0.78,
 }
 """Averages of the paper's Tables IV and V."""
 

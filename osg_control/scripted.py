@@ -1,11 +1,12 @@
 """The paper's Algorithm 1: a scripted, deliberately noisy waypoint-following policy.
 
 For each waypoint of a skill, for a fixed number of steps: while the TCP is farther than a
-threshold ``~ N(mu_1, sigma_1^2)`` from the waypoint, act with the error ``target - current``
-(position [m] and orientation [rad], clipped by the env); else, if the gripper is not in
-the waypoint's state, switch it; else do nothing. Every action gets ``N(mu_2, sigma_2^2)``
-noise on its motion components (orientation noise scaled by the bound ratio 0.1/0.02); the
-gripper component is left noise-free so that noise never toggles the gripper by itself.
+threshold ``~ N(mu_1, sigma_1^2)`` (or the waypoint's own ``reach``) from the waypoint, act
+with the error ``target - current`` (position [m] and orientation [rad], clipped by the
+env); else, if the gripper is not in the waypoint's state, switch it; else do nothing.
+Every action gets ``N(mu_2, sigma_2^2)`` noise on its motion components (orientation noise
+scaled by the bound ratio 0.1/0.02); the gripper component is left noise-free so that
+noise never toggles the gripper by itself.
 """
 
 from __future__ import annotations
@@ -57,7 +58,8 @@ class ScriptedPolicy:
         action = np.zeros(7)
         position_error = np.asarray(waypoint.position) - obs[:3]
         wanted = GRIPPER_OPEN_CMD if waypoint.gripper == "open" else GRIPPER_CLOSED_CMD
-        if np.linalg.norm(position_error) > self.threshold:
+        reach = self.threshold if waypoint.reach is None else waypoint.reach
+        if np.linalg.norm(position_error) > reach:
             action[:3] = _scale_into(position_error, ACTION_BOUNDS[0])
             action[3:6] = _scale_into(
                 rotation_error(quat_to_matrix(obs[3:7]), _TARGET_ROT), ACTION_BOUNDS[3]

@@ -6,10 +6,13 @@ import json
 from pathlib import Path
 
 import numpy as np
+import pytest
 
-from osg_control.evaluate import TASKS, nearest_start_skill, start_regions
-from osg_control.report import PAPER_TABLE_I, markdown, write_report
+from osg_control.errors import PlanningError
+from osg_control.evaluate import nearest_start_skill, start_regions
+from osg_control.report import PAPER_TABLE_I, PAPER_TASK_AVERAGES, markdown, write_report
 from osg_control.skills import NODES, SKILLS
+from osg_control.tasks import TASKS_BY_NAME, get_task
 
 
 def test_eight_start_regions_four_nodes_four_edge_midpoints() -> None:
@@ -28,11 +31,15 @@ def test_nearest_start_skill_picks_a_movement_skill_starting_at_the_nearest_node
     assert name == "move-door-to-home"
 
 
-def test_tasks_match_the_paper() -> None:
-    assert list(TASKS) == [
-        "pick-up", "open-door", "open+pick-up", "pick-up+place", "open+pick-up+place",
+def test_tasks_match_the_paper_and_one_list_feeds_problems_evaluation_and_report() -> None:
+    assert list(TASKS_BY_NAME) == [
+        "pick-up", "open-door", "open-pick-up", "pick-up-place", "open-pick-up-place",
     ]  # fmt: skip
-    assert TASKS["pick-up+place"]["door_opening"] > 0.3
+    assert list(PAPER_TASK_AVERAGES) == list(TASKS_BY_NAME)
+    assert get_task("pick-up-place").door_opening > 0.3
+    assert all(get_task(n).door_opening == 0.0 for n in TASKS_BY_NAME if n != "pick-up-place")
+    with pytest.raises(PlanningError, match="known tasks: pick-up"):
+        get_task("pick-up+place")
 
 
 def test_report_writes_markdown_json_and_plots(tmp_path: Path) -> None:

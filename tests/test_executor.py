@@ -10,7 +10,7 @@ import pytest
 
 from osg_control.defaults import load_defaults, read_manifest
 from osg_control.env import EnvConfig, KitchenEnv
-from osg_control.executor import RESULT_SCHEMA_VERSION, Executor, node_at
+from osg_control.executor import RESULT_SCHEMA_VERSION, Executor, node_at, skill_on_path
 from osg_control.skills import NODES, SKILLS
 
 
@@ -146,23 +146,56 @@ class _DropOnce(Mapping):
         return len(self.policies)
 
 
-def test_a_dropped_cube_triggers_replanning_from_the_re_read_state(
+def test_replanning_recovers_a_cube_that_slipped_out_of_the_gripper(
     defaults: tuple[dict, object],
 ) -> None:
-    # The shipped skills do not yet recover (the re-grasp of a displaced cube fails; see
-    # docs/results.md), so this checks the mechanism: the failure is detected from the
-    # world state, the state is re-read and re-classified, and the budget is respected.
     policies, classifier = defaults
-    injected = _DropOnce(policies)
-    env, result = _run(Executor(injected, classifier, max_replans=2), ["cube-lifted"], seed=1)
-    assert injected.dropped == 3
-    outcomes = [o["skill"] for o in result["outcomes"]]
-    assert outcomes[:4] == ["move-door-to-home", "move-home-to-cube", "grab-cube", "pick-up-cube"]
-    assert not result["outcomes"][3]["success"]
-    assert result["replans"] == 2
-    assert len(outcomes) > 4, "a new plan must run after the failure"
-    assert not env.world_state().cube_grasped
-    assert result["success"] == env.world_state().cube_lifted
+    for max_replans in (0, 2):
+        injected = _DropOnce(policies)
+        env, result = _run(
+            Executor(injected, classifier, max_replans=max_replans), ["cube-lifted"], seed=1
+        )
+        assert injected.dropped == 3
+        outcomes = [o["skill"] for o in result["outcomes"]]
+        assert outcomes[:4] == [
+            "move-door-to-home", "move-home-to-cube", "grab-cube", "pick-up-cube",
+        ]  # fmt: skip
+        dropped = result["outcomes"][3]
+        # Stopped as soon as the grasp was gone, not after the 80-step budget.
+        assert not dropped["success"] and dropped["failure"] == "precondition ['holding-cube'] lost"
+        assert dropped["steps"] < 15
+        assert result["success"] == env.world_state().cube_lifted
+        if max_replans == 0:
+            assert not result["success"] and result["replans"] == 0 and len(outcomes) == 4
+        else:
+            assert result["success"], result
+            assert result["replans"] == 1 and outcomes[-2:] == ["grab-cube", "pick-up-cube"]
+
+
+def test_skill_on_path_finds_an_interrupted_manipulation_skill() -> None:
+    obs = np.zeros(10)
+    obs[:3] = (0.50, -0.20, 0.08)  # on grab-cube's descent from above-cube to the cube
+    obs[7] = 1.0
+    facts = {"hand-empty", "cube-on-counter", "door-closed"}
+    assert skill_on_path(obs, facts, SKILLS) == "grab-cube"
+    obs[7] = -1.0  # the descent is made open-handed
+    assert skill_on_path(obs, facts, SKILLS) is None
+    obs[7] = 1.0
+    assert skill_on_path(obs, {"hand-empty", "cube-in-cabinet"}, SKILLS) is None  # no cube
+    obs[:3] = (0.42, 0.07, 0.475)  # between home and door-front: movement skills only
+    assert skill_on_path(obs, facts, SKILLS) is None
+
+
+def test_a_start_part_way_down_to_the_cube_enters_at_grab_cube(
+    defaults: tuple[dict, object],
+) -> None:
+    policies, classifier = defaults
+    env = KitchenEnv(config=EnvConfig(obs_noise_std=0.0))
+    obs, _ = env.reset(seed=0, options={"position": (0.50, -0.20, 0.08), "radius": 0.01})
+    result = Executor(policies, classifier, max_replans=0).execute(["cube-lifted"], env, obs)
+    assert result.entry_skill == "grab-cube" and result.plan == ["pick-up-cube"]
+    assert result.success, result.to_dict()
+    assert env.world_state().cube_lifted
 
 
 def test_result_schema_is_stable(defaults: tuple[dict, object]) -> None:

@@ -12,8 +12,6 @@ from osg_control.errors import PDDLError, PlanningError
 from osg_control.graph import graph_from_specs
 from osg_control.pddl_io import (
     DEFAULT_COST,
-    DEFAULT_WORLD,
-    KITCHEN_TASKS,
     build_domain,
     build_problem,
     export_kitchen,
@@ -25,6 +23,7 @@ from osg_control.pddl_io import (
     write_pddl,
 )
 from osg_control.skills import NODES, SKILLS, WORLD_FACTS
+from osg_control.tasks import DEFAULT_WORLD, KITCHEN_TASKS
 
 REPO = Path(__file__).resolve().parents[1]
 COMMITTED = REPO / "domains"

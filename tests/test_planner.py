@@ -13,9 +13,6 @@ from osg_control.cli import main
 from osg_control.errors import PDDLError, PlanningError
 from osg_control.graph import graph_from_specs
 from osg_control.pddl_io import (
-    DEFAULT_WORLD,
-    KITCHEN_TASKS,
-    KitchenTask,
     build_domain,
     build_problem,
     read_domain,
@@ -27,6 +24,7 @@ from osg_control.planning.grounding import ground
 from osg_control.planning.heuristics import HMax
 from osg_control.planning.synthetic import random_goal, random_skill_graph
 from osg_control.planning.task import State, Task
+from osg_control.tasks import DEFAULT_WORLD, KITCHEN_TASKS, KitchenTask
 
 REPO = Path(__file__).resolve().parents[1]
 DOMAIN = REPO / "domains" / "osg-kitchen.pddl"

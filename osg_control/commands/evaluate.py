@@ -7,7 +7,8 @@ import json
 from pathlib import Path
 
 from osg_control.commands import add_filter_argument
-from osg_control.evaluate import TASKS, format_task_table, task_table
+from osg_control.evaluate import format_task_table, task_table
+from osg_control.tasks import TASKS_BY_NAME
 
 
 def register(subparsers: argparse._SubParsersAction) -> None:
@@ -19,7 +20,9 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     tasks.add_argument("--noise", type=float, default=0.02, help="TCP observation noise [m]")
     tasks.add_argument("--seed", type=int, default=0)
     tasks.add_argument("--workers", type=int, default=2)
-    tasks.add_argument("--task", nargs="*", default=list(TASKS), choices=list(TASKS))
+    tasks.add_argument(
+        "--task", nargs="*", default=list(TASKS_BY_NAME), choices=list(TASKS_BY_NAME)
+    )
     tasks.add_argument(
         "--replans",
         type=int,

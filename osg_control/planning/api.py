@@ -13,7 +13,6 @@ from pddl.core import Domain, Problem
 from osg_control.errors import PlanningError
 from osg_control.graph import SkillGraph
 from osg_control.pddl_io import (
-    DEFAULT_WORLD,
     build_domain,
     build_problem,
     read_domain,
@@ -25,6 +24,7 @@ from osg_control.planning.grounding import ground
 from osg_control.planning.heuristics import HMax, blind
 from osg_control.planning.search import best_first_search
 from osg_control.planning.task import PlanResult, Task
+from osg_control.tasks import DEFAULT_WORLD
 
 
 @dataclass(frozen=True)
