@@ -82,6 +82,10 @@ class TcpFilter:
         self._estimate = None
         self._previous_command = np.zeros(3)
 
+    def forget_motion(self) -> None:
+        """Keep the estimate but drop the previous command (the arm is at rest)."""
+        self._previous_command = np.zeros(3)
+
     def update(self, obs: np.ndarray, action: np.ndarray | None) -> np.ndarray:
         """Fold in a reading taken after ``action`` (None: the robot did not move).
 
@@ -106,21 +110,71 @@ class TcpFilter:
         return filtered
 
 
+class TcpTracker:
+    """A ``TcpFilter`` wired to one control loop: ``read`` every observation, tell it every
+    action applied (``acted``); it pairs each reading with the actions since the last one.
+
+    Reading the same observation twice with no action in between returns the same
+    estimate (the executor reads the last observation of a skill to plan, and the next
+    skill starts from it); a new reading with no action (after the joint reset, which holds
+    the TCP still) is folded in as a reading of a resting arm.
+    """
+
+    def __init__(self, gain: float = DEFAULT_GAIN) -> None:
+        self.filter = TcpFilter(gain)
+        self._pending: np.ndarray | None = None
+        self._last_reading: np.ndarray | None = None
+        self._last_seen: np.ndarray | None = None
+
+    def reset(self) -> None:
+        """Start a new episode."""
+        self.filter.reset()
+        self._pending = self._last_reading = self._last_seen = None
+
+    def read(self, obs: np.ndarray) -> np.ndarray:
+        """The observation with its position replaced by the filtered estimate."""
+        last, last_reading = self._last_seen, self._last_reading
+        if (
+            self._pending is None
+            and last is not None
+            and last_reading is not None
+            and np.array_equal(obs, last_reading)
+        ):
+            return last.copy()
+        self._last_seen = self.filter.update(obs, self._pending)
+        self._last_reading = np.array(obs, dtype=float)
+        self._pending = None
+        return self._last_seen.copy()
+
+    def settle(self) -> None:
+        """The arm was brought to rest (the joint reset between skills): forget the commands
+        since the last reading and the servo lag they carried.
+
+        Folding the last command of the finished skill into the next reading instead (what
+        the motion model says) was measured worse: pick-up-place at sigma = 2 cm, no
+        replanning, 200 episodes: 0.81 against 0.875 (docs/results.md).
+        """
+        self._pending = None
+        self.filter.forget_motion()
+
+    def acted(self, action: np.ndarray) -> None:
+        """Record the action just applied (the next reading is taken after it)."""
+        self._pending = np.asarray(action, dtype=float)
+
+
 class FilteredPolicy:
     """A policy that acts on filtered observations; one instance per episode."""
 
     def __init__(self, policy: Callable[[np.ndarray], np.ndarray], gain: float) -> None:
         self.policy = policy
-        self.filter = TcpFilter(gain)
-        self._last_action: np.ndarray | None = None
+        self.tracker = TcpTracker(gain)
 
     def reset(self) -> None:
         """Start a new episode."""
-        self.filter.reset()
-        self._last_action = None
+        self.tracker.reset()
 
     def __call__(self, obs: np.ndarray) -> np.ndarray:
         """The wrapped policy's action for the filtered observation."""
-        action = self.policy(self.filter.update(obs, self._last_action))
-        self._last_action = np.asarray(action, dtype=float)
+        action = self.policy(self.tracker.read(obs))
+        self.tracker.acted(action)
         return action

@@ -25,7 +25,7 @@ from typing import Any, Protocol
 import numpy as np
 
 from osg_control.env import GRIPPER_OPEN_CMD, KitchenEnv, world_facts
-from osg_control.estimator import TcpFilter
+from osg_control.estimator import TcpTracker
 from osg_control.planning.api import plan_for_goal
 from osg_control.skills import NODES, SKILLS_BY_NAME, SkillSpec, nearest_start
 
@@ -153,8 +153,9 @@ class Executor:
         max_replans: how many times a failed plan is re-planned (0 = the paper's executor).
         reset_joints: run the joint reset between skills.
         filter_gain: feed the policies a filtered TCP position (``estimator.TcpFilter``
-            with this gain, carried across the skills of an execution); None feeds the raw
-            observation (the paper's protocol).
+            with this gain, carried across the skills of an execution), and locate the
+            robot on the graph from it; None uses the raw observation (the paper's
+            protocol).
     """
 
     def __init__(
@@ -214,22 +215,23 @@ class Executor:
         env: KitchenEnv,
         skill: SkillSpec,
         obs: np.ndarray,
-        tcp_filter: TcpFilter | None = None,
+        tracker: TcpTracker | None = None,
     ) -> tuple[SkillOutcome, np.ndarray]:
         """Run one option until beta holds, its step budget runs out or it loses a watched
         precondition (see ``WATCHED_FACTS``).
 
-        ``tcp_filter``, if given, turns each observation into the policy's input; it is fed
-        every reading and every action of the skill.
+        ``tracker``, if given, turns each observation into the policy's input; it reads
+        every observation and is told every action of the skill.
         """
         policy = self.policies[skill.name]
         watched = (skill.preconditions - skill.del_effects) & WATCHED_FACTS
         started = time.perf_counter()
-        action = None
         lost_steps = 0
         for step in range(1, skill.max_steps + 1):
-            seen = obs if tcp_filter is None else tcp_filter.update(obs, action)
+            seen = obs if tracker is None else tracker.read(obs)
             action = policy(seen)
+            if tracker is not None:
+                tracker.acted(action)
             obs, _reward, _terminated, _truncated, info = env.step(action)
             if self.on_step is not None:
                 self.on_step(env)
@@ -263,7 +265,7 @@ class Executor:
         started = time.perf_counter()
         facts = world_facts(env.world_state())
         result = ExecutionResult(goal=goal, success=False, entry_skill=None, plan=[])
-        tcp_filter = TcpFilter(self.filter_gain) if self.filter_gain is not None else None
+        tracker = TcpTracker(self.filter_gain) if self.filter_gain is not None else None
         planning_time = 0.0
         for attempt in range(self.max_replans + 1):
             if set(goal) <= facts:
@@ -272,7 +274,8 @@ class Executor:
             if "hand-empty" in facts and obs[7] != GRIPPER_OPEN_CMD:
                 obs = _open_gripper(env)
             t0 = time.perf_counter()
-            entry, plan, planned = self.plan(goal, obs, facts)
+            seen = obs if tracker is None else tracker.read(obs)
+            entry, plan, planned = self.plan(goal, seen, facts)
             planning_time += time.perf_counter() - t0
             if attempt == 0:
                 result.entry_skill, result.plan = entry, plan
@@ -280,7 +283,7 @@ class Executor:
                 result.failure = f"no plan: unreachable goal facts {list(planned.unreached)}"
                 break
             obs, failed = self._run_sequence(
-                env, ([entry] if entry else []) + plan, obs, result, tcp_filter
+                env, ([entry] if entry else []) + plan, obs, result, tracker
             )
             facts = world_facts(env.world_state())
             if not failed:
@@ -308,12 +311,12 @@ class Executor:
         sequence: list[str],
         obs: np.ndarray,
         result: ExecutionResult,
-        tcp_filter: TcpFilter | None,
+        tracker: TcpTracker | None,
     ) -> tuple[np.ndarray, str | None]:
         """Run skills in order; stop at the first failure and return its reason."""
         for index, name in enumerate(sequence):
             skill = SKILLS_BY_NAME[name]
-            outcome, obs = self.run_skill(env, skill, obs, tcp_filter)
+            outcome, obs = self.run_skill(env, skill, obs, tracker)
             facts = world_facts(env.world_state())
             if outcome.success and not (skill.add_effects <= facts):
                 outcome.success = False
@@ -324,6 +327,8 @@ class Executor:
             if self.reset_joints and index < len(sequence) - 1:
                 outcome.reset_steps = env.joint_reset()
                 obs = env.observe()
+                if tracker is not None:
+                    tracker.settle()
         return obs, None
 
 

@@ -6,7 +6,13 @@ import numpy as np
 import pytest
 
 from osg_control.collect import run_scripted_episode
-from osg_control.estimator import MOTION_MODEL, FilteredPolicy, TcpFilter, fit_motion_model
+from osg_control.estimator import (
+    MOTION_MODEL,
+    FilteredPolicy,
+    TcpFilter,
+    TcpTracker,
+    fit_motion_model,
+)
 from osg_control.skills import get_skill
 
 SIGMA = 0.02
@@ -82,6 +88,32 @@ def test_filtered_policy_feeds_its_own_actions_back() -> None:
     wrapped.reset()
     wrapped(obs)
     assert seen[2][0] == 0.0
+
+
+def test_tracker_folds_each_reading_once_with_the_actions_before_it() -> None:
+    tracker = TcpTracker(gain=0.5)
+    first = np.zeros(10)
+    np.testing.assert_array_equal(tracker.read(first), first)
+    tracker.acted(np.array([0.01, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0]))
+    second = np.zeros(10)  # the arm did not move as commanded: estimate halfway
+    expected = 0.5 * MOTION_MODEL[0] * 0.01
+    assert tracker.read(second)[0] == pytest.approx(expected)
+    # The same reading again (e.g. the executor plans from it, then the next skill starts
+    # from it): not folded twice.
+    assert tracker.read(second)[0] == pytest.approx(expected)
+    # A new reading with no action since: a resting arm (the previous command's lag term
+    # still applies).
+    third = np.zeros(10)
+    third[0] = 0.004
+    rest = expected + MOTION_MODEL[1] * 0.01
+    assert tracker.read(third)[0] == pytest.approx(rest + 0.5 * (0.004 - rest))
+    # After settle (the joint reset stopped the arm) no command is carried into the
+    # next reading's prediction.
+    estimate = tracker.read(third)[0]
+    tracker.acted(np.array([0.02, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0]))
+    tracker.settle()
+    fourth = np.zeros(10)
+    assert tracker.read(fourth)[0] == pytest.approx(0.5 * estimate)
 
 
 def test_motion_model_matches_the_simulated_arm() -> None:
