@@ -5,7 +5,8 @@ world facts) and the env's current state:
 
 1. if the TCP is on a graph node, plan from it; if it is part-way along a manipulation
    skill's path (an interrupted skill), that skill is the entry; otherwise the classifier
-   picks the entry (movement) skill. The planner plans from the entry's termination node;
+   picks the entry (movement) skill among those whose data was recorded in the current
+   door state. The planner plans from the entry's termination node;
 2. each option runs its policy until its termination condition beta holds (the skill's
    success predicate), its step budget runs out, or the grasp it relies on is lost for
    ``GRASP_GRACE_STEPS`` steps (the cube slipped out of the gripper); the joints are reset
@@ -51,10 +52,12 @@ class Policy(Protocol):
 
 
 class EntryClassifier(Protocol):
-    """Picks the movement skill that brings a state onto the graph."""
+    """Scores the movement skills that may bring a state onto the graph."""
 
-    def predict(self, states: np.ndarray) -> Any:
-        """The skill name for one state."""
+    classes: tuple[str, ...]
+
+    def predict_proba(self, states: np.ndarray) -> np.ndarray:
+        """Class probabilities (in ``classes`` order) for one state."""
         ...
 
 
@@ -105,6 +108,13 @@ def node_at(obs: np.ndarray, facts: Iterable[str]) -> str | None:
         if distance <= best_distance:
             best, best_distance = node.name, distance
     return best
+
+
+def recorded_world_holds(skill: SkillSpec, facts: Iterable[str]) -> bool:
+    """Whether the world a skill's data was recorded in holds now: the skills recorded with
+    the door open (``start_door_opening`` > 0) need door-open. From near the closed door,
+    move-cabinet-to-cube's path (via ``skills.CABINET_CLEAR``) runs into the handle."""
+    return skill.start_door_opening == 0.0 or "door-open" in set(facts)
 
 
 def _segment_distance(point: np.ndarray, a: np.ndarray, b: np.ndarray) -> float:
@@ -206,9 +216,19 @@ class Executor:
         if on_path is not None:
             return on_path
         if "hand-empty" in facts:
-            return str(self.classifier.predict(obs))
+            return self._classify(obs, facts)
         applicable = [s for s in SKILLS_BY_NAME.values() if s.preconditions <= facts]
         return nearest_start(applicable or SKILLS_BY_NAME.values(), obs[:3]).name
+
+    def _classify(self, obs: np.ndarray, facts: set[str]) -> str:
+        """The classifier's likeliest movement skill among those whose recorded world holds
+        (``recorded_world_holds``; all of them if none does)."""
+        proba = np.asarray(self.classifier.predict_proba(obs), dtype=float)
+        classes = self.classifier.classes
+        allowed = np.array([recorded_world_holds(SKILLS_BY_NAME[c], facts) for c in classes])
+        if not allowed.any():
+            allowed[:] = True
+        return classes[int(np.argmax(np.where(allowed, proba, -np.inf)))]
 
     def run_skill(
         self,

@@ -186,6 +186,29 @@ def test_skill_on_path_finds_an_interrupted_manipulation_skill() -> None:
     assert skill_on_path(obs, facts, SKILLS) is None
 
 
+class _Scores:
+    """A classifier stand-in with fixed scores (the rule under test is the executor's)."""
+
+    classes = ("move-cabinet-to-cube", "move-home-to-cube", "move-door-to-home")
+
+    def predict_proba(self, states: np.ndarray) -> np.ndarray:
+        return np.array([0.6, 0.3, 0.1])
+
+
+def test_entry_skips_skills_recorded_with_the_door_open_while_it_is_shut(
+    defaults: tuple[dict, object],
+) -> None:
+    policies, _classifier = defaults
+    executor = Executor(policies, _Scores())
+    obs = np.zeros(10)
+    obs[:3] = (0.40, 0.09, 0.31)  # a start beside the closed door's handle
+    obs[7] = 1.0
+    shut = {"hand-empty", "door-closed", "cube-on-counter"}
+    assert executor._entry_skill(obs, shut) == "move-home-to-cube"
+    opened = {"hand-empty", "door-open", "cube-on-counter"}
+    assert executor._entry_skill(obs, opened) == "move-cabinet-to-cube"
+
+
 def test_a_start_part_way_down_to_the_cube_enters_at_grab_cube(
     defaults: tuple[dict, object],
 ) -> None:
