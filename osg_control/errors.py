@@ -1,5 +1,10 @@
 """One exception tree for the package, so callers can catch ``OSGError``."""
 
+from collections.abc import Callable, Mapping
+from typing import TypeVar
+
+T = TypeVar("T")
+
 
 class OSGError(Exception):
     """Base class of every error raised by osg-control."""
@@ -35,3 +40,13 @@ class PDDLError(OSGError):
 
 class PlanningError(OSGError):
     """The planner cannot solve the task (e.g. unknown goal facts)."""
+
+
+def lookup(table: Mapping[str, T], name: str, what: str, error: Callable[[str], Exception]) -> T:
+    """``table[name]``; for an unknown name raise ``error`` naming it and the known ones
+    (``unknown <what> 'x'; known <what>s: a, b``)."""
+    try:
+        return table[name]
+    except KeyError:
+        known = ", ".join(table)
+        raise error(f"unknown {what} {name!r}; known {what}s: {known}") from None

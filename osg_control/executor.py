@@ -261,7 +261,7 @@ class Executor:
                 ), obs
             if env.skill_success(skill):
                 return SkillOutcome(skill.name, True, step, time.perf_counter() - started), obs
-            lost = watched - world_facts(info["world"])
+            lost = watched - world_facts(info["world"]) if watched else set()
             lost_steps = lost_steps + 1 if lost else 0
             if lost_steps >= GRASP_GRACE_STEPS:
                 return SkillOutcome(

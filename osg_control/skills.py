@@ -18,7 +18,7 @@ from typing import Any, Literal
 
 import numpy as np
 
-from osg_control.errors import SkillSpecError
+from osg_control.errors import SkillSpecError, lookup
 
 TOP_DOWN_QUAT = (0.0, 1.0, 0.0, 0.0)
 """TCP orientation of every named pose: a half turn about x (z down, y flipped)."""
@@ -354,11 +354,7 @@ def get_skill(name: str) -> SkillSpec:
     Raises:
         SkillSpecError: for an unknown name, listing the known ones.
     """
-    try:
-        return SKILLS_BY_NAME[name]
-    except KeyError:
-        known = ", ".join(SKILLS_BY_NAME)
-        raise SkillSpecError(f"unknown skill {name!r}; known skills: {known}") from None
+    return lookup(SKILLS_BY_NAME, name, "skill", SkillSpecError)
 
 
 def nearest_start(skills: Iterable[SkillSpec], position: np.ndarray) -> SkillSpec:

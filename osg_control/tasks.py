@@ -5,7 +5,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from osg_control.errors import PlanningError
+from osg_control.errors import PlanningError, lookup
 from osg_control.skills import DOOR_OPENED
 
 DEFAULT_WORLD: tuple[str, ...] = ("door-closed", "cube-on-counter", "hand-empty")
@@ -66,8 +66,4 @@ def get_task(name: str) -> KitchenTask:
     Raises:
         PlanningError: for an unknown name, listing the known ones.
     """
-    try:
-        return TASKS_BY_NAME[name]
-    except KeyError:
-        known = ", ".join(TASKS_BY_NAME)
-        raise PlanningError(f"unknown task {name!r}; known tasks: {known}") from None
+    return lookup(TASKS_BY_NAME, name, "task", PlanningError)
