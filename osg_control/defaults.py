@@ -11,10 +11,10 @@ import json
 from pathlib import Path
 from typing import Any
 
-from osg_control.classifier import StateClassifier
+from osg_control.classifier.model import StateClassifier
 from osg_control.errors import CheckpointError
+from osg_control.learning.policy import SkillPolicy, load_policies
 from osg_control.paths import DEFAULTS_DIR
-from osg_control.policy import SkillPolicy, load_policies
 
 MANIFEST = "manifest.json"
 

@@ -6,7 +6,7 @@ import os
 from pathlib import Path
 
 PACKAGE_DIR = Path(__file__).resolve().parent
-DEFAULTS_DIR = PACKAGE_DIR / "defaults"
+DEFAULTS_DIR = PACKAGE_DIR / "kitchen" / "defaults"
 
 
 def cache_dir() -> Path:

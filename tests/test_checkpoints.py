@@ -13,7 +13,9 @@ from safetensors.numpy import load_file
 from test_td3bc import OTHER_SKILL, SKILL, SMALL, toy_checkpoint, toy_data, train
 
 from osg_control import __version__
-from osg_control.checkpoints import (
+from osg_control.errors import CheckpointError
+from osg_control.kitchen.skills import get_skill
+from osg_control.learning.checkpoints import (
     OBS_CLIP,
     checkpoint_paths,
     load_checkpoint,
@@ -21,10 +23,8 @@ from osg_control.checkpoints import (
     save_checkpoint,
     sha256_file,
 )
-from osg_control.errors import CheckpointError
-from osg_control.policy import SkillPolicy, load_policies
-from osg_control.skills import get_skill
-from osg_control.td3bc import TD3BC, SkillData
+from osg_control.learning.policy import SkillPolicy, load_policies
+from osg_control.learning.td3bc import TD3BC, SkillData
 
 
 @pytest.fixture(scope="module")

@@ -11,32 +11,32 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from osg_control.classifier import (
-    SIDECAR_FILE,
-    WEIGHTS_FILE,
-    StateClassifier,
-    evaluate,
-    reload_split,
-)
-from osg_control.classifier_data import (
+from osg_control.classifier.data import (
     ClassifierData,
     class_order,
     dataset_path,
     load_classifier_data,
     movement_classes,
 )
-from osg_control.classifier_metrics import (
+from osg_control.classifier.metrics import (
     accuracy,
     confusion_matrix,
     corrected_accuracy,
     format_report,
     nearest_node_predict,
 )
-from osg_control.classifier_train import TrainConfig, train_classifier
+from osg_control.classifier.model import (
+    SIDECAR_FILE,
+    WEIGHTS_FILE,
+    StateClassifier,
+    evaluate,
+    reload_split,
+)
+from osg_control.classifier.train import TrainConfig, train_classifier
 from osg_control.cli import main
-from osg_control.datasets import ACTION_DIM, OBS_DIM, Episode, write_episodes
+from osg_control.data.datasets import ACTION_DIM, OBS_DIM, Episode, write_episodes
 from osg_control.errors import CheckpointError, DatasetError
-from osg_control.skills import MOVEMENT_SKILLS, SKILLS, TOP_DOWN_QUAT, SkillSpec, get_skill
+from osg_control.kitchen.skills import MOVEMENT_SKILLS, SKILLS, TOP_DOWN_QUAT, SkillSpec, get_skill
 
 EPISODES = 20
 STEPS = 25

@@ -10,17 +10,17 @@ import h5py
 import numpy as np
 import pytest
 
-from osg_control.collect import (
+from osg_control.data.collect import (
     HOLD_STEPS,
     LocalExecutor,
     collect_skill,
     parts_dir,
     run_scripted_episode,
 )
-from osg_control.datasets import load_dataset
-from osg_control.env import world_facts
-from osg_control.scene import world_state_from_array
-from osg_control.skills import get_skill
+from osg_control.data.datasets import load_dataset
+from osg_control.kitchen.env import world_facts
+from osg_control.kitchen.scene import world_state_from_array
+from osg_control.kitchen.skills import get_skill
 
 T = TypeVar("T")
 R = TypeVar("R")

@@ -13,12 +13,12 @@ import numpy as np
 import pytest
 from gymnasium.utils.env_checker import check_env
 
-from osg_control.env import ACTION_BOUNDS, OBS_DIM, EnvConfig, KitchenEnv, world_facts
+from osg_control.control.ik import IKConfig, joint_reset_controller, rotation_error
+from osg_control.control.robot import HOME_Q
 from osg_control.errors import OSGError
-from osg_control.ik import IKConfig, joint_reset_controller, rotation_error
-from osg_control.robot import HOME_Q
-from osg_control.scene import CUBE_HALF_SIZE, world_state_from_array
-from osg_control.skills import NODES, TOP_DOWN_QUAT
+from osg_control.kitchen.env import ACTION_BOUNDS, OBS_DIM, EnvConfig, KitchenEnv, world_facts
+from osg_control.kitchen.scene import CUBE_HALF_SIZE, world_state_from_array
+from osg_control.kitchen.skills import NODES, TOP_DOWN_QUAT
 
 ZERO_ACTION = np.zeros(7)
 

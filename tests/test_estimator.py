@@ -5,15 +5,15 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from osg_control.collect import run_scripted_episode
-from osg_control.estimator import (
+from osg_control.control.estimator import (
     MOTION_MODEL,
     FilteredPolicy,
     TcpFilter,
     TcpTracker,
     fit_motion_model,
 )
-from osg_control.skills import get_skill
+from osg_control.data.collect import run_scripted_episode
+from osg_control.kitchen.skills import get_skill
 
 SIGMA = 0.02
 

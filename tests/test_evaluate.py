@@ -9,10 +9,10 @@ import numpy as np
 import pytest
 
 from osg_control.errors import PlanningError
-from osg_control.evaluate import nearest_start_skill, start_regions
-from osg_control.report import PAPER_TABLE_I, PAPER_TASK_AVERAGES, markdown, write_report
-from osg_control.skills import NODES, SKILLS
-from osg_control.tasks import TASKS_BY_NAME, get_task
+from osg_control.evaluation.evaluate import nearest_start_skill, start_regions
+from osg_control.evaluation.report import PAPER_TABLE_I, PAPER_TASK_AVERAGES, markdown, write_report
+from osg_control.kitchen.skills import NODES, SKILLS
+from osg_control.kitchen.tasks import TASKS_BY_NAME, get_task
 
 
 def test_eight_start_regions_four_nodes_four_edge_midpoints() -> None:

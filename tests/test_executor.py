@@ -9,9 +9,9 @@ import numpy as np
 import pytest
 
 from osg_control.defaults import load_defaults, read_manifest
-from osg_control.env import EnvConfig, KitchenEnv
-from osg_control.executor import RESULT_SCHEMA_VERSION, Executor, node_at, skill_on_path
-from osg_control.skills import NODES, SKILLS
+from osg_control.execution.executor import RESULT_SCHEMA_VERSION, Executor, node_at, skill_on_path
+from osg_control.kitchen.env import EnvConfig, KitchenEnv
+from osg_control.kitchen.skills import NODES, SKILLS
 
 
 @pytest.fixture(scope="module")

@@ -10,9 +10,11 @@ import numpy as np
 import pytest
 
 from osg_control.cli import main
-from osg_control.datasets import Dataset, Episode, load_dataset, write_episodes
+from osg_control.data.datasets import Dataset, Episode, load_dataset, write_episodes
 from osg_control.errors import DatasetError, SkillSpecError
-from osg_control.graph import (
+from osg_control.kitchen.scene import WorldState, world_state_from_array
+from osg_control.kitchen.skills import NODES, SKILLS, SkillSpec
+from osg_control.planning.graph import (
     draw_graph,
     graph_from_datasets,
     graph_from_specs,
@@ -20,8 +22,6 @@ from osg_control.graph import (
     save_graph,
     world_facts,
 )
-from osg_control.scene import WorldState, world_state_from_array
-from osg_control.skills import NODES, SKILLS, SkillSpec
 
 STEPS = 6
 

@@ -13,8 +13,7 @@ import qpsolvers
 from pink.limits import ConfigurationLimit, VelocityLimit
 from scipy.spatial.transform import Rotation
 
-from osg_control.errors import ControllerError
-from osg_control.ik import (
+from osg_control.control.ik import (
     DiffIKController,
     IKConfig,
     MinkBackend,
@@ -24,7 +23,8 @@ from osg_control.ik import (
     rotation_step,
     solve_ik,
 )
-from osg_control.robot import HOME_Q, TCP_FRAME, TCP_SITE
+from osg_control.control.robot import HOME_Q, TCP_FRAME, TCP_SITE
+from osg_control.errors import ControllerError
 
 BACKEND_NAMES = ("mink", "pinocchio")
 SHOULDER = np.array([0.0, 0.0, 0.333])

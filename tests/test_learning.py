@@ -8,9 +8,9 @@ import numpy as np
 from scipy.stats import fisher_exact
 
 from osg_control.cli import main
-from osg_control.collect import collect_skill, run_scripted_episode
-from osg_control.evaluate import SkillEpisode, run_skill_episode
-from osg_control.skills import get_skill
+from osg_control.data.collect import collect_skill, run_scripted_episode
+from osg_control.evaluation.evaluate import SkillEpisode, run_skill_episode
+from osg_control.kitchen.skills import get_skill
 
 SKILL = "move-home-to-door"
 EPISODES = 40

@@ -9,8 +9,10 @@ import pytest
 from pddl.formatter import domain_to_string, problem_to_string
 
 from osg_control.errors import PDDLError, PlanningError
-from osg_control.graph import graph_from_specs
-from osg_control.pddl_io import (
+from osg_control.kitchen.skills import NODES, SKILLS, WORLD_FACTS
+from osg_control.kitchen.tasks import DEFAULT_WORLD, KITCHEN_TASKS
+from osg_control.planning.graph import graph_from_specs
+from osg_control.planning.pddl_io import (
     DEFAULT_COST,
     build_domain,
     build_problem,
@@ -22,8 +24,6 @@ from osg_control.pddl_io import (
     skill_cost,
     write_pddl,
 )
-from osg_control.skills import NODES, SKILLS, WORLD_FACTS
-from osg_control.tasks import DEFAULT_WORLD, KITCHEN_TASKS
 
 REPO = Path(__file__).resolve().parents[1]
 COMMITTED = REPO / "domains"

@@ -11,20 +11,20 @@ from pddl.core import Domain, Problem
 
 from osg_control.cli import main
 from osg_control.errors import PDDLError, PlanningError
-from osg_control.graph import graph_from_specs
-from osg_control.pddl_io import (
+from osg_control.kitchen.tasks import DEFAULT_WORLD, KITCHEN_TASKS, KitchenTask
+from osg_control.planning.api import PLANNERS, plan_files, plan_for_goal, solve
+from osg_control.planning.fast_downward import find_fast_downward
+from osg_control.planning.graph import graph_from_specs
+from osg_control.planning.grounding import ground
+from osg_control.planning.heuristics import HMax
+from osg_control.planning.pddl_io import (
     build_domain,
     build_problem,
     read_domain,
     read_problem,
 )
-from osg_control.planning.api import PLANNERS, plan_files, plan_for_goal, solve
-from osg_control.planning.fast_downward import find_fast_downward
-from osg_control.planning.grounding import ground
-from osg_control.planning.heuristics import HMax
 from osg_control.planning.synthetic import random_goal, random_skill_graph
 from osg_control.planning.task import State, Task
-from osg_control.tasks import DEFAULT_WORLD, KITCHEN_TASKS, KitchenTask
 
 REPO = Path(__file__).resolve().parents[1]
 DOMAIN = REPO / "domains" / "osg-kitchen.pddl"

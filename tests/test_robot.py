@@ -11,10 +11,11 @@ import numpy as np
 import pinocchio as pin
 import pytest
 
-from osg_control import robot, scene
+from osg_control.control import robot
+from osg_control.control.ik import IKConfig, MinkBackend, PinocchioBackend
+from osg_control.control.robot import ARM_JOINTS, HOME_Q, TCP_FRAME, TCP_SITE
 from osg_control.errors import ModelNotFoundError, OSGError
-from osg_control.ik import IKConfig, MinkBackend, PinocchioBackend
-from osg_control.robot import ARM_JOINTS, HOME_Q, TCP_FRAME, TCP_SITE
+from osg_control.kitchen import scene
 
 N_CONFIGURATIONS = 100
 KINEMATICS_TOL = 1e-9

@@ -8,10 +8,10 @@ import json
 import numpy as np
 import pytest
 
+from osg_control.data.scripted import ScriptedPolicy
 from osg_control.errors import SkillSpecError
-from osg_control.scene import WorldState, world_facts
-from osg_control.scripted import ScriptedPolicy
-from osg_control.skills import (
+from osg_control.kitchen.scene import WorldState, world_facts
+from osg_control.kitchen.skills import (
     RELEASE_STEPS,
     SKILLS,
     Waypoint,

@@ -11,13 +11,13 @@ import numpy as np
 import pytest
 import torch
 
-from osg_control.checkpoints import Checkpoint, normalise_observations
 from osg_control.cli import main
-from osg_control.datasets import Episode, load_dataset, write_episodes
+from osg_control.data.datasets import Episode, load_dataset, write_episodes
 from osg_control.errors import DatasetError
-from osg_control.policy import SkillPolicy, load_policies
-from osg_control.skills import get_skill
-from osg_control.td3bc import (
+from osg_control.kitchen.skills import get_skill
+from osg_control.learning.checkpoints import Checkpoint, normalise_observations
+from osg_control.learning.policy import SkillPolicy, load_policies
+from osg_control.learning.td3bc import (
     ACTION_SCALE,
     TD3BC,
     BatchedReplay,
@@ -246,7 +246,7 @@ def test_train_command_refuses_data_recorded_for_another_skill(
 
 
 def test_default_action_scale_is_the_env_bounds() -> None:
-    from osg_control.env import ACTION_BOUNDS
+    from osg_control.kitchen.env import ACTION_BOUNDS
 
     np.testing.assert_array_equal(ACTION_SCALE, ACTION_BOUNDS.astype(np.float32))
 

@@ -13,7 +13,7 @@ import tempfile
 import time
 from pathlib import Path
 
-from osg_control.collect import LocalExecutor, collect_skill
+from osg_control.data.collect import LocalExecutor, collect_skill
 
 
 def measure(skill: str, episodes: int, workers: int, chunk: int) -> dict[str, float]:

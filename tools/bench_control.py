@@ -33,9 +33,9 @@ from typing import Any
 import mujoco
 import numpy as np
 
-from osg_control.env import ACTION_BOUNDS, KitchenEnv
-from osg_control.ik import DiffIKController, IKConfig, rotation_step
-from osg_control.robot import HOME_Q
+from osg_control.control.ik import DiffIKController, IKConfig, rotation_step
+from osg_control.control.robot import HOME_Q
+from osg_control.kitchen.env import ACTION_BOUNDS, KitchenEnv
 
 COMBINATIONS: tuple[tuple[str, str], ...] = (
     ("mink", "daqp"),

@@ -17,12 +17,12 @@ import statistics
 import time
 from dataclasses import asdict, dataclass
 
-from osg_control.graph import SkillGraph
+from osg_control.kitchen.tasks import KITCHEN_TASKS
 from osg_control.planning.api import plan_for_goal
 from osg_control.planning.fast_downward import find_fast_downward
+from osg_control.planning.graph import SkillGraph
 from osg_control.planning.synthetic import random_goal, random_skill_graph
 from osg_control.planning.task import PlanResult
-from osg_control.tasks import KITCHEN_TASKS
 
 
 @dataclass(frozen=True)

@@ -21,8 +21,8 @@ COMMAND_MODULES: tuple[str, ...] = (
 
 def add_filter_argument(parser: argparse.ArgumentParser) -> None:
     """Add ``--filter [GAIN]``: run the policies on filtered TCP estimates (see
-    ``osg_control.estimator``); absent means raw observations, the paper's protocol."""
-    from osg_control.estimator import DEFAULT_GAIN
+    ``osg_control.control.estimator``); absent means raw observations, the paper's protocol."""
+    from osg_control.control.estimator import DEFAULT_GAIN
 
     parser.add_argument(
         "--filter",

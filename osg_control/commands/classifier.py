@@ -13,10 +13,10 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import Any, TypeAlias
 
-from osg_control.classifier import StateClassifier, evaluate, reload_split
-from osg_control.classifier_data import load_classifier_data, movement_classes
-from osg_control.classifier_metrics import format_report
-from osg_control.classifier_train import TrainConfig, train_classifier
+from osg_control.classifier.data import load_classifier_data, movement_classes
+from osg_control.classifier.metrics import format_report
+from osg_control.classifier.model import StateClassifier, evaluate, reload_split
+from osg_control.classifier.train import TrainConfig, train_classifier
 from osg_control.paths import DEFAULTS_DIR, cache_dir
 
 Verbs: TypeAlias = "argparse._SubParsersAction[argparse.ArgumentParser]"
@@ -166,7 +166,7 @@ def add_eval(verbs: Verbs) -> None:
 
 def run_reach(args: argparse.Namespace) -> int:
     """Print Table III: classify random starts, run the chosen movement skill."""
-    from osg_control.evaluate import format_reach_table, reach_table
+    from osg_control.evaluation.evaluate import format_reach_table, reach_table
 
     models = str(args.models) if args.models else None
     table = reach_table(models, args.episodes, args.seed, args.workers, args.noise)

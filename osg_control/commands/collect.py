@@ -7,11 +7,11 @@ import json
 import time
 from pathlib import Path
 
-from osg_control.collect import DEFAULT_EPISODES, LocalExecutor, collect_skill
-from osg_control.datasets import dataset_summary, load_dataset
+from osg_control.data.collect import DEFAULT_EPISODES, LocalExecutor, collect_skill
+from osg_control.data.datasets import dataset_summary, load_dataset
 from osg_control.errors import DatasetError
+from osg_control.kitchen.skills import SKILLS, get_skill
 from osg_control.paths import cache_dir
-from osg_control.skills import SKILLS, get_skill
 
 
 def register(subparsers: argparse._SubParsersAction) -> None:

@@ -7,8 +7,8 @@ import json
 from pathlib import Path
 
 from osg_control.commands import add_filter_argument
-from osg_control.evaluate import format_task_table, task_table
-from osg_control.tasks import TASKS_BY_NAME
+from osg_control.evaluation.evaluate import format_task_table, task_table
+from osg_control.kitchen.tasks import TASKS_BY_NAME
 
 
 def register(subparsers: argparse._SubParsersAction) -> None:

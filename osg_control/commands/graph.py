@@ -7,9 +7,9 @@ import json
 from pathlib import Path
 from typing import TypeAlias
 
-from osg_control.datasets import load_dataset
+from osg_control.data.datasets import load_dataset
 from osg_control.errors import DatasetError
-from osg_control.graph import (
+from osg_control.planning.graph import (
     PROJECTIONS,
     SkillGraph,
     draw_graph,

@@ -6,8 +6,8 @@ import argparse
 from pathlib import Path
 from typing import TypeAlias
 
-from osg_control.graph import load_graph
-from osg_control.pddl_io import export_kitchen
+from osg_control.planning.graph import load_graph
+from osg_control.planning.pddl_io import export_kitchen
 
 Verbs: TypeAlias = "argparse._SubParsersAction[argparse.ArgumentParser]"
 

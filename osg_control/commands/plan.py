@@ -8,10 +8,10 @@ from pathlib import Path
 from typing import TypeAlias
 
 from osg_control.errors import PlanningError
-from osg_control.graph import load_graph
+from osg_control.kitchen.tasks import DEFAULT_WORLD
 from osg_control.planning.api import PLANNERS, plan_files, plan_for_goal
+from osg_control.planning.graph import load_graph
 from osg_control.planning.task import PlanResult
-from osg_control.tasks import DEFAULT_WORLD
 
 Verbs: TypeAlias = "argparse._SubParsersAction[argparse.ArgumentParser]"
 NO_PLAN_EXIT = 3

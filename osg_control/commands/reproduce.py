@@ -20,9 +20,9 @@ from pathlib import Path
 from typing import Any
 
 from osg_control import __version__
-from osg_control.checkpoints import sha256_file
 from osg_control.commands import add_filter_argument
 from osg_control.defaults import MANIFEST
+from osg_control.learning.checkpoints import sha256_file
 from osg_control.paths import PACKAGE_DIR
 
 
@@ -171,7 +171,7 @@ def run(args: argparse.Namespace) -> int:
         "package_version": __version__,
         "total_seconds": round(sum(stage_seconds.values()), 1),
     }
-    from osg_control.report import write_report
+    from osg_control.evaluation.report import write_report
 
     written = write_report(figures, out)
     if args.json:
@@ -197,7 +197,7 @@ def _write_manifest(defaults: Path, data: Path, args: argparse.Namespace, scale:
 
 
 def _table_i(defaults: Path, scale: Scale, args: argparse.Namespace) -> dict[str, Any]:
-    from osg_control.evaluate import format_skill_table, skill_table
+    from osg_control.evaluation.evaluate import format_skill_table, skill_table
 
     table = skill_table(
         defaults / "skills",
@@ -213,9 +213,9 @@ def _table_i(defaults: Path, scale: Scale, args: argparse.Namespace) -> dict[str
 
 
 def _table_ii(defaults: Path, data: Path, seed: int) -> dict[str, Any]:
-    from osg_control.classifier import StateClassifier, evaluate
-    from osg_control.classifier_data import load_classifier_data, movement_classes
-    from osg_control.classifier_metrics import format_report
+    from osg_control.classifier.data import load_classifier_data, movement_classes
+    from osg_control.classifier.metrics import format_report
+    from osg_control.classifier.model import StateClassifier, evaluate
 
     model = StateClassifier.load(defaults / "classifier")
     report = evaluate(model, load_classifier_data(data, movement_classes(), seed).test)
@@ -224,7 +224,7 @@ def _table_ii(defaults: Path, data: Path, seed: int) -> dict[str, Any]:
 
 
 def _table_iii(defaults: Path, scale: Scale, args: argparse.Namespace) -> dict[str, Any]:
-    from osg_control.evaluate import format_reach_table, reach_table
+    from osg_control.evaluation.evaluate import format_reach_table, reach_table
 
     table = reach_table(str(defaults), scale.reach_episodes, args.seed, args.workers)
     print(format_reach_table(table))
@@ -232,7 +232,7 @@ def _table_iii(defaults: Path, scale: Scale, args: argparse.Namespace) -> dict[s
 
 
 def _tables_iv_v(defaults: Path, scale: Scale, args: argparse.Namespace) -> dict[str, Any]:
-    from osg_control.evaluate import format_task_table, task_table
+    from osg_control.evaluation.evaluate import format_task_table, task_table
 
     table = task_table(
         str(defaults),

@@ -10,11 +10,11 @@ from typing import Any
 import numpy as np
 
 from osg_control.commands import add_filter_argument
-from osg_control.env import EnvConfig, KitchenEnv
-from osg_control.evaluate import format_skill_table, skill_table, start_regions
-from osg_control.executor import load_executor
+from osg_control.evaluation.evaluate import format_skill_table, skill_table, start_regions
+from osg_control.execution.executor import load_executor
+from osg_control.kitchen.env import EnvConfig, KitchenEnv
+from osg_control.kitchen.skills import NODES
 from osg_control.paths import DEFAULTS_DIR
-from osg_control.skills import NODES
 
 
 def register(subparsers: argparse._SubParsersAction) -> None:

@@ -12,12 +12,11 @@ from typing import Any
 import torch
 from tqdm import tqdm
 
-from osg_control.checkpoints import Checkpoint, save_checkpoint, sha256_file
-from osg_control.datasets import load_dataset
+from osg_control.data.datasets import load_dataset
 from osg_control.errors import DatasetError, OSGError, SkillSpecError
-from osg_control.paths import cache_dir
-from osg_control.skills import SKILLS, SkillSpec, get_skill, skill_from_json
-from osg_control.td3bc import (
+from osg_control.kitchen.skills import SKILLS, SkillSpec, get_skill, skill_from_json
+from osg_control.learning.checkpoints import Checkpoint, save_checkpoint, sha256_file
+from osg_control.learning.td3bc import (
     ACTION_SCALE,
     TD3BC,
     BatchedReplay,
@@ -26,6 +25,7 @@ from osg_control.td3bc import (
     prepare_skill_data,
     skill_seed,
 )
+from osg_control.paths import cache_dir
 
 DEFAULT_STEPS = 100_000
 LOG_EVERY = 100

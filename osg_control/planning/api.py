@@ -11,20 +11,20 @@ from pathlib import Path
 from pddl.core import Domain, Problem
 
 from osg_control.errors import PlanningError
-from osg_control.graph import SkillGraph
-from osg_control.pddl_io import (
+from osg_control.kitchen.tasks import DEFAULT_WORLD
+from osg_control.planning.fast_downward import run_fast_downward
+from osg_control.planning.graph import SkillGraph
+from osg_control.planning.grounding import ground
+from osg_control.planning.heuristics import HMax, blind
+from osg_control.planning.pddl_io import (
     build_domain,
     build_problem,
     read_domain,
     read_problem,
     write_pddl,
 )
-from osg_control.planning.fast_downward import run_fast_downward
-from osg_control.planning.grounding import ground
-from osg_control.planning.heuristics import HMax, blind
 from osg_control.planning.search import best_first_search
 from osg_control.planning.task import PlanResult, Task
-from osg_control.tasks import DEFAULT_WORLD
 
 
 @dataclass(frozen=True)

@@ -5,7 +5,7 @@ from __future__ import annotations
 import random
 from dataclasses import dataclass
 
-from osg_control.graph import GraphNode, SkillEdge, SkillGraph
+from osg_control.planning.graph import GraphNode, SkillEdge, SkillGraph
 
 
 @dataclass(frozen=True)

@@ -6,7 +6,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 from osg_control.errors import PlanningError, lookup
-from osg_control.skills import DOOR_OPENED
+from osg_control.kitchen.skills import DOOR_OPENED
 
 DEFAULT_WORLD: tuple[str, ...] = ("door-closed", "cube-on-counter", "hand-empty")
 """The kitchen's world facts at the start of a task: door shut, cube on the counter."""

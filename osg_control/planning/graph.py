@@ -18,10 +18,10 @@ from matplotlib.figure import Figure
 from matplotlib.patches import FancyArrowPatch
 from scipy.cluster.hierarchy import fcluster, linkage
 
-from osg_control.datasets import Dataset
+from osg_control.data.datasets import Dataset
 from osg_control.errors import DatasetError, SkillSpecError
-from osg_control.scene import world_facts, world_state_from_array
-from osg_control.skills import NODES, SKILLS, WORLD_FACTS, SkillSpec, get_skill
+from osg_control.kitchen.scene import world_facts, world_state_from_array
+from osg_control.kitchen.skills import NODES, SKILLS, WORLD_FACTS, SkillSpec, get_skill
 
 GRAPH_FORMAT = "osg-skill-graph"
 GRAPH_VERSION = 1

@@ -50,8 +50,8 @@ import numpy as np
 import qpsolvers
 from scipy import sparse
 
+from osg_control.control.robot import HOME_Q, TCP_FRAME, TCP_SITE, load_pinocchio_arm, panda_spec
 from osg_control.errors import ControllerError
-from osg_control.robot import HOME_Q, TCP_FRAME, TCP_SITE, load_pinocchio_arm, panda_spec
 
 SOLVERS: tuple[str, ...] = ("daqp", "osqp")
 

@@ -26,8 +26,8 @@ from pddl.parser.problem import ProblemParser
 from pddl.requirements import Requirements
 
 from osg_control.errors import PDDLError, PlanningError
-from osg_control.graph import SkillGraph, graph_from_specs
-from osg_control.tasks import KITCHEN_TASKS, KitchenTask
+from osg_control.kitchen.tasks import KITCHEN_TASKS, KitchenTask
+from osg_control.planning.graph import SkillGraph, graph_from_specs
 
 DOMAIN_NAME = "osg-kitchen"
 NODE_TYPE = "node"

@@ -13,9 +13,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from osg_control.env import ACTION_BOUNDS, GRIPPER_CLOSED_CMD, GRIPPER_OPEN_CMD
-from osg_control.ik import quat_to_matrix, rotation_error
-from osg_control.skills import TOP_DOWN_QUAT, ScriptParams, SkillSpec
+from osg_control.control.ik import quat_to_matrix, rotation_error
+from osg_control.kitchen.env import ACTION_BOUNDS, GRIPPER_CLOSED_CMD, GRIPPER_OPEN_CMD
+from osg_control.kitchen.skills import TOP_DOWN_QUAT, ScriptParams, SkillSpec
 
 _TARGET_ROT = quat_to_matrix(np.array(TOP_DOWN_QUAT))
 _NOISE_SCALE = np.concatenate([np.ones(3), np.full(3, ACTION_BOUNDS[3] / ACTION_BOUNDS[0])])
@@ -48,7 +48,7 @@ class ScriptedPolicy:
         return self._step >= self._ends[-1]
 
     def __call__(self, obs: np.ndarray) -> np.ndarray:
-        """The noisy action for an observation (10-D, see ``osg_control.env``)."""
+        """The noisy action for an observation (10-D, see ``osg_control.kitchen.env``)."""
         index = min(
             int(np.searchsorted(self._ends, self._step, side="right")),
             len(self.skill.waypoints) - 1,

@@ -20,11 +20,11 @@ import numpy as np
 from tqdm import tqdm
 
 from osg_control import __version__
-from osg_control.datasets import Dataset, Episode, load_dataset, write_episodes
-from osg_control.env import EnvConfig, KitchenEnv
-from osg_control.scene import WORLD_FIELDS
-from osg_control.scripted import ScriptedPolicy
-from osg_control.skills import SKILLS, SkillSpec, get_skill
+from osg_control.data.datasets import Dataset, Episode, load_dataset, write_episodes
+from osg_control.data.scripted import ScriptedPolicy
+from osg_control.kitchen.env import EnvConfig, KitchenEnv
+from osg_control.kitchen.scene import WORLD_FIELDS
+from osg_control.kitchen.skills import SKILLS, SkillSpec, get_skill
 
 DEFAULT_EPISODES = 300
 CHUNK_EPISODES = 25
@@ -147,7 +147,7 @@ def _attrs(skill: SkillSpec, seed: int) -> dict[str, Any]:
         "seed": seed,
         "package_version": __version__,
         "world_fields": ",".join(WORLD_FIELDS),
-        "collector": "osg_control.collect (Algorithm 1)",
+        "collector": "osg_control.data.collect (Algorithm 1)",
     }
 
 

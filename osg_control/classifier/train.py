@@ -14,9 +14,9 @@ import torch
 from torch import nn
 from tqdm import tqdm
 
-from osg_control.classifier import StateClassifier
-from osg_control.classifier_data import ClassifierData
-from osg_control.datasets import OBS_DIM
+from osg_control.classifier.data import ClassifierData
+from osg_control.classifier.model import StateClassifier
+from osg_control.data.datasets import OBS_DIM
 
 MIN_STD = 1e-6
 """An input whose training std is below this (e.g. a constant gripper command) is not scaled."""

@@ -15,7 +15,7 @@ from typing import Any
 
 import numpy as np
 
-from osg_control.skills import get_skill
+from osg_control.kitchen.skills import get_skill
 
 
 def confusion_matrix(labels: np.ndarray, predictions: np.ndarray, n_classes: int) -> np.ndarray:

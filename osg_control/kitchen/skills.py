@@ -80,7 +80,7 @@ class Waypoint:
 
 @dataclass(frozen=True)
 class ScriptParams:
-    """Algorithm 1's noise parameters for one skill (see ``osg_control.scripted``).
+    """Algorithm 1's noise parameters for one skill (see ``osg_control.data.scripted``).
 
     Attributes:
         threshold_mean: mu_1, mean distance [m] below which a waypoint counts as reached.

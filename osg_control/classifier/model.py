@@ -1,7 +1,7 @@
 """The state->skill classifier at run time: numpy forward pass and checkpoint files.
 
 An MLP (10 -> 256 -> 256 -> classes, ReLU) on normalised states, trained by
-``osg_control.classifier_train``. Prediction needs no torch. A checkpoint is a folder with
+``osg_control.classifier.train``. Prediction needs no torch. A checkpoint is a folder with
 ``classifier.safetensors`` (the layer weights) and ``classifier.json`` (classes, normalisation,
 training configuration, seed, data-set digests, package version); nothing is pickled.
 """
@@ -21,16 +21,16 @@ from safetensors import SafetensorError
 from safetensors.numpy import load_file, save_file
 
 from osg_control import __version__
-from osg_control.checkpoints import sha256_file
-from osg_control.classifier_data import (
+from osg_control.classifier.data import (
     ClassifierData,
     LabelledStates,
     load_classifier_data,
     movement_classes,
 )
-from osg_control.classifier_metrics import EvaluationReport, evaluate_predictions
-from osg_control.datasets import OBS_DIM
+from osg_control.classifier.metrics import EvaluationReport, evaluate_predictions
+from osg_control.data.datasets import OBS_DIM
 from osg_control.errors import CheckpointError
+from osg_control.learning.checkpoints import sha256_file
 
 WEIGHTS_FILE = "classifier.safetensors"
 SIDECAR_FILE = "classifier.json"

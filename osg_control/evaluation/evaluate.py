@@ -14,11 +14,11 @@ from typing import Any
 
 import numpy as np
 
-from osg_control.collect import LocalExecutor, run_scripted_episode
-from osg_control.env import EnvConfig, KitchenEnv
-from osg_control.estimator import FilteredPolicy
-from osg_control.skills import NODES, SKILLS, SKILLS_BY_NAME, get_skill, nearest_start
-from osg_control.tasks import TASKS_BY_NAME, get_task
+from osg_control.control.estimator import FilteredPolicy
+from osg_control.data.collect import LocalExecutor, run_scripted_episode
+from osg_control.kitchen.env import EnvConfig, KitchenEnv
+from osg_control.kitchen.skills import NODES, SKILLS, SKILLS_BY_NAME, get_skill, nearest_start
+from osg_control.kitchen.tasks import TASKS_BY_NAME, get_task
 
 START_NODES: tuple[str, ...] = ("home", "above-cube", "door-front", "cabinet-front")
 
@@ -39,7 +39,7 @@ def start_regions() -> list[tuple[str, tuple[float, float, float]]]:
 
 @cache
 def _policies(directory: str) -> dict[str, Any]:
-    from osg_control.policy import load_policies
+    from osg_control.learning.policy import load_policies
 
     return load_policies(directory)
 
@@ -153,7 +153,7 @@ def format_skill_table(table: dict[str, Any]) -> str:
 
 @cache
 def _executor(models: str | None, max_replans: int, filter_gain: float | None) -> Any:
-    from osg_control.executor import load_executor
+    from osg_control.execution.executor import load_executor
 
     return load_executor(models, max_replans=max_replans, filter_gain=filter_gain)
 

@@ -11,7 +11,7 @@ rotation vector [rad], base frame), each clipped to ``ACTION_BOUNDS``, and a gri
 command: ``g < -0.5`` closes, ``g > 0.5`` opens, otherwise the gripper holds.
 
 The control rate is 20 Hz (25 physics steps of 2 ms). A differential-IK QP
-(``osg_control.ik``) turns each command into joint position targets within joint and
+(``osg_control.control.ik``) turns each command into joint position targets within joint and
 velocity limits. With a ``skill``, the env gives the skill's sparse reward (1 on the step
 its success predicate first holds, which also terminates the episode).
 """
@@ -26,17 +26,17 @@ import mujoco
 import numpy as np
 from scipy.spatial.transform import Rotation
 
+from osg_control.control.ik import DiffIKController, IKConfig, joint_reset_controller, solve_ik
+from osg_control.control.robot import ARM_JOINTS, FINGER_JOINTS, FINGER_OPEN, HOME_Q, TCP_SITE
 from osg_control.errors import SimulationError
-from osg_control.ik import DiffIKController, IKConfig, joint_reset_controller, solve_ik
-from osg_control.robot import ARM_JOINTS, FINGER_JOINTS, FINGER_OPEN, HOME_Q, TCP_SITE
-from osg_control.scene import (
+from osg_control.kitchen.scene import (
     CUBE_HALF_SIZE,
     SceneIndex,
     WorldState,
     build_kitchen_model,
     world_facts,
 )
-from osg_control.skills import NODES, TOP_DOWN_QUAT, SkillSpec, get_skill
+from osg_control.kitchen.skills import NODES, TOP_DOWN_QUAT, SkillSpec, get_skill
 
 __all__ = ["ACTION_BOUNDS", "EnvConfig", "KitchenEnv", "world_facts"]
 

@@ -29,9 +29,9 @@ from typing import Any
 import numpy as np
 import torch
 
-from osg_control.checkpoints import normalise_observations
-from osg_control.datasets import ACTION_DIM, OBS_DIM, Dataset
+from osg_control.data.datasets import ACTION_DIM, OBS_DIM, Dataset
 from osg_control.errors import DatasetError
+from osg_control.learning.checkpoints import normalise_observations
 
 ACTION_SCALE = np.array([0.02, 0.02, 0.02, 0.1, 0.1, 0.1, 1.0], dtype=np.float32)
 """Per-step action bounds: position [m] (x3), angles [rad] (x3), gripper command (unitless)."""

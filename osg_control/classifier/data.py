@@ -2,7 +2,7 @@
 
 The classes are the movement skills, ordered along the skill graph (``class_order``) so that
 skills sharing a start or end node sit next to each other; the corrected accuracy of
-``osg_control.classifier_metrics`` relies on that order. Every step of ``<DIR>/<skill>.h5``
+``osg_control.classifier.metrics`` relies on that order. Every step of ``<DIR>/<skill>.h5``
 contributes its ``observations`` row (the state before the step) labelled with the index of
 its skill in that order, up to the step that reaches the skill's end node (the steps
 recorded after it, holding the node, are on the graph and not the classifier's business).
@@ -20,10 +20,10 @@ from pathlib import Path
 
 import numpy as np
 
-from osg_control.checkpoints import sha256_file
-from osg_control.datasets import load_dataset
+from osg_control.data.datasets import load_dataset
 from osg_control.errors import DatasetError
-from osg_control.skills import MOVEMENT_SKILLS, SkillSpec, get_skill
+from osg_control.kitchen.skills import MOVEMENT_SKILLS, SkillSpec, get_skill
+from osg_control.learning.checkpoints import sha256_file
 
 MAX_ORDERED_CLASSES = 9
 """``class_order`` tries every permutation; 9! = 362,880 is the most it accepts."""

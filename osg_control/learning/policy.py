@@ -6,14 +6,14 @@ from pathlib import Path
 
 import numpy as np
 
-from osg_control.checkpoints import (
+from osg_control.data.datasets import ACTION_DIM, OBS_DIM
+from osg_control.errors import CheckpointError
+from osg_control.learning.checkpoints import (
     SIDECAR_SUFFIX,
     Checkpoint,
     load_checkpoint,
     normalise_observations,
 )
-from osg_control.datasets import ACTION_DIM, OBS_DIM
-from osg_control.errors import CheckpointError
 
 
 class SkillPolicy:

@@ -14,9 +14,9 @@ from pathlib import Path
 import mujoco
 import numpy as np
 
+from osg_control.control.robot import ARM_JOINTS, FINGER_JOINTS, FINGER_OPEN, HOME_Q, panda_spec
 from osg_control.errors import ModelNotFoundError
 from osg_control.paths import PACKAGE_DIR
-from osg_control.robot import ARM_JOINTS, FINGER_JOINTS, FINGER_OPEN, HOME_Q, panda_spec
 
 CUBE_HALF_SIZE = 0.0225
 """Half the cube's edge [m]."""

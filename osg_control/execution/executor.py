@@ -25,10 +25,10 @@ from typing import Any, Protocol
 
 import numpy as np
 
-from osg_control.env import GRIPPER_OPEN_CMD, KitchenEnv, world_facts
-from osg_control.estimator import TcpTracker
+from osg_control.control.estimator import TcpTracker
+from osg_control.kitchen.env import GRIPPER_OPEN_CMD, KitchenEnv, world_facts
+from osg_control.kitchen.skills import NODES, SKILLS_BY_NAME, SkillSpec, nearest_start
 from osg_control.planning.api import plan_for_goal
-from osg_control.skills import NODES, SKILLS_BY_NAME, SkillSpec, nearest_start
 
 RESULT_SCHEMA_VERSION = 1
 NODE_TOLERANCE = 0.02

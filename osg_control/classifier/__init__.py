@@ -1,0 +1,1 @@
+"""The state-to-skill classifier: data, training, the model and its metrics."""

@@ -1,0 +1,1 @@
+"""Control layer: the robot model, differential IK and the TCP estimator."""

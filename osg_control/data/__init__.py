@@ -1,0 +1,1 @@
+"""Data layer: Algorithm 1's scripted policy, parallel collection and HDF5 data sets."""

@@ -1,0 +1,1 @@
+"""Evaluation layer: the paper's tables and the reproduction report."""

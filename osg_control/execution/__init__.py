@@ -1,0 +1,1 @@
+"""Execution layer: the executor that classifies, plans, runs options and replans."""
