@@ -9,6 +9,7 @@ from collections.abc import Sequence
 
 from osg_control import __version__
 from osg_control.commands import COMMAND_MODULES
+from osg_control.domain.registry import DEFAULT_DOMAIN
 from osg_control.errors import OSGError
 
 
@@ -19,6 +20,11 @@ def build_parser() -> argparse.ArgumentParser:
         description="Offline Skill Graph robot control: collect, train, plan, run.",
     )
     parser.add_argument("--version", action="version", version=f"osg-control {__version__}")
+    parser.add_argument(
+        "--domain",
+        default=DEFAULT_DOMAIN,
+        help=f"the domain to work in (default: {DEFAULT_DOMAIN}; `osg domains` lists them)",
+    )
     subparsers = parser.add_subparsers(dest="command", metavar="COMMAND")
     for module_name in COMMAND_MODULES:
         importlib.import_module(f"osg_control.commands.{module_name}").register(subparsers)

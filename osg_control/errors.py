@@ -50,3 +50,7 @@ def lookup(table: Mapping[str, T], name: str, what: str, error: Callable[[str], 
     except KeyError:
         known = ", ".join(table)
         raise error(f"unknown {what} {name!r}; known {what}s: {known}") from None
+
+
+class DomainError(OSGError):
+    """A domain is malformed or unknown; the message names the domain and the field."""

@@ -1,4 +1,4 @@
-"""Where artifacts live: the user cache directory and the shipped defaults."""
+"""Where artifacts live: the package directory and the user cache directory."""
 
 from __future__ import annotations
 
@@ -6,7 +6,6 @@ import os
 from pathlib import Path
 
 PACKAGE_DIR = Path(__file__).resolve().parent
-DEFAULTS_DIR = PACKAGE_DIR / "kitchen" / "defaults"
 
 
 def cache_dir() -> Path:

@@ -14,6 +14,7 @@ import pytest
 from osg_control.classifier.data import (
     ClassifierData,
     class_order,
+    class_starts,
     dataset_path,
     load_classifier_data,
     movement_classes,
@@ -35,8 +36,20 @@ from osg_control.classifier.model import (
 from osg_control.classifier.train import TrainConfig, train_classifier
 from osg_control.cli import main
 from osg_control.data.datasets import ACTION_DIM, OBS_DIM, Episode, write_episodes
+from osg_control.domain.registry import get_domain
 from osg_control.errors import CheckpointError, DatasetError
-from osg_control.kitchen.skills import MOVEMENT_SKILLS, SKILLS, TOP_DOWN_QUAT, SkillSpec, get_skill
+from osg_control.kitchen.scene import WORLD_FIELDS
+from osg_control.kitchen.skills import (
+    MOVEMENT_SKILLS,
+    NODES,
+    SKILLS,
+    TOP_DOWN_QUAT,
+    SkillSpec,
+    get_skill,
+)
+
+WORLD = ",".join(WORLD_FIELDS)
+KITCHEN = get_domain("kitchen")
 
 EPISODES = 20
 STEPS = 25
@@ -45,8 +58,8 @@ FAST = TrainConfig(epochs=20, batch_size=64, seed=0)
 
 def _episode(skill: SkillSpec, rng: np.random.Generator, t_range: tuple[float, float]) -> Episode:
     """States along the skill's start->end segment (fraction ``t_range``) with 5 mm noise."""
-    start = np.array(skill.start_node.position)
-    end = np.array(skill.end_node.position)
+    start = np.array(NODES[skill.start].position)
+    end = np.array(NODES[skill.end].position)
     t = np.linspace(*t_range, STEPS + 1)[:, None]
     states = np.zeros((STEPS + 1, OBS_DIM), dtype=np.float32)
     states[:, :3] = start + t * (end - start) + rng.normal(0.0, 0.005, (STEPS + 1, 3))
@@ -74,7 +87,9 @@ def write_movement_datasets(
         skill = get_skill(name)
         episodes = [_episode(skill, rng, t_range) for _ in range(EPISODES)]
         write_episodes(
-            dataset_path(data_dir, name), episodes, {"skill": skill.to_json(), "seed": 0}
+            dataset_path(data_dir, name),
+            episodes,
+            {"skill": skill.to_json(), "seed": 0, "world_fields": WORLD},
         )
 
 
@@ -87,7 +102,7 @@ def data_dir(tmp_path_factory: pytest.TempPathFactory) -> Path:
 
 @pytest.fixture(scope="module")
 def data(data_dir: Path) -> ClassifierData:
-    return load_classifier_data(data_dir, movement_classes(), seed=0)
+    return load_classifier_data(data_dir, movement_classes(KITCHEN), seed=0)
 
 
 @pytest.fixture(scope="module")
@@ -112,23 +127,25 @@ def test_split_is_by_episode_and_seeded(data_dir: Path, data: ClassifierData) ->
     assert len(data.test) == len(MOVEMENT_SKILLS) * held_out * STEPS
     assert len(data.train) == len(MOVEMENT_SKILLS) * (EPISODES - held_out) * STEPS
     assert np.bincount(data.test.labels).tolist() == [held_out * STEPS] * len(MOVEMENT_SKILLS)
-    again = load_classifier_data(data_dir, movement_classes(), seed=0)
+    again = load_classifier_data(data_dir, movement_classes(KITCHEN), seed=0)
     np.testing.assert_array_equal(again.test.observations, data.test.observations)
-    other = load_classifier_data(data_dir, movement_classes(), seed=1)
+    other = load_classifier_data(data_dir, movement_classes(KITCHEN), seed=1)
     assert not np.array_equal(other.test.observations, data.test.observations)
     assert set(data.sha256) == set(MOVEMENT_SKILLS)
     # a skill's held-out episodes do not depend on the class order
-    reordered = load_classifier_data(data_dir, movement_classes()[::-1], seed=0)
+    reordered = load_classifier_data(data_dir, movement_classes(KITCHEN)[::-1], seed=0)
     assert sorted(map(tuple, reordered.test.observations.tolist())) == sorted(
         map(tuple, data.test.observations.tolist())
     )
     with pytest.raises(ValueError, match="seed must be non-negative"):
-        load_classifier_data(data_dir, movement_classes(), seed=-1)
+        load_classifier_data(data_dir, movement_classes(KITCHEN), seed=-1)
 
 
 def test_missing_or_mislabelled_data_set_is_named(tmp_path: Path, data_dir: Path) -> None:
-    with pytest.raises(DatasetError, match=f"{movement_classes()[0]}.h5: data set file not found"):
-        load_classifier_data(tmp_path, movement_classes(), seed=0)
+    with pytest.raises(
+        DatasetError, match=f"{movement_classes(KITCHEN)[0]}.h5: data set file not found"
+    ):
+        load_classifier_data(tmp_path, movement_classes(KITCHEN), seed=0)
     (tmp_path / "move-home-to-door.h5").write_bytes(
         dataset_path(data_dir, "move-home-to-cube").read_bytes()
     )
@@ -140,7 +157,7 @@ def test_missing_or_mislabelled_data_set_is_named(tmp_path: Path, data_dir: Path
 
 
 def test_training_separates_synthetic_skills(model: StateClassifier, data: ClassifierData) -> None:
-    report = evaluate(model, data.test)
+    report = evaluate(model, data.test, class_starts(KITCHEN, model.classes))
     assert report.accuracy >= 0.95
     assert report.corrected_accuracy >= report.accuracy
     losses = model.info["training"]["epoch_losses"]
@@ -195,7 +212,7 @@ def test_confusion_matrix_sums_to_one_and_trace_is_accuracy(
     matrix = confusion_matrix(labels, predictions, 6)
     assert matrix.sum() == pytest.approx(1.0)
     assert accuracy(matrix) == pytest.approx(np.mean(labels == predictions))
-    report = evaluate(model, data.test)
+    report = evaluate(model, data.test, class_starts(KITCHEN, model.classes))
     assert report.confusion.sum() == pytest.approx(1.0)
     predicted = model.predict_index(data.test.observations)
     assert report.accuracy == pytest.approx(np.mean(predicted == data.test.labels))
@@ -220,22 +237,22 @@ def test_corrected_accuracy_hand_example() -> None:
 
 
 def test_nearest_node_baseline(model: StateClassifier, data: ClassifierData) -> None:
-    classes = movement_classes()
+    classes = movement_classes(KITCHEN)
     states = np.zeros((len(classes), OBS_DIM))
-    states[:, :3] = [get_skill(name).start_node.position for name in classes]
-    predicted = nearest_node_predict(states, classes)
+    states[:, :3] = [NODES[get_skill(name).start].position for name in classes]
+    predicted = nearest_node_predict(states, class_starts(KITCHEN, classes))
     first_with_start: dict[str, int] = {}
     for i, name in enumerate(classes):
         first_with_start.setdefault(get_skill(name).start, i)
     assert predicted.tolist() == [first_with_start[get_skill(n).start] for n in classes]
-    report = evaluate(model, data.test)
+    report = evaluate(model, data.test, class_starts(KITCHEN, model.classes))
     assert 0.0 < report.baseline_accuracy < report.accuracy
 
 
 def test_format_report_lists_classes_and_accuracies(
     model: StateClassifier, data: ClassifierData
 ) -> None:
-    report = evaluate(model, data.test)
+    report = evaluate(model, data.test, class_starts(KITCHEN, model.classes))
     text = format_report(report)
     for name in report.classes:
         assert name in text
@@ -247,10 +264,10 @@ def test_format_report_lists_classes_and_accuracies(
 
 
 def test_class_order_of_real_skills_keeps_node_sharing_skills_adjacent() -> None:
-    movement = [s for s in SKILLS if s.kind == "movement"]
+    movement = [s for s in SKILLS if s.is_movement]
     order = class_order(movement)
     assert sorted(order) == sorted(MOVEMENT_SKILLS)
-    assert tuple(order) == movement_classes()
+    assert tuple(order) == movement_classes(KITCHEN)
     best = max(_sharing_pairs(p) for p in itertools.permutations(movement))
     assert _sharing_pairs(order) == best == len(order) - 1
     # a skill and its reverse share both nodes, so they are adjacent
@@ -305,8 +322,8 @@ def test_checkpoint_class_mismatch_names_both_lists(tmp_path: Path, model: State
     sidecar["classes"] = stale
     sidecar_path.write_text(json.dumps(sidecar))
     with pytest.raises(CheckpointError) as err:
-        StateClassifier.load(tmp_path)
-    assert str(stale) in str(err.value) and str(list(movement_classes())) in str(err.value)
+        StateClassifier.load(tmp_path, movement_classes(KITCHEN))
+    assert str(stale) in str(err.value) and str(list(movement_classes(KITCHEN))) in str(err.value)
 
 
 def test_checkpoint_missing_or_corrupt_file_is_named(
@@ -353,7 +370,7 @@ def test_cli_train_then_eval(
     args = ["classifier", "train", "--data", str(data_dir), "--out", str(out)]
     assert main([*args, "--epochs", "3", "--batch-size", "256", "--json"]) == 0
     trained = json.loads(capsys.readouterr().out)
-    assert trained["classes"] == list(movement_classes())
+    assert trained["classes"] == list(movement_classes(KITCHEN))
     assert trained["config"]["epochs"] == 3
     assert main(["classifier", "eval", "--data", str(data_dir), "--model", str(out), "--json"]) == 0
     evaluated = json.loads(capsys.readouterr().out)
@@ -370,9 +387,9 @@ def test_cli_defaults_to_cache_dir_and_reports_errors(
     monkeypatch.setenv("OSG_CACHE_DIR", str(tmp_path))
     # No classifier trained in the cache: eval falls back to the shipped one, then needs data.
     assert main(["classifier", "eval"]) == 1
-    assert str(tmp_path / "data" / "move-home-to-door.h5") in capsys.readouterr().err
-    (tmp_path / "classifier").mkdir()
+    assert str(tmp_path / "kitchen" / "data" / "move-home-to-door.h5") in capsys.readouterr().err
+    (tmp_path / "kitchen" / "classifier").mkdir(parents=True)
     assert main(["classifier", "eval"]) == 1
-    assert str(tmp_path / "classifier" / SIDECAR_FILE) in capsys.readouterr().err
+    assert str(tmp_path / "kitchen" / "classifier" / SIDECAR_FILE) in capsys.readouterr().err
     assert main(["classifier", "train"]) == 1
-    assert str(tmp_path / "data") in capsys.readouterr().err
+    assert str(tmp_path / "kitchen" / "data") in capsys.readouterr().err

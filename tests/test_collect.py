@@ -18,9 +18,10 @@ from osg_control.data.collect import (
     run_scripted_episode,
 )
 from osg_control.data.datasets import load_dataset
-from osg_control.kitchen.env import world_facts
-from osg_control.kitchen.scene import world_state_from_array
+from osg_control.domain.registry import get_domain
 from osg_control.kitchen.skills import get_skill
+
+KITCHEN = get_domain("kitchen")
 
 T = TypeVar("T")
 R = TypeVar("R")
@@ -33,8 +34,12 @@ def _arrays(path: Path) -> dict[str, np.ndarray]:
 
 
 def test_same_seed_same_data_for_one_and_two_workers(tmp_path: Path) -> None:
-    one = collect_skill(SKILL, 6, 3, tmp_path / "w1", LocalExecutor(1), False, chunk_episodes=2)
-    two = collect_skill(SKILL, 6, 3, tmp_path / "w2", LocalExecutor(2), False, chunk_episodes=2)
+    one = collect_skill(
+        KITCHEN, SKILL, 6, 3, tmp_path / "w1", LocalExecutor(1), False, chunk_episodes=2
+    )
+    two = collect_skill(
+        KITCHEN, SKILL, 6, 3, tmp_path / "w2", LocalExecutor(2), False, chunk_episodes=2
+    )
     assert one.num_episodes == two.num_episodes == 6
     for key, value in one.arrays.items():
         np.testing.assert_array_equal(value, two.arrays[key], err_msg=key)
@@ -54,13 +59,13 @@ class _InterruptAfter:
 
 
 def test_interrupted_collection_resumes_without_loss_or_duplicates(tmp_path: Path) -> None:
-    reference = collect_skill(SKILL, 6, 5, tmp_path / "ref", None, False, chunk_episodes=2)
+    reference = collect_skill(KITCHEN, SKILL, 6, 5, tmp_path / "ref", None, False, chunk_episodes=2)
     out = tmp_path / "resumed"
     with pytest.raises(KeyboardInterrupt):
-        collect_skill(SKILL, 6, 5, out, _InterruptAfter(2), False, chunk_episodes=2)
+        collect_skill(KITCHEN, SKILL, 6, 5, out, _InterruptAfter(2), False, chunk_episodes=2)
     kept = sorted(parts_dir(out, get_skill(SKILL)).glob("*.h5"))
     assert len(kept) == 2, "finished chunks must survive the interruption"
-    resumed = collect_skill(SKILL, 6, 5, out, None, False, chunk_episodes=2)
+    resumed = collect_skill(KITCHEN, SKILL, 6, 5, out, None, False, chunk_episodes=2)
     assert resumed.num_episodes == 6
     for key, value in reference.arrays.items():
         np.testing.assert_array_equal(value, resumed.arrays[key], err_msg=key)
@@ -72,7 +77,7 @@ def test_scripted_success_rate_is_in_a_sound_band(name: str) -> None:
     # 60 episodes: a true rate in [0.40, 0.50] lands in [0.25, 0.65] with > 99% probability
     # (binomial, 2.6 sigma of the worst case); the tuned rates are printed by `osg collect`.
     skill = get_skill(name)
-    rate = np.mean([run_scripted_episode(skill, 11, i).success for i in range(60)])
+    rate = np.mean([run_scripted_episode(KITCHEN, skill, 11, i).success for i in range(60)])
     assert 0.25 <= rate <= 0.65, f"{name}: scripted success rate {rate:.2f}"
 
 
@@ -81,14 +86,14 @@ def test_scripted_success_rate_is_in_a_sound_band(name: str) -> None:
 )
 def test_successful_episodes_end_with_their_effect(name: str) -> None:
     skill = get_skill(name)
-    episodes = [run_scripted_episode(skill, 2, i) for i in range(12)]
+    episodes = [run_scripted_episode(KITCHEN, skill, 2, i) for i in range(12)]
     successes = [e for e in episodes if e.success]
     assert successes, f"{name}: no successful episode in 12"
     for episode in successes:
         np.testing.assert_array_equal(episode.terminations, episode.rewards > 0)
         first = int(np.flatnonzero(episode.rewards)[0])
         assert len(episode.rewards) - 1 - first <= HOLD_STEPS  # holds beta, then stops
-        facts = world_facts(world_state_from_array(episode.world_states[first]))
+        facts = KITCHEN.facts_of(episode.world_states[first])
         assert skill.add_effects <= facts, (name, facts)
         assert not (skill.del_effects & facts), (name, facts)
     for episode in episodes:
@@ -97,7 +102,7 @@ def test_successful_episodes_end_with_their_effect(name: str) -> None:
 
 
 def test_file_reads_with_plain_h5py(tmp_path: Path) -> None:
-    data = collect_skill(SKILL, 3, 1, tmp_path, None, False)
+    data = collect_skill(KITCHEN, SKILL, 3, 1, tmp_path, None, False)
     with h5py.File(data.path, "r") as f:
         assert f["observations"].shape[1] == 10
         assert f["actions"].shape[1] == 7
@@ -107,7 +112,7 @@ def test_file_reads_with_plain_h5py(tmp_path: Path) -> None:
 
 
 def test_corrupt_file_is_named(tmp_path: Path) -> None:
-    data = collect_skill(SKILL, 2, 1, tmp_path, None, False)
+    data = collect_skill(KITCHEN, SKILL, 2, 1, tmp_path, None, False)
     blob = data.path.read_bytes()
     data.path.write_bytes(blob[: len(blob) // 3])
     from osg_control.errors import DatasetError

@@ -15,9 +15,10 @@ from gymnasium.utils.env_checker import check_env
 
 from osg_control.control.ik import IKConfig, joint_reset_controller, rotation_error
 from osg_control.control.robot import HOME_Q
+from osg_control.environment.arm_env import ACTION_BOUNDS, OBS_DIM, EnvConfig
 from osg_control.errors import OSGError
-from osg_control.kitchen.env import ACTION_BOUNDS, OBS_DIM, EnvConfig, KitchenEnv, world_facts
-from osg_control.kitchen.scene import CUBE_HALF_SIZE, world_state_from_array
+from osg_control.kitchen.env import KitchenEnv
+from osg_control.kitchen.scene import CUBE_HALF_SIZE, world_facts, world_state_from_array
 from osg_control.kitchen.skills import NODES, TOP_DOWN_QUAT
 
 ZERO_ACTION = np.zeros(7)
@@ -69,11 +70,11 @@ def test_spaces(env: KitchenEnv) -> None:
 # ------------------------------------------------------------------ physics sanity
 def test_cube_stays_put_when_idle(env: KitchenEnv) -> None:
     env.reset(seed=0)
-    cube_start = np.array(env.world_state().cube_pos)
+    cube_start = np.array(env.world().cube_pos)
     tcp_start, _ = env.tcp_pose()
     for _ in range(200):  # 10 s at 20 Hz
         env.step(ZERO_ACTION)
-    assert np.linalg.norm(np.array(env.world_state().cube_pos) - cube_start) < 1e-3
+    assert np.linalg.norm(np.array(env.world().cube_pos) - cube_start) < 1e-3
     tcp_end, _ = env.tcp_pose()
     assert np.linalg.norm(tcp_end - tcp_start) < 2e-3
 
@@ -97,7 +98,7 @@ def test_door_only_slides(env: KitchenEnv) -> None:
     assert np.all(np.diff(y_positions) > 0)
     travel = y_positions[-1] - y_positions[0]
     assert 0.05 < travel < 0.4  # moving, not yet at the end of its 0.45 m slide
-    assert env.world_state().door_opening == pytest.approx(travel, abs=2e-3)
+    assert env.world().door_opening == pytest.approx(travel, abs=2e-3)
 
 
 # ------------------------------------------------------------------ actions
@@ -178,7 +179,7 @@ def test_random_starts_stay_within_radius_and_angle(env: KitchenEnv, node: str) 
 
 def test_world_state_at_start(env: KitchenEnv) -> None:
     _, info = env.reset(seed=0)
-    world = env.world_state()
+    world = env.world()
     assert abs(world.door_opening) < 1e-6 and not world.door_open
     assert abs(world.valve_angle) < 1e-6
     np.testing.assert_allclose(world.cube_pos, (0.50, -0.20, CUBE_HALF_SIZE), atol=1e-3)

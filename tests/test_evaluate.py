@@ -8,26 +8,30 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from osg_control.domain.registry import get_domain
 from osg_control.errors import PlanningError
-from osg_control.evaluation.evaluate import nearest_start_skill, start_regions
-from osg_control.evaluation.report import PAPER_TABLE_I, PAPER_TASK_AVERAGES, markdown, write_report
+from osg_control.evaluation.evaluate import nearest_start_skill
+from osg_control.evaluation.report import markdown, write_report
+from osg_control.kitchen.paper import PAPER_TABLE_I, PAPER_TASK_AVERAGES, PUBLISHED
 from osg_control.kitchen.skills import NODES, SKILLS
 from osg_control.kitchen.tasks import TASKS_BY_NAME, get_task
 
+KITCHEN = get_domain("kitchen")
+
 
 def test_eight_start_regions_four_nodes_four_edge_midpoints() -> None:
-    regions = start_regions()
+    regions = KITCHEN.start_regions
     assert len(regions) == 8
-    names = [name for name, _ in regions]
+    names = [region.name for region in regions]
     assert names[:4] == ["home", "above-cube", "door-front", "cabinet-front"]
-    for name, position in regions[4:]:
+    for name, position in ((r.name, r.position) for r in regions[4:]):
         assert name.startswith("mid(")
         nearest = min(np.linalg.norm(np.subtract(position, n.position)) for n in NODES.values())
         assert nearest > 0.075, f"{name} should lie away from every node"
 
 
 def test_nearest_start_skill_picks_a_movement_skill_starting_at_the_nearest_node() -> None:
-    name = nearest_start_skill(np.asarray(NODES["door-front"].position) + 0.01)
+    name = nearest_start_skill(KITCHEN, np.asarray(NODES["door-front"].position) + 0.01)
     assert name == "move-door-to-home"
 
 
@@ -36,8 +40,8 @@ def test_tasks_match_the_paper_and_one_list_feeds_problems_evaluation_and_report
         "pick-up", "open-door", "open-pick-up", "pick-up-place", "open-pick-up-place",
     ]  # fmt: skip
     assert list(PAPER_TASK_AVERAGES) == list(TASKS_BY_NAME)
-    assert get_task("pick-up-place").door_opening > 0.3
-    assert all(get_task(n).door_opening == 0.0 for n in TASKS_BY_NAME if n != "pick-up-place")
+    assert "door-open" in get_task("pick-up-place").world
+    assert all("door-closed" in get_task(n).world for n in TASKS_BY_NAME if n != "pick-up-place")
     with pytest.raises(PlanningError, match="known tasks: pick-up"):
         get_task("pick-up+place")
 
@@ -53,14 +57,14 @@ def test_report_writes_markdown_json_and_plots(tmp_path: Path) -> None:
         },
         "table_ii": {"accuracy": 0.7, "corrected_accuracy": 0.9},
     }
-    written = write_report(figures, tmp_path)
+    written = write_report(figures, tmp_path, PUBLISHED)
     assert json.loads((tmp_path / "figures.json").read_text()) == figures
     text = (tmp_path / "report.md").read_text()
     assert "Table I" in text and "0.927" in text
-    report = markdown(figures)
+    report = markdown(figures, PUBLISHED)
     slide_row = next(line for line in report.splitlines() if "| slide-door-open |" in line)
     assert "/".join(map(str, PAPER_TABLE_I["slide-door-open"])) in slide_row
     release_row = next(line for line in report.splitlines() if "| release-cube |" in line)
-    assert "(split off)" in release_row
+    assert release_row.rstrip().endswith("| — |")  # split off: the paper has no such row
     assert (tmp_path / "table_i.png").stat().st_size > 1000
     assert len(written) == 3

@@ -8,21 +8,35 @@ from collections.abc import Mapping
 import numpy as np
 import pytest
 
-from osg_control.defaults import load_defaults, read_manifest
-from osg_control.execution.executor import RESULT_SCHEMA_VERSION, Executor, node_at, skill_on_path
+from osg_control.domain.registry import get_domain
+from osg_control.execution.defaults import load_defaults, read_manifest
+from osg_control.execution.executor import (
+    RESULT_SCHEMA_VERSION,
+    node_at,
+    skill_on_path,
+)
+from osg_control.execution.executor import Executor as DomainExecutor
 from osg_control.kitchen.env import EnvConfig, KitchenEnv
 from osg_control.kitchen.skills import NODES, SKILLS
+
+KITCHEN = get_domain("kitchen")
+
+
+def Executor(*args: object, **kwargs: object) -> DomainExecutor:  # noqa: N802
+    """The kitchen's executor (the tests' shorthand)."""
+    return DomainExecutor(KITCHEN, *args, **kwargs)  # type: ignore[arg-type]
 
 
 @pytest.fixture(scope="module")
 def defaults() -> tuple[dict, object]:
-    return load_defaults()
+    loaded = load_defaults(KITCHEN)
+    return loaded.policies, loaded.classifier
 
 
 def test_shipped_defaults_have_a_manifest_and_every_skill(defaults: tuple[dict, object]) -> None:
     policies, _classifier = defaults
     assert set(policies) == {s.name for s in SKILLS}
-    manifest = read_manifest()
+    manifest = read_manifest(KITCHEN.defaults_dir)
     assert manifest["command"].startswith("osg collect")
     assert len(manifest["datasets_sha256"]) == len(SKILLS)
 
@@ -31,12 +45,12 @@ def test_node_at_recognises_nodes_and_gripper_state() -> None:
     obs = np.zeros(10)
     obs[:3] = NODES["home"].position
     obs[7] = 1.0
-    assert node_at(obs, {"hand-empty"}) == "home"
+    assert node_at(KITCHEN, obs, {"hand-empty"}) == "home"
     obs[:3] += [0.05, 0, 0]
-    assert node_at(obs, {"hand-empty"}) is None
+    assert node_at(KITCHEN, obs, {"hand-empty"}) is None
     obs[:3] = NODES["cube-lifted"].position
     obs[7] = -1.0
-    assert node_at(obs, {"holding-cube", "cube-lifted"}) == "cube-lifted"
+    assert node_at(KITCHEN, obs, {"holding-cube", "cube-lifted"}) == "cube-lifted"
 
 
 def _run(
@@ -55,7 +69,7 @@ def test_three_stage_task_from_a_random_start(defaults: tuple[dict, object]) -> 
     goal = ["door-open", "cube-in-cabinet"]
     env, result = _run(Executor(policies, classifier, max_replans=0), goal, seed=5)
     assert result["success"], result
-    world = env.world_state()
+    world = env.world()
     assert world.door_open and world.cube_in_cabinet and not world.cube_grasped
     assert result["plan"][-3:] == ["move-cube-to-cabinet", "place-cube-in-cabinet", "release-cube"]
     assert all(outcome["success"] for outcome in result["outcomes"])
@@ -69,14 +83,14 @@ def test_pick_up_under_noise_with_the_tcp_filter(defaults: tuple[dict, object]) 
     executor = Executor(policies, classifier, max_replans=0, filter_gain=0.2)
     result = executor.execute(["cube-lifted"], env, obs)
     assert result.success, result.to_dict()
-    assert env.world_state().cube_lifted
+    assert env.world().cube_lifted
 
 
 def test_pick_up_from_a_random_start(defaults: tuple[dict, object]) -> None:
     policies, classifier = defaults
     env, result = _run(Executor(policies, classifier), ["cube-lifted"], seed=3)
     assert result["success"], result
-    assert env.world_state().cube_lifted
+    assert env.world().cube_lifted
     assert result["entry_skill"] is not None
     assert result["plan"][-2:] == ["grab-cube", "pick-up-cube"]
     assert all(outcome["success"] for outcome in result["outcomes"])
@@ -164,7 +178,7 @@ def test_replanning_recovers_a_cube_that_slipped_out_of_the_gripper(
         # Stopped as soon as the grasp was gone, not after the 80-step budget.
         assert not dropped["success"] and dropped["failure"] == "precondition ['holding-cube'] lost"
         assert dropped["steps"] < 15
-        assert result["success"] == env.world_state().cube_lifted
+        assert result["success"] == env.world().cube_lifted
         if max_replans == 0:
             assert not result["success"] and result["replans"] == 0 and len(outcomes) == 4
         else:
@@ -177,13 +191,13 @@ def test_skill_on_path_finds_an_interrupted_manipulation_skill() -> None:
     obs[:3] = (0.50, -0.20, 0.08)  # on grab-cube's descent from above-cube to the cube
     obs[7] = 1.0
     facts = {"hand-empty", "cube-on-counter", "door-closed"}
-    assert skill_on_path(obs, facts, SKILLS) == "grab-cube"
+    assert skill_on_path(KITCHEN, obs, facts, SKILLS) == "grab-cube"
     obs[7] = -1.0  # the descent is made open-handed
-    assert skill_on_path(obs, facts, SKILLS) is None
+    assert skill_on_path(KITCHEN, obs, facts, SKILLS) is None
     obs[7] = 1.0
-    assert skill_on_path(obs, {"hand-empty", "cube-in-cabinet"}, SKILLS) is None  # no cube
+    assert skill_on_path(KITCHEN, obs, {"hand-empty", "cube-in-cabinet"}, SKILLS) is None  # no cube
     obs[:3] = (0.42, 0.07, 0.475)  # between home and door-front: movement skills only
-    assert skill_on_path(obs, facts, SKILLS) is None
+    assert skill_on_path(KITCHEN, obs, facts, SKILLS) is None
 
 
 class _Scores:
@@ -218,7 +232,7 @@ def test_a_start_part_way_down_to_the_cube_enters_at_grab_cube(
     result = Executor(policies, classifier, max_replans=0).execute(["cube-lifted"], env, obs)
     assert result.entry_skill == "grab-cube" and result.plan == ["pick-up-cube"]
     assert result.success, result.to_dict()
-    assert env.world_state().cube_lifted
+    assert env.world().cube_lifted
 
 
 def test_result_schema_is_stable(defaults: tuple[dict, object]) -> None:

@@ -11,17 +11,20 @@ import pytest
 
 from osg_control.cli import main
 from osg_control.data.datasets import Dataset, Episode, load_dataset, write_episodes
+from osg_control.domain.registry import get_domain
 from osg_control.errors import DatasetError, SkillSpecError
-from osg_control.kitchen.scene import WorldState, world_state_from_array
+from osg_control.kitchen.scene import WORLD_FIELDS, WorldState, world_facts, world_state_from_array
 from osg_control.kitchen.skills import NODES, SKILLS, SkillSpec
 from osg_control.planning.graph import (
-    draw_graph,
     graph_from_datasets,
     graph_from_specs,
     load_graph,
     save_graph,
-    world_facts,
 )
+from osg_control.planning.graph_draw import draw_graph
+
+WORLD = ",".join(WORLD_FIELDS)
+KITCHEN = get_domain("kitchen")
 
 STEPS = 6
 
@@ -47,7 +50,7 @@ def world_for(facts: frozenset[str]) -> WorldState:
 def start_facts(spec: SkillSpec) -> frozenset[str]:
     """A consistent world in which the skill's preconditions hold."""
     pre = spec.preconditions
-    door = "door-open" if "door-open" in pre or spec.start_door_opening > 0 else "door-closed"
+    door = "door-open" if "door-open" in pre or "door-open" in spec.start_facts else "door-closed"
     hand = next((f for f in ("holding-cube", "holding-handle") if f in pre), "hand-empty")
     cube = "cube-lifted" if "cube-lifted" in pre else "cube-on-counter"
     return frozenset({door, hand, cube})
@@ -63,8 +66,8 @@ def episodes_for(
     """Successful episodes start -> end node (plus one failure that stops halfway)."""
     before = start_facts(spec)
     after = end_facts if end_facts is not None else (before - spec.del_effects) | spec.add_effects
-    start = np.array(spec.start_node.position)
-    end = np.array(spec.end_node.position) + np.array([0.0, 0.0, end_shift])
+    start = np.array(NODES[spec.start].position)
+    end = np.array(NODES[spec.end].position) + np.array([0.0, 0.0, end_shift])
     episodes = []
     for i in range(count + 1):
         success = i < count
@@ -102,7 +105,7 @@ def write_data(
         write_episodes(
             folder / f"{spec.name}.h5",
             episodes_for(spec, rng, **options),
-            {"skill": spec.to_json(), "seed": 0},
+            {"skill": spec.to_json(), "seed": 0, "world_fields": WORLD},
         )
     return folder
 
@@ -121,7 +124,7 @@ def test_world_for_round_trips_every_skill_world() -> None:
 
 
 def test_graph_from_specs() -> None:
-    graph = graph_from_specs()
+    graph = graph_from_specs(KITCHEN)
     assert graph.node_names == tuple(NODES)
     assert [e.name for e in graph.edges] == [s.name for s in SKILLS]
     assert graph.disagreements == ()
@@ -135,15 +138,18 @@ def test_graph_from_specs() -> None:
 
 
 def test_rates_are_checked() -> None:
-    assert graph_from_specs(success_rates={"grab-cube": 0.7}).edge("grab-cube").success_rate == 0.7
+    assert (
+        graph_from_specs(KITCHEN, success_rates={"grab-cube": 0.7}).edge("grab-cube").success_rate
+        == 0.7
+    )
     with pytest.raises(SkillSpecError, match="outside"):
-        graph_from_specs(success_rates={"grab-cube": 1.5})
+        graph_from_specs(KITCHEN, success_rates={"grab-cube": 1.5})
     with pytest.raises(SkillSpecError, match="unknown skill"):
-        graph_from_specs(success_rates={"fly": 0.5})
+        graph_from_specs(KITCHEN, success_rates={"fly": 0.5})
 
 
 def test_json_round_trip(tmp_path: Path) -> None:
-    graph = graph_from_specs(success_rates={"grab-cube": 0.8})
+    graph = graph_from_specs(KITCHEN, success_rates={"grab-cube": 0.8})
     save_graph(graph, tmp_path / "g.json")
     assert load_graph(tmp_path / "g.json") == graph
 
@@ -155,7 +161,7 @@ def test_json_errors_name_the_file(tmp_path: Path) -> None:
     bad.write_text("{}")
     with pytest.raises(DatasetError, match=f"{bad}: not a skill graph"):
         load_graph(bad)
-    data = graph_from_specs().to_dict()
+    data = graph_from_specs(KITCHEN).to_dict()
     data["edges"][0]["start"] = "attic"
     bad.write_text(json.dumps(data))
     with pytest.raises(DatasetError, match="unknown node 'attic'"):
@@ -168,7 +174,7 @@ def data_dir(tmp_path_factory: pytest.TempPathFactory) -> Path:
 
 
 def test_graph_from_data_agrees_with_specs(data_dir: Path, tmp_path: Path) -> None:
-    graph = graph_from_datasets(load_all(data_dir), success_rates={"grab-cube": 0.9})
+    graph = graph_from_datasets(KITCHEN, load_all(data_dir), success_rates={"grab-cube": 0.9})
     assert graph.disagreements == ()
     for node in graph.nodes:
         assert node.observed is not None and node.observed.position is not None
@@ -189,7 +195,7 @@ def test_wrong_effects_and_regions_are_reported(tmp_path: Path) -> None:
         grab_cube={"end_facts": start_facts(grab)},  # the grasp never registers
         pick_up_cube={"end_shift": 0.10},  # ends 10 cm above cube-lifted
     )
-    graph = graph_from_datasets(load_all(data))
+    graph = graph_from_datasets(KITCHEN, load_all(data))
     issues = {(d.kind, d.subject): d.detail for d in graph.disagreements}
     assert "holding-cube" in issues[("effects", "grab-cube")]
     assert "not seen in data" in issues[("effects", "grab-cube")]
@@ -200,21 +206,21 @@ def test_wrong_effects_and_regions_are_reported(tmp_path: Path) -> None:
 
 def test_missing_skill_and_duplicates(tmp_path: Path) -> None:
     data = write_data(tmp_path, skills=SKILLS[:3])
-    graph = graph_from_datasets(load_all(data))
+    graph = graph_from_datasets(KITCHEN, load_all(data))
     missing = {d.subject for d in graph.disagreements if d.kind == "no-data"}
     assert missing == {s.name for s in SKILLS[3:]}
     empty = tmp_path / "empty" / "grab-cube.h5"
-    write_episodes(empty, [], {"skill": SKILLS[8].to_json(), "seed": 0})
-    graph = graph_from_datasets([load_dataset(empty)])
+    write_episodes(empty, [], {"skill": SKILLS[8].to_json(), "seed": 0, "world_fields": WORLD})
+    graph = graph_from_datasets(KITCHEN, [load_dataset(empty)])
     assert any(d.detail == f"{empty} has no episodes" for d in graph.disagreements)
     with pytest.raises(DatasetError, match="already read"):
-        graph_from_datasets(load_all(data) * 2)
+        graph_from_datasets(KITCHEN, load_all(data) * 2)
     with pytest.raises(DatasetError, match="no data sets"):
-        graph_from_datasets([])
+        graph_from_datasets(KITCHEN, [])
 
 
 def test_draw_png(tmp_path: Path) -> None:
-    graph = graph_from_specs()
+    graph = graph_from_specs(KITCHEN)
     draw_graph(graph, tmp_path / "g.png", "xz")
     assert (tmp_path / "g.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
     with pytest.raises(ValueError, match="projection"):

@@ -8,41 +8,45 @@ from pathlib import Path
 import pytest
 from pddl.formatter import domain_to_string, problem_to_string
 
+from osg_control.domain.registry import get_domain
 from osg_control.errors import PDDLError, PlanningError
 from osg_control.kitchen.skills import NODES, SKILLS, WORLD_FACTS
 from osg_control.kitchen.tasks import DEFAULT_WORLD, KITCHEN_TASKS
+from osg_control.planning.costs import measured_graph
 from osg_control.planning.graph import graph_from_specs
 from osg_control.planning.pddl_io import (
     DEFAULT_COST,
     build_domain,
     build_problem,
-    export_kitchen,
-    kitchen_problem,
+    export_pddl,
     parse_atoms,
     read_domain,
     read_problem,
     skill_cost,
+    task_problem,
     write_pddl,
 )
 
 REPO = Path(__file__).resolve().parents[1]
-COMMITTED = REPO / "domains"
+COMMITTED = REPO / "domains" / "kitchen"
+KITCHEN = get_domain("kitchen")
+MEASURED = build_domain(measured_graph(KITCHEN), "osg-kitchen")
 
 
 @pytest.fixture(scope="module")
 def exported(tmp_path_factory: pytest.TempPathFactory) -> list[Path]:
-    return export_kitchen(tmp_path_factory.mktemp("pddl"))
+    return export_pddl(KITCHEN, tmp_path_factory.mktemp("pddl"), measured_graph(KITCHEN))
 
 
 def test_export_parse_export_is_stable(exported: list[Path], tmp_path: Path) -> None:
     domain = read_domain(exported[0])
-    assert domain_to_string(domain) == domain_to_string(build_domain())
+    assert domain_to_string(domain) == domain_to_string(MEASURED)
     again = write_pddl(domain, tmp_path / "again.pddl")
     assert domain_to_string(read_domain(again)) == domain_to_string(domain)
     for task, path in zip(KITCHEN_TASKS, exported[1:], strict=True):
         problem = read_problem(path)
         assert problem_to_string(problem) == problem_to_string(
-            kitchen_problem(build_domain(), task)
+            task_problem(MEASURED, KITCHEN, task)
         )
 
 
@@ -53,7 +57,7 @@ def test_committed_domain_and_problems_are_up_to_date(exported: list[Path]) -> N
 
 
 def test_domain_has_one_operator_per_skill_with_effects_and_cost() -> None:
-    domain = build_domain()
+    domain = build_domain(graph_from_specs(KITCHEN), "osg-kitchen")
     assert domain.name == "osg-kitchen"
     assert {str(r) for r in domain.requirements} == {":strips", ":typing", ":action-costs"}
     assert {a.name for a in domain.actions} == {s.name for s in SKILLS}
@@ -78,14 +82,19 @@ def test_skill_cost_scale(rate: float | None, cost: int) -> None:
 
 
 def test_success_rates_set_operator_costs() -> None:
-    graph = graph_from_specs(success_rates={"grab-cube": 0.8})
+    graph = graph_from_specs(KITCHEN, success_rates={"grab-cube": 0.8})
     text = domain_to_string(build_domain(graph))
     grab = text[text.index("(:action grab-cube") :]
     assert f"(increase (total-cost) {round(-math.log(0.8) * 1000)})" in grab.split("(:action")[1]
 
 
 def test_problem_has_init_goal_and_metric() -> None:
-    problem = build_problem(build_domain(), "door-front", DEFAULT_WORLD, "door-open (at home)")
+    problem = build_problem(
+        build_domain(graph_from_specs(KITCHEN), "osg-kitchen"),
+        "door-front",
+        DEFAULT_WORLD,
+        "door-open (at home)",
+    )
     text = problem_to_string(problem)
     assert "(:init (= (total-cost) 0) (at door-front) (cube-on-counter) (door-closed) " in text
     assert "(:goal (and (door-open) (at home)))" in text
@@ -107,20 +116,34 @@ def test_parse_atoms_forms() -> None:
 
 def test_unknown_goal_fact_lists_known_ones() -> None:
     with pytest.raises(PlanningError) as err:
-        build_problem(build_domain(), "home", DEFAULT_WORLD, "door-opn")
+        build_problem(
+            build_domain(graph_from_specs(KITCHEN), "osg-kitchen"),
+            "home",
+            DEFAULT_WORLD,
+            "door-opn",
+        )
     assert "unknown predicate 'door-opn'" in str(err.value)
     assert all(fact in str(err.value) for fact in WORLD_FACTS)
 
 
 def test_unknown_node_lists_known_nodes() -> None:
     with pytest.raises(PlanningError) as err:
-        build_problem(build_domain(), "kitchen-sink", DEFAULT_WORLD, "door-open")
+        build_problem(
+            build_domain(graph_from_specs(KITCHEN), "osg-kitchen"),
+            "kitchen-sink",
+            DEFAULT_WORLD,
+            "door-open",
+        )
     assert "unknown object 'kitchen-sink'" in str(err.value)
     assert all(node in str(err.value) for node in NODES)
     with pytest.raises(PlanningError, match="takes 1 argument"):
-        build_problem(build_domain(), "home", DEFAULT_WORLD, "(at)")
+        build_problem(
+            build_domain(graph_from_specs(KITCHEN), "osg-kitchen"), "home", DEFAULT_WORLD, "(at)"
+        )
     with pytest.raises(PlanningError, match="empty goal"):
-        build_problem(build_domain(), "home", DEFAULT_WORLD, "")
+        build_problem(
+            build_domain(graph_from_specs(KITCHEN), "osg-kitchen"), "home", DEFAULT_WORLD, ""
+        )
 
 
 def _broken_copy(source: Path, tmp_path: Path, old: str, new: str) -> Path:

@@ -10,9 +10,11 @@ import pytest
 from pddl.core import Domain, Problem
 
 from osg_control.cli import main
+from osg_control.domain.base import Task as KitchenTask
+from osg_control.domain.registry import get_domain
 from osg_control.errors import PDDLError, PlanningError
-from osg_control.kitchen.tasks import DEFAULT_WORLD, KITCHEN_TASKS, KitchenTask
-from osg_control.planning.api import PLANNERS, plan_files, plan_for_goal, solve
+from osg_control.kitchen.tasks import DEFAULT_WORLD, KITCHEN_TASKS
+from osg_control.planning.api import PLANNERS, plan_files, plan_for_goal, plan_on_graph, solve
 from osg_control.planning.fast_downward import find_fast_downward
 from osg_control.planning.graph import graph_from_specs
 from osg_control.planning.grounding import ground
@@ -26,9 +28,10 @@ from osg_control.planning.pddl_io import (
 from osg_control.planning.synthetic import random_goal, random_skill_graph
 from osg_control.planning.task import State, Task
 
+KITCHEN = get_domain("kitchen")
 REPO = Path(__file__).resolve().parents[1]
-DOMAIN = REPO / "domains" / "osg-kitchen.pddl"
-PROBLEMS = sorted((REPO / "domains" / "problems").glob("*.pddl"))
+DOMAIN = REPO / "domains" / "kitchen" / "osg-kitchen.pddl"
+PROBLEMS = sorted((REPO / "domains" / "kitchen" / "problems").glob("*.pddl"))
 needs_fd = pytest.mark.skipif(
     find_fast_downward() is None,
     reason="Fast Downward driver (up_fast_downward/downward/fast-downward.py) not installed",
@@ -48,7 +51,7 @@ EXPECTED_FROM_HOME = {
 
 
 def test_default_goal_gives_the_ten_skill_plan() -> None:
-    result = plan_for_goal("door-open cube-in-cabinet")
+    result = plan_for_goal(KITCHEN, "door-open cube-in-cabinet")
     assert result.actions == EXPECTED_FROM_HOME["open-pick-up-place"]
     assert result.cost == 1000
     assert result.stats.expanded > 0 and result.stats.time_s >= 0
@@ -56,11 +59,14 @@ def test_default_goal_gives_the_ten_skill_plan() -> None:
 
 @pytest.mark.parametrize("task", KITCHEN_TASKS, ids=lambda t: t.name)
 def test_kitchen_tasks_from_home(task: KitchenTask) -> None:
-    assert plan_for_goal(task.goal, task.node, task.world).actions == EXPECTED_FROM_HOME[task.name]
+    assert (
+        plan_for_goal(KITCHEN, task.goal, task.node, task.world).actions
+        == EXPECTED_FROM_HOME[task.name]
+    )
 
 
 def _kitchen_task(node: str, world: tuple[str, ...], goal: tuple[str, ...]) -> Task:
-    domain = build_domain()
+    domain = build_domain(graph_from_specs(KITCHEN), "osg-kitchen")
     return ground(domain, build_problem(domain, node, world, goal))
 
 
@@ -72,8 +78,8 @@ def test_kitchen_tasks_from_other_nodes_reach_the_goal_optimally(
     world = task.world
     if node == "handle":  # at the handle the robot holds it, the door still shut
         world = ("door-closed", "cube-on-counter", "holding-handle")
-    astar = plan_for_goal(task.goal, node, world)
-    ucs = plan_for_goal(task.goal, node, world, planner="ucs")
+    astar = plan_for_goal(KITCHEN, task.goal, node, world)
+    ucs = plan_for_goal(KITCHEN, task.goal, node, world, planner="ucs")
     sim = _kitchen_task(node, world, task.goal)
     if not astar.solved:  # e.g. open-door from above-cube: fine, but then UCS must agree
         assert not ucs.solved and astar.unreached
@@ -99,7 +105,7 @@ def test_plan_simulated_step_by_step() -> None:
 def test_unreachable_goal_gives_no_plan_naming_the_facts() -> None:
     for planner in ("astar", "ucs"):
         result = plan_for_goal(
-            "cube-in-cabinet", world=("door-closed", "hand-empty"), planner=planner
+            KITCHEN, "cube-in-cabinet", world=("door-closed", "hand-empty"), planner=planner
         )
         assert not result.solved and result.cost is None
         assert result.unreached == ("(cube-in-cabinet)",)
@@ -107,7 +113,7 @@ def test_unreachable_goal_gives_no_plan_naming_the_facts() -> None:
 
 def test_goal_blocked_by_deletes_lists_unmet_facts() -> None:
     # Both facts are reachable when deletes are ignored, never together.
-    result = plan_for_goal("door-open door-closed")
+    result = plan_for_goal(KITCHEN, "door-open door-closed")
     assert not result.solved
     assert result.unreached == ("(door-open)",)
 
@@ -115,7 +121,10 @@ def test_goal_blocked_by_deletes_lists_unmet_facts() -> None:
 def test_success_rates_steer_the_plan() -> None:
     rates = {"move-home-to-door": 0.5, "move-door-to-home": 0.5}
     result = plan_for_goal(
-        "(at door-front)", node="home", graph=graph_from_specs(success_rates=rates)
+        KITCHEN,
+        "(at door-front)",
+        node="home",
+        graph=graph_from_specs(KITCHEN, success_rates=rates),
     )
     assert result.actions == ("move-home-to-door",)
     assert result.cost == round(-math.log(0.5) * 1000)
@@ -184,7 +193,7 @@ def test_astar_and_fast_downward_agree_on_random_problems(seed: int) -> None:
     graph = random_skill_graph(30, seed=seed)
     goal = random_goal(graph, seed=seed, num_goal_facts=2)
     results = [
-        plan_for_goal(goal.goal, goal.node, goal.world, p, graph)
+        plan_on_graph(graph, goal.goal, goal.node, goal.world, p)
         for p in ("astar", "fast-downward")
     ]
     assert results[0].cost == results[1].cost
@@ -284,10 +293,10 @@ def test_unit_costs_without_metric(courier: tuple[Path, Path]) -> None:
 
 def test_unknown_planner_and_goal_are_named() -> None:
     with pytest.raises(PlanningError, match="known planners: astar, fast-downward, ucs"):
-        plan_for_goal("door-open", planner="magic")
+        plan_for_goal(KITCHEN, "door-open", planner="magic")
     assert set(PLANNERS) == {"astar", "fast-downward", "ucs"}
     with pytest.raises(PlanningError, match="known predicates: .*door-open"):
-        plan_for_goal("door-ajar")
+        plan_for_goal(KITCHEN, "door-ajar")
 
 
 def test_cli_plan_json_and_exit_codes(capsys: pytest.CaptureFixture[str]) -> None:

@@ -9,6 +9,7 @@ import numpy as np
 import pytest
 
 from osg_control.data.scripted import ScriptedPolicy
+from osg_control.domain.spec import skill_from_json
 from osg_control.errors import SkillSpecError
 from osg_control.kitchen.scene import WorldState, world_facts
 from osg_control.kitchen.skills import (
@@ -16,7 +17,6 @@ from osg_control.kitchen.skills import (
     SKILLS,
     Waypoint,
     get_skill,
-    skill_from_json,
     validate_skill,
 )
 

@@ -14,6 +14,7 @@ import torch
 from osg_control.cli import main
 from osg_control.data.datasets import Episode, load_dataset, write_episodes
 from osg_control.errors import DatasetError
+from osg_control.kitchen.scene import WORLD_FIELDS
 from osg_control.kitchen.skills import get_skill
 from osg_control.learning.checkpoints import Checkpoint, normalise_observations
 from osg_control.learning.policy import SkillPolicy, load_policies
@@ -25,8 +26,10 @@ from osg_control.learning.td3bc import (
     TD3BCConfig,
     bc_weights,
     prepare_skill_data,
-    skill_seed,
 )
+from osg_control.seeding import skill_seed
+
+WORLD = ",".join(WORLD_FIELDS)
 
 SKILL = "move-home-to-cube"
 OTHER_SKILL = "move-cube-to-home"
@@ -87,7 +90,7 @@ def write_toy_dataset(
 ) -> Path:
     """Write ``episodes`` toy demonstrations recorded as skill ``skill`` to ``path``."""
     rng = np.random.default_rng(seed)
-    attrs = {"skill": get_skill(skill).to_json(), "seed": seed}
+    attrs = {"skill": get_skill(skill).to_json(), "seed": seed, "world_fields": WORLD}
     write_episodes(path, [toy_episode(rng, noise) for _ in range(episodes)], attrs)
     return path
 
@@ -199,7 +202,9 @@ def test_data_set_without_success_is_refused(tmp_path: Path) -> None:
         for episode in (toy_episode(rng, 0.006) for _ in range(5))
     ]
     path = tmp_path / f"{SKILL}.h5"
-    write_episodes(path, failures, {"skill": get_skill(SKILL).to_json(), "seed": 0})
+    write_episodes(
+        path, failures, {"skill": get_skill(SKILL).to_json(), "seed": 0, "world_fields": WORLD}
+    )
     with pytest.raises(DatasetError, match="no successful episode") as info:
         prepare_skill_data(load_dataset(path))
     assert str(path) in str(info.value)
@@ -246,7 +251,7 @@ def test_train_command_refuses_data_recorded_for_another_skill(
 
 
 def test_default_action_scale_is_the_env_bounds() -> None:
-    from osg_control.kitchen.env import ACTION_BOUNDS
+    from osg_control.environment.arm_env import ACTION_BOUNDS
 
     np.testing.assert_array_equal(ACTION_SCALE, ACTION_BOUNDS.astype(np.float32))
 

@@ -14,6 +14,7 @@ import time
 from pathlib import Path
 
 from osg_control.data.collect import LocalExecutor, collect_skill
+from osg_control.domain.registry import get_domain
 
 
 def measure(skill: str, episodes: int, workers: int, chunk: int) -> dict[str, float]:
@@ -21,7 +22,14 @@ def measure(skill: str, episodes: int, workers: int, chunk: int) -> dict[str, fl
     with tempfile.TemporaryDirectory() as tmp:
         started = time.perf_counter()
         data = collect_skill(
-            skill, episodes, 0, Path(tmp), LocalExecutor(workers), False, chunk_episodes=chunk
+            get_domain("kitchen"),
+            skill,
+            episodes,
+            0,
+            Path(tmp),
+            LocalExecutor(workers),
+            False,
+            chunk_episodes=chunk,
         )
         seconds = time.perf_counter() - started
     return {

@@ -17,24 +17,25 @@ import statistics
 import time
 from dataclasses import asdict, dataclass
 
+from osg_control.domain.registry import get_domain
 from osg_control.kitchen.tasks import KITCHEN_TASKS
-from osg_control.planning.api import plan_for_goal
+from osg_control.planning.api import plan_on_graph
 from osg_control.planning.fast_downward import find_fast_downward
-from osg_control.planning.graph import SkillGraph
+from osg_control.planning.graph import SkillGraph, graph_from_specs
 from osg_control.planning.synthetic import random_goal, random_skill_graph
 from osg_control.planning.task import PlanResult
 
 
 @dataclass(frozen=True)
 class Problem:
-    """One benchmark problem: a start, a goal and the graph (None: the kitchen specs)."""
+    """One benchmark problem: a start, a goal and the graph."""
 
     name: str
     skills: int
     node: str
     world: tuple[str, ...]
     goal: tuple[str, ...]
-    graph: SkillGraph | None = None
+    graph: SkillGraph
 
 
 @dataclass(frozen=True)
@@ -55,7 +56,11 @@ class Row:
 
 def problems(sizes: list[int], goals: int) -> list[Problem]:
     """The kitchen tasks, then ``goals`` random goals per random graph size."""
-    found = [Problem(f"kitchen:{t.name}", 12, t.node, t.world, t.goal) for t in KITCHEN_TASKS]
+    kitchen = graph_from_specs(get_domain("kitchen"))
+    found = [
+        Problem(f"kitchen:{t.name}", len(kitchen.edges), t.node, t.world, t.goal, kitchen)
+        for t in KITCHEN_TASKS
+    ]
     for size in sizes:
         graph = random_skill_graph(size, seed=size)
         for seed in range(goals):
@@ -68,7 +73,7 @@ def problems(sizes: list[int], goals: int) -> list[Problem]:
 
 def _plan(problem: Problem, planner: str) -> tuple[PlanResult, float]:
     start = time.perf_counter()
-    result = plan_for_goal(problem.goal, problem.node, problem.world, planner, problem.graph)
+    result = plan_on_graph(problem.graph, problem.goal, problem.node, problem.world, planner)
     return result, time.perf_counter() - start
 
 

@@ -21,8 +21,9 @@ from pathlib import Path
 import numpy as np
 
 from osg_control.data.datasets import load_dataset
+from osg_control.domain.base import Domain
+from osg_control.domain.spec import SkillSpec
 from osg_control.errors import DatasetError
-from osg_control.kitchen.skills import MOVEMENT_SKILLS, SkillSpec, get_skill
 from osg_control.learning.checkpoints import sha256_file
 
 MAX_ORDERED_CLASSES = 9
@@ -69,9 +70,14 @@ def class_order(skills: Sequence[SkillSpec]) -> list[str]:
     return [skill.name for skill in best]
 
 
-def movement_classes() -> tuple[str, ...]:
-    """The classifier's classes: the movement skills in ``class_order``."""
-    return tuple(class_order([get_skill(name) for name in MOVEMENT_SKILLS]))
+def movement_classes(domain: Domain) -> tuple[str, ...]:
+    """The classifier's classes: a domain's movement skills in ``class_order``."""
+    return tuple(class_order(list(domain.movement_skills)))
+
+
+def class_starts(domain: Domain, classes: Sequence[str]) -> np.ndarray:
+    """(K, 3) start-node positions of the classes (for the nearest-node baseline)."""
+    return np.array([domain.node_of(domain.skill(name), "start").position for name in classes])
 
 
 @dataclass(frozen=True)

@@ -15,8 +15,6 @@ from typing import Any
 
 import numpy as np
 
-from osg_control.kitchen.skills import get_skill
-
 
 def confusion_matrix(labels: np.ndarray, predictions: np.ndarray, n_classes: int) -> np.ndarray:
     """Confusion matrix normalised to the total number of points.
@@ -64,17 +62,17 @@ def corrected_accuracy(confusion: np.ndarray) -> float:
     return float(sum(np.trace(confusion, offset=k) for k in (-1, 0, 1)))
 
 
-def nearest_node_predict(observations: np.ndarray, classes: Sequence[str]) -> np.ndarray:
+def nearest_node_predict(observations: np.ndarray, starts: np.ndarray) -> np.ndarray:
     """Baseline: the class whose start node is nearest to the state's TCP position.
 
     Args:
         observations: (N, 10) states; columns 0-2 are the TCP position.
-        classes: skill names.
+        starts: (K, 3) start-node positions of the classes, in class order.
 
     Returns:
-        (N,) int64 class indices; ties go to the first class in ``classes``.
+        (N,) int64 class indices; ties go to the first class.
     """
-    starts = np.array([get_skill(name).start_node.position for name in classes])
+    starts = np.asarray(starts, dtype=float)
     distances = np.linalg.norm(observations[:, None, :3] - starts[None, :, :], axis=-1)
     return np.argmin(distances, axis=1).astype(np.int64)
 
@@ -122,6 +120,7 @@ def evaluate_predictions(
     labels: np.ndarray,
     predictions: np.ndarray,
     classes: Sequence[str],
+    starts: np.ndarray,
 ) -> EvaluationReport:
     """Build the report of a classifier's predictions, with the baseline on the same states.
 
@@ -130,11 +129,12 @@ def evaluate_predictions(
         labels: (N,) true class indices.
         predictions: (N,) the classifier's class indices.
         classes: class names in ``class_order``.
+        starts: (K, 3) start-node positions of the classes (``data.class_starts``).
 
     Returns:
         The report.
     """
-    baseline = confusion_matrix(labels, nearest_node_predict(observations, classes), len(classes))
+    baseline = confusion_matrix(labels, nearest_node_predict(observations, starts), len(classes))
     return EvaluationReport(
         classes=tuple(classes),
         confusion=confusion_matrix(labels, predictions, len(classes)),

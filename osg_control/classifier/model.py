@@ -25,7 +25,6 @@ from osg_control.classifier.data import (
     ClassifierData,
     LabelledStates,
     load_classifier_data,
-    movement_classes,
 )
 from osg_control.classifier.metrics import EvaluationReport, evaluate_predictions
 from osg_control.data.datasets import OBS_DIM
@@ -204,7 +203,8 @@ class StateClassifier:
 
         Args:
             directory: the folder.
-            expected_classes: the class list the caller needs; default ``movement_classes()``.
+            expected_classes: the class list the caller needs (a domain's
+                ``movement_classes``); None accepts the checkpoint's.
 
         Returns:
             The classifier.
@@ -233,7 +233,7 @@ class StateClassifier:
                 f"{sidecar_path}: format version {sidecar['format_version']}, this package "
                 f"reads {CHECKPOINT_VERSION}"
             )
-        expected = list(movement_classes() if expected_classes is None else expected_classes)
+        expected = sidecar["classes"] if expected_classes is None else list(expected_classes)
         if sidecar["classes"] != expected:
             raise CheckpointError(
                 f"{sidecar_path}: checkpoint classes {sidecar['classes']} do not match the "
@@ -277,18 +277,25 @@ def _write_atomic(path: Path, write: Callable[[Path], object]) -> None:
         tmp.unlink(missing_ok=True)
 
 
-def evaluate(model: StateClassifier, states: LabelledStates) -> EvaluationReport:
+def evaluate(
+    model: StateClassifier, states: LabelledStates, starts: np.ndarray
+) -> EvaluationReport:
     """Table II of ``model`` on labelled states, with the nearest-node baseline.
 
     Args:
         model: the classifier; its classes must be in ``class_order``.
         states: the test states.
+        starts: (K, 3) start-node positions of its classes (``data.class_starts``).
 
     Returns:
         The report.
     """
     return evaluate_predictions(
-        states.observations, states.labels, model.predict_index(states.observations), model.classes
+        states.observations,
+        states.labels,
+        model.predict_index(states.observations),
+        model.classes,
+        starts,
     )
 
 

@@ -4,7 +4,13 @@ A module's ``register`` adds its parser and sets ``func`` (called with the parse
 returning the exit code). Add a module here to expose it.
 """
 
+from __future__ import annotations
+
 import argparse
+from typing import TYPE_CHECKING
+
+if TYPE_CHECKING:
+    from osg_control.domain.base import Domain
 
 COMMAND_MODULES: tuple[str, ...] = (
     "collect",
@@ -16,7 +22,15 @@ COMMAND_MODULES: tuple[str, ...] = (
     "pddl",
     "plan",
     "reproduce",
+    "domains",
 )
+
+
+def domain_of(args: argparse.Namespace) -> Domain:
+    """The domain ``osg --domain NAME`` selected (the registry's default without it)."""
+    from osg_control.domain.registry import get_domain
+
+    return get_domain(args.domain)
 
 
 def add_filter_argument(parser: argparse.ArgumentParser) -> None:

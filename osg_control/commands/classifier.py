@@ -13,11 +13,14 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import Any, TypeAlias
 
-from osg_control.classifier.data import load_classifier_data, movement_classes
+from osg_control.classifier.data import class_starts, load_classifier_data, movement_classes
 from osg_control.classifier.metrics import format_report
 from osg_control.classifier.model import StateClassifier, evaluate, reload_split
 from osg_control.classifier.train import TrainConfig, train_classifier
-from osg_control.paths import DEFAULTS_DIR, cache_dir
+from osg_control.commands import domain_of
+from osg_control.domain.base import Domain
+from osg_control.execution.defaults import defaults_root
+from osg_control.paths import cache_dir
 
 Verbs: TypeAlias = "argparse._SubParsersAction[argparse.ArgumentParser]"
 
@@ -32,23 +35,29 @@ def _int_at_least(minimum: int) -> Callable[[str], int]:
     return parse
 
 
-def _data_dir(path: Path | None) -> Path:
-    return Path(path) if path else cache_dir() / "data"
+def _data_dir(domain: Domain, path: Path | None) -> Path:
+    return Path(path) if path else cache_dir() / domain.name / "data"
 
 
-def _model_dir(path: Path | None) -> Path:
+def _trained_dir(domain: Domain, path: Path | None) -> Path:
+    """Where ``osg classifier train`` writes: the given folder, else the cache (never the
+    installed package)."""
+    return Path(path) if path else cache_dir() / domain.name / "classifier"
+
+
+def _model_dir(domain: Domain, path: Path | None) -> Path:
     """The given folder, else the one ``osg classifier train`` wrote, else the shipped one."""
-    if path:
-        return Path(path)
-    trained = cache_dir() / "classifier"
-    return trained if trained.is_dir() else DEFAULTS_DIR / "classifier"
+    trained = _trained_dir(domain, path)
+    if path or trained.is_dir():
+        return trained
+    return defaults_root(domain) / "classifier"
 
 
 def _add_data_argument(parser: argparse.ArgumentParser) -> None:
     parser.add_argument(
         "--data",
         type=Path,
-        help="folder of the movement data sets <skill>.h5 (default: $OSG_CACHE_DIR/data)",
+        help="folder of the movement data sets <skill>.h5 (default: $OSG_CACHE_DIR/DOMAIN/data)",
     )
 
 
@@ -68,11 +77,13 @@ def run_train(args: argparse.Namespace) -> int:
     config = TrainConfig(
         epochs=args.epochs, batch_size=args.batch_size, seed=args.seed, threads=args.threads
     )
-    data = load_classifier_data(_data_dir(args.data), movement_classes(), args.seed)
+    domain = domain_of(args)
+    classes = movement_classes(domain)
+    data = load_classifier_data(_data_dir(domain, args.data), classes, args.seed)
     model = train_classifier(data, config, progress=True)
-    out = _model_dir(args.out)
+    out = _trained_dir(domain, args.out)
     sidecar = model.save(out)
-    report = evaluate(model, data.test)
+    report = evaluate(model, data.test, class_starts(domain, classes))
     losses = model.info["training"]["epoch_losses"]
     text = (
         f"trained on {len(data.train)} states, tested on {len(data.test)} held-out states "
@@ -93,16 +104,17 @@ def run_eval(args: argparse.Namespace) -> int:
     Returns:
         0.
     """
-    model_dir = _model_dir(args.model)
-    model = StateClassifier.load(model_dir)
-    data, same_data = reload_split(model, _data_dir(args.data))
+    domain = domain_of(args)
+    model_dir = _model_dir(domain, args.model)
+    model = StateClassifier.load(model_dir, movement_classes(domain))
+    data, same_data = reload_split(model, _data_dir(domain, args.data))
     if not same_data:
         print(
             "osg: warning: the data sets differ from those the classifier was trained on "
             "(sha256); the test split may overlap its training states",
             file=sys.stderr,
         )
-    report = evaluate(model, data.test)
+    report = evaluate(model, data.test, class_starts(domain, model.classes))
     payload = {"model": str(model_dir), "same_data": same_data, **report.to_dict()}
     _emit(args, payload, format_report(report))
     return 0
@@ -169,7 +181,7 @@ def run_reach(args: argparse.Namespace) -> int:
     from osg_control.evaluation.evaluate import format_reach_table, reach_table
 
     models = str(args.models) if args.models else None
-    table = reach_table(models, args.episodes, args.seed, args.workers, args.noise)
+    table = reach_table(domain_of(args), models, args.episodes, args.seed, args.workers, args.noise)
     _emit(args, table, format_reach_table(table))
     return 0
 
@@ -179,8 +191,8 @@ def add_reach(verbs: Verbs) -> None:
     parser = verbs.add_parser(
         "reach",
         help="print Table III: reaching the graph from random starts",
-        description="From 8 start regions (4 nodes, 4 edge midpoints), random starts within "
-        "15 cm and 0.2 rad: classify, run the chosen movement skill, count arrivals at its "
+        description="From the domain's start regions (the kitchen: 4 nodes, 4 edge midpoints, "
+        "15 cm and 0.2 rad): classify, run the chosen movement skill, count arrivals at its "
         "termination node; beside it, how often the start lay outside the chosen skill's "
         "initiation region and the success of the nearest-start-node baseline.",
     )

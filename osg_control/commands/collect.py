@@ -7,10 +7,10 @@ import json
 import time
 from pathlib import Path
 
+from osg_control.commands import domain_of
 from osg_control.data.collect import DEFAULT_EPISODES, LocalExecutor, collect_skill
 from osg_control.data.datasets import dataset_summary, load_dataset
 from osg_control.errors import DatasetError
-from osg_control.kitchen.skills import SKILLS, get_skill
 from osg_control.paths import cache_dir
 
 
@@ -23,7 +23,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     collect.add_argument("--episodes", type=int, default=DEFAULT_EPISODES)
     collect.add_argument("--workers", type=int, default=2)
     collect.add_argument("--seed", type=int, default=0)
-    collect.add_argument("--out", type=Path, default=None, help="default: <cache>/data")
+    collect.add_argument("--out", type=Path, default=None, help="default: <cache>/<domain>/data")
     collect.add_argument("--json", action="store_true", help="print a JSON summary")
     collect.set_defaults(func=run_collect)
 
@@ -37,13 +37,16 @@ def register(subparsers: argparse._SubParsersAction) -> None:
 
 def run_collect(args: argparse.Namespace) -> int:
     """Collect the requested skills and print their scripted success rates."""
-    skills = list(SKILLS) if args.skill == "all" else [get_skill(args.skill)]
-    out = args.out or cache_dir() / "data"
+    domain = domain_of(args)
+    skills = list(domain.skills) if args.skill == "all" else [domain.skill(args.skill)]
+    out = args.out or cache_dir() / domain.name / "data"
     executor = LocalExecutor(args.workers)
     rows = []
     for skill in skills:
         started = time.perf_counter()
-        dataset = collect_skill(skill, args.episodes, args.seed, out, executor, not args.json)
+        dataset = collect_skill(
+            domain, skill, args.episodes, args.seed, out, executor, not args.json
+        )
         summary = dataset_summary(dataset)
         summary["seconds"] = round(time.perf_counter() - started, 2)
         rows.append(summary)

@@ -7,16 +7,16 @@ import json
 from pathlib import Path
 from typing import TypeAlias
 
+from osg_control.commands import domain_of
 from osg_control.data.datasets import load_dataset
 from osg_control.errors import DatasetError
 from osg_control.planning.graph import (
-    PROJECTIONS,
     SkillGraph,
-    draw_graph,
     graph_from_datasets,
     graph_from_specs,
     save_graph,
 )
+from osg_control.planning.graph_draw import PROJECTIONS, draw_graph
 
 Verbs: TypeAlias = "argparse._SubParsersAction[argparse.ArgumentParser]"
 
@@ -70,12 +70,13 @@ def run_graph(args: argparse.Namespace) -> int:
     Returns:
         0.
     """
+    domain = domain_of(args)
     rates = _read_rates(args.rates)
     if args.data:
         datasets = [load_dataset(path) for path in _data_files(args.data)]
-        graph = graph_from_datasets(datasets, rates)
+        graph = graph_from_datasets(domain, datasets, rates)
     else:
-        graph = graph_from_specs(success_rates=rates)
+        graph = graph_from_specs(domain, success_rates=rates)
     if args.out:
         save_graph(graph, args.out)
     if args.png:

@@ -7,8 +7,8 @@ import json
 from pathlib import Path
 from typing import TypeAlias
 
+from osg_control.commands import domain_of
 from osg_control.errors import PlanningError
-from osg_control.kitchen.tasks import DEFAULT_WORLD
 from osg_control.planning.api import PLANNERS, plan_files, plan_for_goal
 from osg_control.planning.graph import load_graph
 from osg_control.planning.task import PlanResult
@@ -71,8 +71,12 @@ def run_plan(args: argparse.Namespace) -> int:
             raise PlanningError(
                 'give a goal (--goal "door-open cube-in-cabinet") or DOMAIN PROBLEM files'
             )
-        graph = load_graph(args.graph) if args.graph else None
-        result = plan_for_goal(args.goal, args.from_node, args.facts.split(), args.planner, graph)
+        from osg_control.planning.costs import measured_graph
+
+        domain = domain_of(args)
+        graph = load_graph(args.graph) if args.graph else measured_graph(domain)
+        facts = None if args.facts is None else args.facts.split()
+        result = plan_for_goal(domain, args.goal, args.from_node, facts, args.planner, graph)
     print(json.dumps(result.to_dict(), indent=2) if args.json else format_plan(result))
     return 0 if result.solved else NO_PLAN_EXIT
 
@@ -83,7 +87,7 @@ def register(subparsers: Verbs) -> None:
         "plan",
         help="plan a skill sequence for a goal",
         description="Find the cheapest skill sequence (operator costs from success rates) "
-        "for a kitchen goal, or solve any STRIPS/typing/action-costs PDDL pair.",
+        "for a goal of the domain, or solve any STRIPS/typing/action-costs PDDL pair.",
         epilog=f"Exit status: 0 with a plan, {NO_PLAN_EXIT} when there is none, 1 on errors.",
     )
     parser.add_argument(
@@ -96,13 +100,17 @@ def register(subparsers: Verbs) -> None:
     parser.add_argument(
         "--goal", help='facts to reach, e.g. "door-open cube-in-cabinet" or "(at home)"'
     )
-    parser.add_argument("--from-node", default="home", help="start node (default: home)")
-    world = " ".join(DEFAULT_WORLD)
     parser.add_argument(
-        "--facts", default=world, help=f'world facts true at the start (default: "{world}")'
+        "--from-node", default=None, help="start node (default: the domain's home node)"
     )
     parser.add_argument(
-        "--graph", type=Path, help="skill graph JSON with success rates (default: the skill specs)"
+        "--facts", default=None, help="world facts true at the start (default: the domain's)"
+    )
+    parser.add_argument(
+        "--graph",
+        type=Path,
+        help="skill graph JSON with success rates (default: the domain's specs with the "
+        "shipped defaults' measured success rates)",
     )
     parser.add_argument(
         "--planner", choices=sorted(PLANNERS), default="astar", help="search (default: astar)"

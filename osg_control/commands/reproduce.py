@@ -3,7 +3,8 @@
 Stages: collect -> train (TD3+BC, all skills batched) -> skill graph + PDDL -> classifier ->
 Table I -> Table II -> Table III -> Tables IV/V -> report. Each stage's time is printed and
 recorded. The output directory's ``defaults/`` has the layout of the shipped defaults
-(``skills/``, ``classifier/``, ``manifest.json``); the shipped ones are a copy of it.
+(``skills/``, ``classifier/``, ``manifest.json`` with the Table I success rates at 2 cm
+that become the plan costs); a domain's shipped defaults are a copy of it.
 """
 
 from __future__ import annotations
@@ -20,10 +21,14 @@ from pathlib import Path
 from typing import Any
 
 from osg_control import __version__
-from osg_control.commands import add_filter_argument
-from osg_control.defaults import MANIFEST
+from osg_control.commands import add_filter_argument, domain_of
+from osg_control.domain.base import Domain
 from osg_control.learning.checkpoints import sha256_file
 from osg_control.paths import PACKAGE_DIR
+from osg_control.planning.costs import MANIFEST, RATES_KEY
+
+DEPLOYMENT_NOISE = 0.02
+"""The observation noise [m] whose Table I rates become the plan costs (the paper's 2 cm)."""
 
 
 @dataclass(frozen=True)
@@ -74,6 +79,7 @@ def run(args: argparse.Namespace) -> int:
     """Run every stage, print each stage's time, write the report."""
     from osg_control.cli import main as osg
 
+    domain = domain_of(args)
     scale = QUICK if args.quick else FULL
     out: Path = args.out
     data, defaults = out / "data", out / "defaults"
@@ -90,7 +96,7 @@ def run(args: argparse.Namespace) -> int:
         return value
 
     def cli(*argv: str) -> int:
-        code = osg(list(argv))
+        code = osg(["--domain", domain.name, *argv])
         if code:
             raise SystemExit(f"osg reproduce: stage 'osg {' '.join(argv)}' exited {code}")
         return code
@@ -157,11 +163,19 @@ def run(args: argparse.Namespace) -> int:
             seed,
         ),
     )
-    _write_manifest(defaults, data, args, scale)
-    figures["table_i"] = stage("table I", lambda: _table_i(defaults, scale, args))
-    figures["table_ii"] = stage("table II", lambda: _table_ii(defaults, data, args.seed))
-    figures["table_iii"] = stage("table III", lambda: _table_iii(defaults, scale, args))
-    figures["tables_iv_v"] = stage("tables IV/V", lambda: _tables_iv_v(defaults, scale, args))
+    manifest = _manifest(domain.name, data, args, scale)
+    (defaults / MANIFEST).write_text(json.dumps(manifest, indent=2))
+    figures["table_i"] = stage("table I", lambda: _table_i(domain, defaults, scale, args))
+    manifest[RATES_KEY] = deployment_rates(figures["table_i"])
+    manifest["success_rates_from"] = f"Table I at sigma = {DEPLOYMENT_NOISE} m" + (
+        f", TCP filter gain {args.filter}" if args.filter is not None else ", raw observations"
+    )
+    (defaults / MANIFEST).write_text(json.dumps(manifest, indent=2))
+    figures["table_ii"] = stage("table II", lambda: _table_ii(domain, defaults, data, args.seed))
+    figures["table_iii"] = stage("table III", lambda: _table_iii(domain, defaults, scale, args))
+    figures["tables_iv_v"] = stage(
+        "tables IV/V", lambda: _tables_iv_v(domain, defaults, scale, args)
+    )
     figures["stage_seconds"] = stage_seconds
     figures["run"] = {
         "command": "osg " + " ".join(map(shlex.quote, sys.argv[1:])),
@@ -173,7 +187,7 @@ def run(args: argparse.Namespace) -> int:
     }
     from osg_control.evaluation.report import write_report
 
-    written = write_report(figures, out)
+    written = write_report(figures, out, domain.published)
     if args.json:
         print(json.dumps(figures, indent=2))
     else:
@@ -183,25 +197,34 @@ def run(args: argparse.Namespace) -> int:
     return 0
 
 
-def _write_manifest(defaults: Path, data: Path, args: argparse.Namespace, scale: Scale) -> None:
-    manifest = {
-        "command": f"osg reproduce{' --quick' if args.quick else ''} --seed {args.seed} "
-        f"--out {args.out}",
+def deployment_rates(table_i: dict[str, Any]) -> dict[str, float]:
+    """Each skill's Table I rate at ``DEPLOYMENT_NOISE`` (the plan costs' rates)."""
+    column = list(table_i["noise"]).index(DEPLOYMENT_NOISE)
+    return {row["skill"]: float(row["rates"][column]) for row in table_i["rows"]}
+
+
+def _manifest(domain: str, data: Path, args: argparse.Namespace, scale: Scale) -> dict[str, Any]:
+    return {
+        "domain": domain,
+        "command": f"osg --domain {domain} reproduce{' --quick' if args.quick else ''} "
+        f"--seed {args.seed} --out {args.out}",
         "seed": args.seed,
         "scale": scale.__dict__,
         "package_version": __version__,
         "git_commit": _git_commit(),
         "datasets_sha256": {p.name: sha256_file(p) for p in sorted(data.glob("*.h5"))},
     }
-    (defaults / MANIFEST).write_text(json.dumps(manifest, indent=2))
 
 
-def _table_i(defaults: Path, scale: Scale, args: argparse.Namespace) -> dict[str, Any]:
+def _table_i(
+    domain: Domain, defaults: Path, scale: Scale, args: argparse.Namespace
+) -> dict[str, Any]:
     from osg_control.evaluation.evaluate import format_skill_table, skill_table
 
     table = skill_table(
+        domain,
         defaults / "skills",
-        (0.0, 0.01, 0.02),
+        (0.0, 0.01, DEPLOYMENT_NOISE),
         scale.table_i_episodes,
         args.seed,
         args.workers,
@@ -212,29 +235,36 @@ def _table_i(defaults: Path, scale: Scale, args: argparse.Namespace) -> dict[str
     return table
 
 
-def _table_ii(defaults: Path, data: Path, seed: int) -> dict[str, Any]:
-    from osg_control.classifier.data import load_classifier_data, movement_classes
+def _table_ii(domain: Domain, defaults: Path, data: Path, seed: int) -> dict[str, Any]:
+    from osg_control.classifier.data import class_starts, load_classifier_data, movement_classes
     from osg_control.classifier.metrics import format_report
     from osg_control.classifier.model import StateClassifier, evaluate
 
-    model = StateClassifier.load(defaults / "classifier")
-    report = evaluate(model, load_classifier_data(data, movement_classes(), seed).test)
+    classes = movement_classes(domain)
+    model = StateClassifier.load(defaults / "classifier", classes)
+    test = load_classifier_data(data, classes, seed).test
+    report = evaluate(model, test, class_starts(domain, classes))
     print(format_report(report))
     return dict(report.to_dict())
 
 
-def _table_iii(defaults: Path, scale: Scale, args: argparse.Namespace) -> dict[str, Any]:
+def _table_iii(
+    domain: Domain, defaults: Path, scale: Scale, args: argparse.Namespace
+) -> dict[str, Any]:
     from osg_control.evaluation.evaluate import format_reach_table, reach_table
 
-    table = reach_table(str(defaults), scale.reach_episodes, args.seed, args.workers)
+    table = reach_table(domain, str(defaults), scale.reach_episodes, args.seed, args.workers)
     print(format_reach_table(table))
     return table
 
 
-def _tables_iv_v(defaults: Path, scale: Scale, args: argparse.Namespace) -> dict[str, Any]:
+def _tables_iv_v(
+    domain: Domain, defaults: Path, scale: Scale, args: argparse.Namespace
+) -> dict[str, Any]:
     from osg_control.evaluation.evaluate import format_task_table, task_table
 
     table = task_table(
+        domain,
         str(defaults),
         scale.task_episodes,
         args.seed,

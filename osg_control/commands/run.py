@@ -9,12 +9,12 @@ from typing import Any
 
 import numpy as np
 
-from osg_control.commands import add_filter_argument
-from osg_control.evaluation.evaluate import format_skill_table, skill_table, start_regions
+from osg_control.commands import add_filter_argument, domain_of
+from osg_control.domain.base import Domain
+from osg_control.environment.arm_env import EnvConfig
+from osg_control.evaluation.evaluate import format_skill_table, skill_table
+from osg_control.execution.defaults import defaults_root
 from osg_control.execution.executor import load_executor
-from osg_control.kitchen.env import EnvConfig, KitchenEnv
-from osg_control.kitchen.skills import NODES
-from osg_control.paths import DEFAULTS_DIR
 
 
 def register(subparsers: argparse._SubParsersAction) -> None:
@@ -24,12 +24,16 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     run.add_argument(
         "--start",
         default="random",
-        help="'random' (one of the 8 start regions, 15 cm / 0.2 rad) or a node name",
+        help="'random' (one of the domain's start regions, e.g. 15 cm / 0.2 rad) or a node name",
     )
     run.add_argument("--episodes", type=int, default=1)
     run.add_argument("--noise", type=float, default=0.0, help="TCP observation noise sigma [m]")
     run.add_argument("--seed", type=int, default=0)
-    run.add_argument("--door-opening", type=float, default=0.0, help="initial door travel [m]")
+    run.add_argument(
+        "--facts",
+        default=None,
+        help="world facts at the start, space-separated (default: the domain's start world)",
+    )
     run.add_argument("--max-replans", type=int, default=2)
     run.add_argument("--models", type=Path, default=None, help="defaults directory to use")
     run.add_argument("--video", type=Path, default=None, help="write an MP4 of the first episode")
@@ -46,29 +50,34 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     skills.add_argument(
         "--models",
         type=Path,
-        default=DEFAULTS_DIR / "skills",
-        help="skill checkpoint directory (default: shipped)",
+        default=None,
+        help="skill checkpoint directory (default: the domain's shipped skills)",
     )
     add_filter_argument(skills)
     skills.add_argument("--json", action="store_true")
     skills.set_defaults(func=run_eval_skills)
 
 
-def _start_options(start: str, rng: np.random.Generator) -> dict[str, Any]:
+def _start_options(domain: Domain, start: str, rng: np.random.Generator) -> dict[str, Any]:
     if start == "random":
-        regions = start_regions()
-        _name, position = regions[int(rng.integers(len(regions)))]
-        return {"position": position, "radius": 0.15, "angle": 0.2}
-    if start not in NODES:
-        raise SystemExit(f"osg run: unknown start {start!r}; use 'random' or one of {list(NODES)}")
+        region = domain.start_regions[int(rng.integers(len(domain.start_regions)))]
+        return {"position": region.position, "radius": region.radius, "angle": region.angle}
+    if start not in domain.nodes:
+        raise SystemExit(
+            f"osg run: unknown start {start!r}; use 'random' or one of {list(domain.nodes)}"
+        )
     return {"node": start, "radius": 0.0, "angle": 0.0}
 
 
 def run_task(args: argparse.Namespace) -> int:
     """Run ``--episodes`` executions of the goal and report each (exit 1 if any failed)."""
+    domain = domain_of(args)
     goal = args.goal.split()
-    executor = load_executor(args.models, max_replans=args.max_replans, filter_gain=args.filter)
-    env = KitchenEnv(
+    facts = domain.start_world if args.facts is None else tuple(args.facts.split())
+    executor = load_executor(
+        domain, args.models, max_replans=args.max_replans, filter_gain=args.filter
+    )
+    env = domain.make_env(
         config=EnvConfig(obs_noise_std=args.noise),
         render_mode="rgb_array" if args.video else None,
     )
@@ -76,8 +85,8 @@ def run_task(args: argparse.Namespace) -> int:
     results = []
     frames: list[Any] = []
     for episode in range(args.episodes):
-        options = _start_options(args.start, rng)
-        options["world"] = {"door_opening": args.door_opening}
+        options = _start_options(domain, args.start, rng)
+        options["facts"] = facts
         obs, _ = env.reset(seed=int(rng.integers(2**31)), options=options)
         if args.video and episode == 0:
             executor.on_step = lambda e: frames.append(e.render())
@@ -112,8 +121,11 @@ def _write_video(path: Path, frames: list[Any]) -> None:
 
 def run_eval_skills(args: argparse.Namespace) -> int:
     """Print Table I."""
+    domain = domain_of(args)
+    models = args.models or defaults_root(domain) / "skills"
     table = skill_table(
-        args.models,
+        domain,
+        models,
         args.noise,
         args.episodes,
         args.seed,

@@ -12,9 +12,11 @@ from typing import Any
 import torch
 from tqdm import tqdm
 
+from osg_control.commands import domain_of
 from osg_control.data.datasets import load_dataset
+from osg_control.domain.base import Domain
+from osg_control.domain.spec import SkillSpec, skill_from_json
 from osg_control.errors import DatasetError, OSGError, SkillSpecError
-from osg_control.kitchen.skills import SKILLS, SkillSpec, get_skill, skill_from_json
 from osg_control.learning.checkpoints import Checkpoint, save_checkpoint, sha256_file
 from osg_control.learning.td3bc import (
     ACTION_SCALE,
@@ -23,9 +25,9 @@ from osg_control.learning.td3bc import (
     SkillData,
     TD3BCConfig,
     prepare_skill_data,
-    skill_seed,
 )
 from osg_control.paths import cache_dir
+from osg_control.seeding import skill_seed
 
 DEFAULT_STEPS = 100_000
 LOG_EVERY = 100
@@ -63,10 +65,13 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     )
     parser.add_argument("--seed", type=int, default=0, help="run seed (default: 0)")
     parser.add_argument(
-        "--data", type=Path, default=None, help="data set directory (default: <cache>/data)"
+        "--data", type=Path, default=None, help="data set directory (default: <cache>/DOMAIN/data)"
     )
     parser.add_argument(
-        "--out", type=Path, default=None, help="checkpoint directory (default: <cache>/skills)"
+        "--out",
+        type=Path,
+        default=None,
+        help="checkpoint directory (default: <cache>/DOMAIN/skills)",
     )
     parser.add_argument("--device", choices=("cpu", "cuda"), default="cpu")
     parser.add_argument(
@@ -79,15 +84,15 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     parser.set_defaults(func=run)
 
 
-def skill_names(selection: str) -> list[str]:
-    """Resolve ``--skill``: a skill name or ``all``.
+def skill_names(domain: Domain, selection: str) -> list[str]:
+    """Resolve ``--skill``: a skill name of the domain or ``all``.
 
     Raises:
         SkillSpecError: an unknown name, listing the known ones.
     """
     if selection == "all":
-        return [skill.name for skill in SKILLS]
-    return [get_skill(selection).name]
+        return [skill.name for skill in domain.skills]
+    return [domain.skill(selection).name]
 
 
 def load_skill_input(data_dir: Path, name: str, config: TD3BCConfig) -> SkillInput:
@@ -188,20 +193,22 @@ def print_summary(summary: dict[str, Any], as_json: bool) -> None:
 
 def run(args: argparse.Namespace) -> int:
     """Train the selected skills batched and write their checkpoints."""
-    names = skill_names(args.skill)
+    domain = domain_of(args)
+    names = skill_names(domain, args.skill)
     if args.device == "cuda" and not torch.cuda.is_available():
         raise OSGError("--device cuda: CUDA is not available on this machine")
     if args.threads:
         torch.set_num_threads(args.threads)
     config = TD3BCConfig()
-    inputs = [load_skill_input(args.data or cache_dir() / "data", n, config) for n in names]
+    data_dir = args.data or cache_dir() / domain.name / "data"
+    inputs = [load_skill_input(data_dir, n, config) for n in names]
     seeds = [skill_seed(args.seed, name) for name in names]
     replay = BatchedReplay([i.data for i in inputs], config.batch_size, seeds, args.device)
     trainer = TD3BC(config, seeds, device=args.device)
     start = time.perf_counter()
     logs = train_with_progress(trainer, replay, args.steps)
     seconds = time.perf_counter() - start
-    out_dir = args.out or cache_dir() / "skills"
+    out_dir = args.out or cache_dir() / domain.name / "skills"
     print_summary(
         {
             "device": args.device,

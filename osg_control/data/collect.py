@@ -1,7 +1,8 @@
 """Scripted noisy data collection (Algorithm 1): parallel, deterministic, resumable.
 
-Episode ``i`` of skill ``k`` draws everything from ``SeedSequence([seed, k, i])``, so the
-data set is the same whatever the number of workers. Episodes are written in chunks, each
+Episode ``i`` of a skill draws everything from ``SeedSequence([skill_seed(seed, name), i])``
+(``osg_control.seeding``), so the data set is the same whatever the number of workers, and
+adding a skill to a domain changes no other skill's data. Episodes are written in chunks, each
 atomically, under ``<out>/.parts/<skill>/``; an interrupted run keeps every finished chunk
 and the same command continues where it stopped. When all chunks exist they are merged
 into ``<out>/<skill>.h5`` (atomically) and the parts are removed.
@@ -22,9 +23,11 @@ from tqdm import tqdm
 from osg_control import __version__
 from osg_control.data.datasets import Dataset, Episode, load_dataset, write_episodes
 from osg_control.data.scripted import ScriptedPolicy
-from osg_control.kitchen.env import EnvConfig, KitchenEnv
-from osg_control.kitchen.scene import WORLD_FIELDS
-from osg_control.kitchen.skills import SKILLS, SkillSpec, get_skill
+from osg_control.domain.base import Domain
+from osg_control.domain.registry import get_domain
+from osg_control.domain.spec import SkillSpec
+from osg_control.environment.arm_env import ArmEnv, EnvConfig
+from osg_control.seeding import skill_seed
 
 DEFAULT_EPISODES = 300
 CHUNK_EPISODES = 25
@@ -61,22 +64,21 @@ class LocalExecutor:
             yield from pool.map(fn, items)
 
 
-_ENVS: dict[str, KitchenEnv] = {}
-_SKILL_INDEX = {skill.name: index for index, skill in enumerate(SKILLS)}
+_ENVS: dict[tuple[str, str], ArmEnv] = {}
 
 
-def _env_for(skill: SkillSpec) -> KitchenEnv:
+def _env_for(domain: Domain, skill: SkillSpec) -> ArmEnv:
     """One env per skill per process, reused across episodes."""
-    if skill.name not in _ENVS:
-        _ENVS[skill.name] = KitchenEnv(skill=skill, config=EnvConfig())
-    return _ENVS[skill.name]
+    key = (domain.name, skill.to_json())
+    if key not in _ENVS:
+        _ENVS[key] = domain.make_env(skill=skill, config=EnvConfig())
+    return _ENVS[key]
 
 
-def run_scripted_episode(skill: SkillSpec, seed: int, index: int) -> Episode:
+def run_scripted_episode(domain: Domain, skill: SkillSpec, seed: int, index: int) -> Episode:
     """Run Algorithm 1 for one episode from a random start in the skill's initiation region."""
-    skill_index = _SKILL_INDEX.get(skill.name, len(SKILLS))
-    rng = np.random.default_rng(np.random.SeedSequence([seed, skill_index, index]))
-    env = _env_for(skill)
+    rng = np.random.default_rng(np.random.SeedSequence([skill_seed(seed, skill.name), index]))
+    env = _env_for(domain, skill)
     obs, info = env.reset(
         seed=int(rng.integers(2**31)),
         options={"radius": skill.start_radius, "angle": skill.start_angle},
@@ -100,7 +102,7 @@ def run_scripted_episode(skill: SkillSpec, seed: int, index: int) -> Episode:
         rows["act"].append(info["action_applied"])
         rows["rew"].append(1.0 if at_goal else 0.0)
         rows["term"].append(at_goal)
-        rows["world"].append(info["world"].as_array())
+        rows["world"].append(info["world"])
         obs = next_obs
         if hold_left is not None:
             hold_left -= 1
@@ -124,8 +126,9 @@ def run_scripted_episode(skill: SkillSpec, seed: int, index: int) -> Episode:
 
 @dataclass(frozen=True)
 class ChunkTask:
-    """Episodes ``[start, stop)`` of one skill, written to ``path``."""
+    """Episodes ``[start, stop)`` of one skill of a domain, written to ``path``."""
 
+    domain: str
     skill: SkillSpec
     seed: int
     start: int
@@ -134,19 +137,21 @@ class ChunkTask:
 
 
 def _run_chunk(task: ChunkTask) -> tuple[int, int]:
+    domain = get_domain(task.domain)
     episodes = [
-        run_scripted_episode(task.skill, task.seed, i) for i in range(task.start, task.stop)
+        run_scripted_episode(domain, task.skill, task.seed, i) for i in range(task.start, task.stop)
     ]
-    write_episodes(task.path, episodes, _attrs(task.skill, task.seed))
+    write_episodes(task.path, episodes, _attrs(domain, task.skill, task.seed))
     return len(episodes), sum(e.success for e in episodes)
 
 
-def _attrs(skill: SkillSpec, seed: int) -> dict[str, Any]:
+def _attrs(domain: Domain, skill: SkillSpec, seed: int) -> dict[str, Any]:
     return {
+        "domain": domain.name,
         "skill": skill.to_json(),
         "seed": seed,
         "package_version": __version__,
-        "world_fields": ",".join(WORLD_FIELDS),
+        "world_fields": ",".join(domain.world_fields),
         "collector": "osg_control.data.collect (Algorithm 1)",
     }
 
@@ -157,6 +162,7 @@ def parts_dir(out: Path, skill: SkillSpec) -> Path:
 
 
 def collect_skill(
+    domain: Domain,
     skill: SkillSpec | str,
     episodes: int,
     seed: int,
@@ -172,7 +178,7 @@ def collect_skill(
     Returns:
         The merged, validated data set.
     """
-    skill = get_skill(skill) if isinstance(skill, str) else skill
+    skill = domain.skill(skill) if isinstance(skill, str) else skill
     out = Path(out)
     final = out / f"{skill.name}.h5"
     if final.exists():
@@ -184,7 +190,7 @@ def collect_skill(
     for start in range(0, episodes, chunk_episodes):
         stop = min(start + chunk_episodes, episodes)
         path = parts / f"seed{seed}_{start:06d}_{stop:06d}.h5"
-        tasks.append(ChunkTask(skill, seed, start, stop, path))
+        tasks.append(ChunkTask(domain.name, skill, seed, start, stop, path))
     todo = [t for t in tasks if not t.path.exists()]
     done_eps = sum(t.stop - t.start for t in tasks if t.path.exists())
     successes = sum(
@@ -199,6 +205,6 @@ def collect_skill(
     bar.close()
     merged = [load_dataset(t.path) for t in tasks]
     all_episodes = [d.episode(i) for d in merged for i in range(d.num_episodes)]
-    write_episodes(final, all_episodes, _attrs(skill, seed))
+    write_episodes(final, all_episodes, _attrs(domain, skill, seed))
     shutil.rmtree(parts, ignore_errors=True)
     return load_dataset(final)

@@ -15,11 +15,14 @@ One file per skill. Flat step arrays (``N`` steps over all episodes)::
 An episode is successful if any step is rewarded; after its first success the recording
 continues for ``collect.HOLD_STEPS`` steps with the script holding its last waypoint.
     episode_ids        (N,)    int64     episode index of each step
-    world_states       (N, 11) float32   world state after the step (``scene.WORLD_FIELDS``)
+    world_states       (N, W)  float32   world state after the step (the domain's
+                                         ``world_fields``, named in the ``world_fields``
+                                         attribute)
 
 Per-episode arrays (``E`` episodes): ``episode_starts`` (offset of the first step),
 ``episode_lengths``, ``episode_successes``. Attributes: ``skill`` (the spec as JSON),
-``seed``, ``package_version``, ``format_version``, ``world_fields``.
+``seed``, ``package_version``, ``format_version``, ``world_fields`` (comma-separated),
+``domain``.
 """
 
 from __future__ import annotations
@@ -40,6 +43,8 @@ from osg_control.errors import DatasetError
 FORMAT_VERSION = 1
 OBS_DIM = 10
 ACTION_DIM = 7
+WORLD_WIDTH = -1
+"""Stands for the domain's world-state width in ``STEP_FIELDS`` (fixed per file)."""
 STEP_FIELDS: dict[str, tuple[tuple[int, ...], Any]] = {
     "observations": ((OBS_DIM,), np.float32),
     "next_observations": ((OBS_DIM,), np.float32),
@@ -48,7 +53,7 @@ STEP_FIELDS: dict[str, tuple[tuple[int, ...], Any]] = {
     "terminations": ((), np.bool_),
     "truncations": ((), np.bool_),
     "episode_ids": ((), np.int64),
-    "world_states": ((11,), np.float32),
+    "world_states": ((WORLD_WIDTH,), np.float32),
 }
 
 
@@ -146,13 +151,18 @@ def write_episodes(path: Path, episodes: Sequence[Episode], attrs: dict[str, Any
 
     An interrupted write leaves the old file (or none), never a truncated one.
     """
+    fields = attrs.get("world_fields")
+    if not isinstance(fields, str) or not fields:
+        raise DatasetError(f"{path}: attribute 'world_fields' (the world-state names) is required")
+    world_shape = (len(fields.split(",")),)
     tmp, fd = _atomic_h5(Path(path))
     os.close(fd)
     try:
         lengths = np.array([len(e) for e in episodes], dtype=np.int64)
         starts = np.concatenate([[0], np.cumsum(lengths)[:-1]]).astype(np.int64)
         with h5py.File(tmp, "w") as f:
-            for key, (shape, dtype) in STEP_FIELDS.items():
+            for key, (declared, dtype) in STEP_FIELDS.items():
+                shape = world_shape if declared == (WORLD_WIDTH,) else declared
                 if key == "episode_ids":
                     values = np.repeat(np.arange(len(episodes), dtype=np.int64), lengths)
                 elif episodes:
@@ -174,6 +184,14 @@ def write_episodes(path: Path, episodes: Sequence[Episode], attrs: dict[str, Any
             tmp.unlink()
 
 
+def _world_width(f: h5py.File, path: Path) -> int:
+    """The world-state width a file declares (its ``world_fields`` attribute)."""
+    fields = f.attrs.get("world_fields")
+    if not isinstance(fields, str) or not fields:
+        raise DatasetError(f"{path}: missing attribute 'world_fields'")
+    return len(fields.split(","))
+
+
 def load_dataset(path: str | Path) -> Dataset:
     """Read and validate a data set file.
 
@@ -187,10 +205,11 @@ def load_dataset(path: str | Path) -> Dataset:
     try:
         with h5py.File(path, "r") as f:
             arrays: dict[str, np.ndarray] = {}
-            for key, (shape, _dtype) in STEP_FIELDS.items():
+            for key, (declared, _dtype) in STEP_FIELDS.items():
                 if key not in f:
                     raise DatasetError(f"{path}: missing field {key!r}")
                 arrays[key] = f[key][()]
+                shape = (_world_width(f, path),) if declared == (WORLD_WIDTH,) else declared
                 if arrays[key].shape[1:] != shape:
                     raise DatasetError(
                         f"{path}: field {key!r} has shape {arrays[key].shape}, expected "

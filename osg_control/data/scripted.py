@@ -14,10 +14,10 @@ from __future__ import annotations
 import numpy as np
 
 from osg_control.control.ik import quat_to_matrix, rotation_error
-from osg_control.kitchen.env import ACTION_BOUNDS, GRIPPER_CLOSED_CMD, GRIPPER_OPEN_CMD
-from osg_control.kitchen.skills import TOP_DOWN_QUAT, ScriptParams, SkillSpec
+from osg_control.domain.spec import TOP_DOWN_QUAT, ScriptParams, SkillSpec
+from osg_control.environment.arm_env import ACTION_BOUNDS, GRIPPER_CLOSED_CMD, GRIPPER_OPEN_CMD
 
-_TARGET_ROT = quat_to_matrix(np.array(TOP_DOWN_QUAT))
+_TOP_DOWN_ROT = quat_to_matrix(np.array(TOP_DOWN_QUAT))
 _NOISE_SCALE = np.concatenate([np.ones(3), np.full(3, ACTION_BOUNDS[3] / ACTION_BOUNDS[0])])
 
 
@@ -35,6 +35,10 @@ class ScriptedPolicy:
         budgets = [w.steps or self.params.steps_per_waypoint for w in skill.waypoints]
         self._ends = np.cumsum(budgets)
         """The step at which each waypoint's budget ends."""
+        self._rotations = [
+            _TOP_DOWN_ROT if w.orientation is None else quat_to_matrix(np.array(w.orientation))
+            for w in skill.waypoints
+        ]
 
     def reset(self) -> None:
         """Draw this episode's threshold and restart at the first waypoint."""
@@ -48,7 +52,7 @@ class ScriptedPolicy:
         return self._step >= self._ends[-1]
 
     def __call__(self, obs: np.ndarray) -> np.ndarray:
-        """The noisy action for an observation (10-D, see ``osg_control.kitchen.env``)."""
+        """The noisy action for an observation (10-D, see ``osg_control.environment.arm_env``)."""
         index = min(
             int(np.searchsorted(self._ends, self._step, side="right")),
             len(self.skill.waypoints) - 1,
@@ -62,7 +66,7 @@ class ScriptedPolicy:
         if np.linalg.norm(position_error) > reach:
             action[:3] = _scale_into(position_error, ACTION_BOUNDS[0])
             action[3:6] = _scale_into(
-                rotation_error(quat_to_matrix(obs[3:7]), _TARGET_ROT), ACTION_BOUNDS[3]
+                rotation_error(quat_to_matrix(obs[3:7]), self._rotations[index]), ACTION_BOUNDS[3]
             )
         elif obs[7] != wanted:
             action[6] = wanted

@@ -1,7 +1,11 @@
-"""Evaluation: the paper's Table I (skills under observation noise) and Tables IV/V (tasks).
+"""Evaluation: the paper's Table I (skills under observation noise), Table III (reaching the
+graph) and Tables IV/V (tasks), for any domain.
 
 Episodes run in parallel workers; episode ``i`` of a cell draws its start from
-``SeedSequence([seed, cell, i])``, so the tables do not depend on the number of workers.
+``SeedSequence([skill_seed(seed, NAME), k, i])`` where NAME is the cell's skill or task and
+``k`` its noise level or start region, so the tables depend neither on the number of
+workers nor on which other skills or tasks a domain has. Workers find the domain by name
+(``osg_control.domain.registry``).
 """
 
 from __future__ import annotations
@@ -16,25 +20,16 @@ import numpy as np
 
 from osg_control.control.estimator import FilteredPolicy
 from osg_control.data.collect import LocalExecutor, run_scripted_episode
-from osg_control.kitchen.env import EnvConfig, KitchenEnv
-from osg_control.kitchen.skills import NODES, SKILLS, SKILLS_BY_NAME, get_skill, nearest_start
-from osg_control.kitchen.tasks import TASKS_BY_NAME, get_task
+from osg_control.domain.base import Domain
+from osg_control.domain.registry import get_domain
+from osg_control.domain.spec import nearest_start
+from osg_control.environment.arm_env import ArmEnv, EnvConfig
+from osg_control.seeding import skill_seed
 
-START_NODES: tuple[str, ...] = ("home", "above-cube", "door-front", "cabinet-front")
 
-
-def start_regions() -> list[tuple[str, tuple[float, float, float]]]:
-    """The 8 start states: the 4 movement-skill endpoints and the midpoints of the 4 longest
-    movement edges (far from every node), as in the paper's Table III."""
-    regions = [(name, NODES[name].position) for name in START_NODES]
-    edges = sorted(
-        {tuple(sorted((s.start, s.end))) for s in SKILLS if s.kind == "movement"},
-        key=lambda e: -np.linalg.norm(np.subtract(NODES[e[0]].position, NODES[e[1]].position)),
-    )
-    for a, b in edges[:4]:
-        mid = tuple((np.asarray(NODES[a].position) + NODES[b].position) / 2)
-        regions.append((f"mid({a},{b})", (float(mid[0]), float(mid[1]), float(mid[2]))))
-    return regions
+def _rng(seed: int, name: str, cell: int, index: int) -> np.random.Generator:
+    """The generator of episode ``index`` of the cell (``name``, ``cell``)."""
+    return np.random.default_rng(np.random.SeedSequence([skill_seed(seed, name), cell, index]))
 
 
 @cache
@@ -45,14 +40,16 @@ def _policies(directory: str) -> dict[str, Any]:
 
 
 @cache
-def _env(skill: str, noise: float) -> KitchenEnv:
-    return KitchenEnv(skill=skill, config=EnvConfig(obs_noise_std=noise))
+def _env(domain: str, skill: str, noise: float) -> ArmEnv:
+    spec = get_domain(domain).skill(skill)
+    return get_domain(domain).make_env(skill=spec, config=EnvConfig(obs_noise_std=noise))
 
 
 @dataclass(frozen=True)
 class SkillEpisode:
     """One learned-skill evaluation episode."""
 
+    domain: str
     skill: str
     policy_dir: str
     noise: float
@@ -64,12 +61,12 @@ class SkillEpisode:
 
 def run_skill_episode(task: SkillEpisode) -> bool:
     """Run a learned skill from a random start in its initiation region; True on success."""
-    skill = get_skill(task.skill)
+    skill = get_domain(task.domain).skill(task.skill)
     policy: Callable[[np.ndarray], np.ndarray] = _policies(task.policy_dir)[task.skill]
     if task.filter_gain is not None:
         policy = FilteredPolicy(policy, task.filter_gain)
-    env = _env(task.skill, task.noise)
-    rng = np.random.default_rng(np.random.SeedSequence([task.seed, task.cell, task.index]))
+    env = _env(task.domain, task.skill, task.noise)
+    rng = _rng(task.seed, task.skill, task.cell, task.index)
     obs, _ = env.reset(
         seed=int(rng.integers(2**31)),
         options={"radius": skill.start_radius, "angle": skill.start_angle},
@@ -81,11 +78,13 @@ def run_skill_episode(task: SkillEpisode) -> bool:
     return False
 
 
-def _scripted_success(task: tuple[str, int, int]) -> bool:
-    return run_scripted_episode(get_skill(task[0]), task[1], task[2]).success
+def _scripted_success(task: tuple[str, str, int, int]) -> bool:
+    domain = get_domain(task[0])
+    return run_scripted_episode(domain, domain.skill(task[1]), task[2], task[3]).success
 
 
 def skill_table(
+    domain: Domain,
     policy_dir: str | Path,
     noise_levels: Sequence[float] = (0.0, 0.01, 0.02),
     episodes: int = 200,
@@ -105,16 +104,21 @@ def skill_table(
         ``{"noise": [...], "episodes": N, "filter_gain": g, "rows": [{"skill",
         "rates": [...], "scripted": rate}]}``.
     """
-    names = list(skills or SKILLS_BY_NAME)
+    names = list(skills or domain.skills_by_name)
+    for name in names:
+        domain.skill(name)
     executor = LocalExecutor(workers)
     tasks = [
-        SkillEpisode(name, str(policy_dir), float(noise), seed, cell, index, filter_gain)
-        for cell, (name, noise) in enumerate((n, s) for n in names for s in noise_levels)
-        for index in range(episodes)
+        SkillEpisode(domain.name, name, str(policy_dir), float(noise), seed, k, i, filter_gain)
+        for name in names
+        for k, noise in enumerate(noise_levels)
+        for i in range(episodes)
     ]
     outcomes = np.array(list(executor.map(run_skill_episode, tasks)), dtype=float)
     rates = outcomes.reshape(len(names), len(noise_levels), episodes).mean(axis=2)
-    scripted_tasks = [(n, seed + 1, i) for n in names for i in range(scripted_episodes)]
+    scripted_tasks = [
+        (domain.name, n, seed + 1, i) for n in names for i in range(scripted_episodes)
+    ]
     scripted = np.array(list(executor.map(_scripted_success, scripted_tasks)), dtype=float)
     scripted_rates = scripted.reshape(len(names), scripted_episodes).mean(axis=1)
     return {
@@ -152,21 +156,26 @@ def format_skill_table(table: dict[str, Any]) -> str:
 
 
 @cache
-def _executor(models: str | None, max_replans: int, filter_gain: float | None) -> Any:
+def _executor(domain: str, models: str | None, max_replans: int, filter_gain: float | None) -> Any:
     from osg_control.execution.executor import load_executor
 
-    return load_executor(models, max_replans=max_replans, filter_gain=filter_gain)
+    return load_executor(
+        get_domain(domain), models, max_replans=max_replans, filter_gain=filter_gain
+    )
 
 
 @cache
-def _plain_env(noise: float) -> KitchenEnv:
-    return KitchenEnv(config=EnvConfig(obs_noise_std=noise))
+def _plain_env(domain: str, noise: float) -> ArmEnv:
+    return get_domain(domain).make_env(config=EnvConfig(obs_noise_std=noise))
 
 
 @dataclass(frozen=True)
 class StartEpisode:
-    """One episode from a random start in one of the 8 start regions."""
+    """One episode from a random start in one of a domain's start regions; ``name`` is the
+    cell's skill or task (its seeds derive from it)."""
 
+    domain: str
+    name: str
     models: str | None
     region: int
     noise: float
@@ -175,17 +184,17 @@ class StartEpisode:
     index: int
 
 
-def _reset_in_region(env: KitchenEnv, task: StartEpisode, door: float = 0.0) -> np.ndarray:
-    rng = np.random.default_rng(np.random.SeedSequence([task.seed, task.cell, task.index]))
-    _name, position = start_regions()[task.region]
+def _reset_in_region(env: ArmEnv, task: StartEpisode, facts: Sequence[str]) -> np.ndarray:
+    rng = _rng(task.seed, task.name, task.cell, task.index)
+    region = get_domain(task.domain).start_regions[task.region]
     obs, _ = env.reset(
         seed=int(rng.integers(2**31)),
         options={
-            "position": position,
-            "radius": 0.15,
-            "angle": 0.2,
+            "position": region.position,
+            "radius": region.radius,
+            "angle": region.angle,
             "gripper": "open",
-            "world": {"door_opening": door},
+            "facts": tuple(facts),
         },
     )
     return obs
@@ -198,49 +207,56 @@ def run_reach_episode(task: StartEpisode) -> tuple[bool, bool, bool]:
         (success, whether the start lay outside the chosen skill's initiation region,
         success of the nearest-start-node baseline from the same start).
     """
-    executor = _executor(task.models, 0, None)
-    env = _plain_env(task.noise)
+    domain = get_domain(task.domain)
+    executor = _executor(task.domain, task.models, 0, None)
+    env = _plain_env(task.domain, task.noise)
+    region = domain.start_regions[task.region]
     outcomes = []
     outside = False
     for chooser in ("classifier", "nearest"):
-        # Door open: every movement skill's path is then clear of the handle.
-        obs = _reset_in_region(env, task, door=0.40)
+        # In the region's facts (e.g. a world where every movement skill's path is clear).
+        obs = _reset_in_region(env, task, region.facts)
         if chooser == "classifier":
-            name = str(executor.classifier.predict(obs))
-            skill = SKILLS_BY_NAME[name]
-            distance = np.linalg.norm(env.tcp_pose()[0] - np.asarray(skill.start_node.position))
-            outside = bool(distance > skill.start_radius)
+            skill = domain.skill(str(executor.classifier.predict(obs)))
+            start = np.asarray(domain.nodes[skill.start].position)
+            outside = bool(np.linalg.norm(env.tcp_pose()[0] - start) > skill.start_radius)
         else:
-            name = nearest_start_skill(env.tcp_pose()[0])
-        outcome, _ = executor.run_skill(env, SKILLS_BY_NAME[name], obs)
+            skill = domain.skill(nearest_start_skill(domain, env.tcp_pose()[0]))
+        outcome, _ = executor.run_skill(env, skill, obs)
         outcomes.append(outcome.success)
     return outcomes[0], outside, outcomes[1]
 
 
-def nearest_start_skill(position: np.ndarray) -> str:
+def nearest_start_skill(domain: Domain, position: np.ndarray) -> str:
     """The movement skill whose start node is nearest to a TCP position (the baseline)."""
-    return nearest_start((s for s in SKILLS if s.kind == "movement"), position).name
+    return nearest_start(domain.movement_skills, domain.nodes, position).name
 
 
 def reach_table(
+    domain: Domain,
     models: str | None = None,
     episodes: int = 200,
     seed: int = 0,
     workers: int = 2,
     noise: float = 0.0,
 ) -> dict[str, Any]:
-    """Table III: entry-skill success from random starts around the 8 start regions."""
-    regions = start_regions()
+    """Table III: entry-skill success from random starts around the domain's start regions."""
+    regions = domain.start_regions
     tasks = [
-        StartEpisode(models, r, noise, seed, r, i)
+        StartEpisode(domain.name, "reach", models, r, noise, seed, r, i)
         for r in range(len(regions))
         for i in range(episodes)
     ]
     results = np.array(list(LocalExecutor(workers).map(run_reach_episode, tasks)), dtype=float)
     results = results.reshape(len(regions), episodes, 3).mean(axis=1)
     rows = [
-        {"start": name, "success": r[0], "outside_initiation": r[1], "nearest_node_success": r[2]}
-        for (name, _), r in zip(regions, results.tolist(), strict=True)
+        {
+            "start": region.name,
+            "success": r[0],
+            "outside_initiation": r[1],
+            "nearest_node_success": r[2],
+        }
+        for region, r in zip(regions, results.tolist(), strict=True)
     ]
     return {
         "episodes": episodes,
@@ -281,33 +297,37 @@ class TaskEpisode:
 
 def run_task_episode(episode: TaskEpisode) -> bool:
     """Tables IV/V: run the executor on a task from a random start; True on success."""
-    task = get_task(episode.task)
-    env = _plain_env(episode.start.noise)
-    obs = _reset_in_region(env, episode.start, door=task.door_opening)
-    executor = _executor(episode.start.models, episode.max_replans, episode.filter_gain)
+    start = episode.start
+    domain = get_domain(start.domain)
+    task = domain.task(episode.task)
+    env = _plain_env(start.domain, start.noise)
+    obs = _reset_in_region(env, start, domain.task_world(task))
+    executor = _executor(start.domain, start.models, episode.max_replans, episode.filter_gain)
     return bool(executor.execute(task.goal, env, obs).success)
 
 
 def task_table(
+    domain: Domain,
     models: str | None = None,
     episodes: int = 100,
     seed: int = 0,
     workers: int = 2,
     noise: float = 0.02,
-    tasks: Sequence[str] = tuple(TASKS_BY_NAME),
+    tasks: Sequence[str] | None = None,
     replans: Sequence[int] = (0, 2),
     filter_gain: float | None = None,
 ) -> dict[str, Any]:
     """Tables IV and V: task success per start region, without and with replanning.
 
-    ``filter_gain``: the executor's ``TcpFilter`` gain (None: raw observations).
+    ``tasks``: task names (default: all the domain's); ``filter_gain``: the executor's
+    ``TcpFilter`` gain (None: raw observations).
     """
-    regions = start_regions()
+    regions = domain.start_regions
+    tasks = [domain.task(t).name for t in (tasks or [t.name for t in domain.tasks])]
     cells = [(t, r, k) for k in replans for t in tasks for r in range(len(regions))]
     jobs = [
-        TaskEpisode(StartEpisode(models, r, noise, seed, 100 + ti * 10 + r, i), t, k, filter_gain)
+        TaskEpisode(StartEpisode(domain.name, t, models, r, noise, seed, r, i), t, k, filter_gain)
         for (t, r, k) in cells
-        for ti in [list(tasks).index(t)]
         for i in range(episodes)
     ]
     outcomes = np.array(list(LocalExecutor(workers).map(run_task_episode, jobs)), dtype=float)
@@ -317,7 +337,7 @@ def task_table(
         "seed": seed,
         "noise": noise,
         "filter_gain": filter_gain,
-        "regions": [name for name, _ in regions],
+        "regions": [region.name for region in regions],
         "tasks": list(tasks),
         "replans": list(replans),
         "rates": rates.tolist(),

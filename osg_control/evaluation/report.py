@@ -3,36 +3,14 @@
 from __future__ import annotations
 
 import json
+from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
 
-PAPER_TABLE_I = dict(
-    zip(
-        (
-            "move-home-to-cube", "move-cube-to-home", "move-home-to-door", "move-door-to-home",
-            "move-cabinet-to-cube", "move-cabinet-to-home", "grab-handle", "slide-door-open",
-            "grab-cube", "pick-up-cube", "move-cube-to-cabinet", "place-cube-in-cabinet",
-        ),
-        (
-            (1.0, 1.0, 1.0), (1.0, 1.0, 1.0), (1.0, 1.0, 1.0), (1.0, 1.0, 1.0), (1.0, 1.0, 1.0),
-            (1.0, 0.99, 0.99), (0.96, 0.96, 0.83), (1.0, 0.94, 0.28), (1.0, 1.0, 1.0),
-            (1.0, 1.0, 1.0), (0.99, 0.98, 0.98), (0.95, 0.77, 0.65),
-        ),
-        strict=True,
-    )
-)  # fmt: skip
-"""Table I of the paper at sigma = 0, 1 cm, 2 cm, by skill. Its slide and place skills
-included the release that this project splits off (``release-handle``, ``release-cube``)."""
-PAPER_TABLE_II = {"accuracy": 0.84, "corrected_accuracy": 0.927}
-PAPER_TABLE_III = [0.96, 0.96, 1.0, 0.97, 1.0, 1.0, 1.0, 1.0]
-PAPER_TASK_AVERAGES = {
-    "pick-up": 0.92,
-    "open-door": 0.84,
-    "open-pick-up": 0.85,
-    "pick-up-place": 0.82,
-    "open-pick-up-place": 0.78,
-}
-"""Averages of the paper's Tables IV and V."""
+PUBLISHED_KEYS = ("table_i", "table_ii", "table_iii", "task_averages")
+"""What a domain's ``published`` figures may hold: Table I rates per skill (one per noise
+level), Table II's accuracies, Table III's rates per start region, Tables IV/V's averages
+per task. Missing keys print as blanks."""
 
 
 def _md_table(header: list[str], rows: list[list[Any]]) -> list[str]:
@@ -43,8 +21,14 @@ def _md_table(header: list[str], rows: list[list[Any]]) -> list[str]:
     return lines
 
 
-def markdown(figures: dict[str, Any]) -> str:
-    """The report as Markdown: every table that was computed, beside the paper's."""
+def markdown(figures: dict[str, Any], published: Mapping[str, Any] | None = None) -> str:
+    """The report as Markdown: every table that was computed, beside the published figures
+    of its domain (``Domain.published``, see ``PUBLISHED_KEYS``)."""
+    published = published or {}
+    paper_i = published.get("table_i", {})
+    paper_ii = published.get("table_ii", {})
+    paper_iii = list(published.get("table_iii", ()))
+    paper_tasks = published.get("task_averages", {})
     out = ["# osg-control reproduction report", ""]
     out += [f"- {k}: {v}" for k, v in figures.get("run", {}).items()]
     out.append("")
@@ -65,7 +49,7 @@ def markdown(figures: dict[str, Any]) -> str:
                 r["skill"],
                 *r["rates"],
                 r["scripted"],
-                "/".join(map(str, PAPER_TABLE_I.get(r["skill"], ()))) or "(split off)",
+                "/".join(map(str, paper_i.get(r["skill"], ()))) or "—",
             ]
             for i, r in enumerate(t["rows"])
         ]
@@ -77,21 +61,28 @@ def markdown(figures: dict[str, Any]) -> str:
         out += _md_table(
             ["metric", "ours", "paper"],
             [
-                ["accuracy", t["accuracy"], PAPER_TABLE_II["accuracy"]],
+                ["accuracy", t["accuracy"], paper_ii.get("accuracy", "—")],
                 [
                     "corrected accuracy",
                     t["corrected_accuracy"],
-                    PAPER_TABLE_II["corrected_accuracy"],
+                    paper_ii.get("corrected_accuracy", "—"),
                 ],
             ],
         ) + [""]
     if "table_iii" in figures:
         t = figures["table_iii"]
         rows = [
-            [i + 1, r["start"], r["success"], r["nearest_node_success"], PAPER_TABLE_III[i]]
+            [
+                i + 1,
+                r["start"],
+                r["success"],
+                r["nearest_node_success"],
+                paper_iii[i] if i < len(paper_iii) else "—",
+            ]
             for i, r in enumerate(t["rows"])
         ]
-        rows.append(["", "average", t["average"], t["nearest_node_average"], 0.99])
+        paper_average = sum(paper_iii) / len(paper_iii) if paper_iii else "—"
+        rows.append(["", "average", t["average"], t["nearest_node_average"], paper_average])
         out += [f"## Table III: reaching the graph ({t['episodes']} episodes/start)", ""]
         out += _md_table(["#", "start", "classifier", "nearest node", "paper"], rows) + [""]
     if "tables_iv_v" in figures:
@@ -103,7 +94,7 @@ def markdown(figures: dict[str, Any]) -> str:
                 for r, region in enumerate(t["regions"])
             ]
             rows.append(["", "average", *t["averages"][k]])
-            rows.append(["", "paper average", *[PAPER_TASK_AVERAGES[x] for x in t["tasks"]]])
+            rows.append(["", "paper average", *[paper_tasks.get(x, "—") for x in t["tasks"]]])
             out += _md_table(["#", "start", *t["tasks"]], rows) + [""]
     return "\n".join(out)
 
@@ -145,9 +136,11 @@ def bar_plots(figures: dict[str, Any], out_dir: Path) -> list[Path]:
     return written
 
 
-def write_report(figures: dict[str, Any], out_dir: Path) -> list[Path]:
+def write_report(
+    figures: dict[str, Any], out_dir: Path, published: Mapping[str, Any] | None = None
+) -> list[Path]:
     """Write ``report.md``, ``figures.json`` and the plots into ``out_dir``."""
     out_dir.mkdir(parents=True, exist_ok=True)
     (out_dir / "figures.json").write_text(json.dumps(figures, indent=2))
-    (out_dir / "report.md").write_text(markdown(figures))
+    (out_dir / "report.md").write_text(markdown(figures, published))
     return [out_dir / "report.md", out_dir / "figures.json", *bar_plots(figures, out_dir)]

@@ -5,12 +5,13 @@ world facts) and the env's current state:
 
 1. if the TCP is on a graph node, plan from it; if it is part-way along a manipulation
    skill's path (an interrupted skill), that skill is the entry; otherwise the classifier
-   picks the entry (movement) skill among those whose data was recorded in the current
-   door state. The planner plans from the entry's termination node;
+   picks the entry (movement) skill among those whose recorded start facts
+   (``SkillSpec.start_facts``) hold now. The planner plans from the entry's termination
+   node, over the skill graph's costs (``round(-ln p * 1000)`` of the measured rates);
 2. each option runs its policy until its termination condition beta holds (the skill's
-   success predicate), its step budget runs out, or the grasp it relies on is lost for
-   ``GRASP_GRACE_STEPS`` steps (the cube slipped out of the gripper); the joints are reset
-   between skills;
+   success predicate), its step budget runs out, or a precondition it keeps and the domain
+   watches (``Domain.watched_facts``, e.g. a grasp) is lost for ``GRASP_GRACE_STEPS``
+   steps; the joints are reset between skills;
 3. on a failure (timeout, lost grasp, or the expected effect missing from the world
    state) the state is re-read, re-classified and re-planned, up to ``max_replans`` times.
 """
@@ -26,21 +27,18 @@ from typing import Any, Protocol
 import numpy as np
 
 from osg_control.control.estimator import TcpTracker
-from osg_control.kitchen.env import GRIPPER_OPEN_CMD, KitchenEnv, world_facts
-from osg_control.kitchen.skills import NODES, SKILLS_BY_NAME, SkillSpec, nearest_start
-from osg_control.planning.api import plan_for_goal
+from osg_control.domain.base import Domain
+from osg_control.domain.spec import SkillSpec, nearest_start
+from osg_control.environment.arm_env import GRIPPER_OPEN_CMD, ArmEnv
+from osg_control.planning.api import graph_domain, plan_for_goal
+from osg_control.planning.graph import SkillGraph
 
 RESULT_SCHEMA_VERSION = 1
 NODE_TOLERANCE = 0.02
 """TCP distance [m] within which the robot counts as on a graph node or a skill's path."""
-WATCHED_FACTS = frozenset({"holding-cube"})
-"""Preconditions watched while a skill that keeps them runs; losing one stops the skill. In
-the offline data the cube's grasp holds on every step of pick-up-cube and
-move-cube-to-cabinet and drops out for at most 3 steps in place-cube-in-cabinet, so a loss
-means a dropped cube. holding-handle is not watched: the slide pushes the handle with one
-finger, so the both-finger contact is off on 94 % of its steps."""
 GRASP_GRACE_STEPS = 5
-"""Steps a watched fact may be false before the skill is stopped (above the data's 3)."""
+"""Steps a watched fact may be false before the skill is stopped (a grasp's contact may
+flicker for a few steps in the offline data)."""
 
 
 class Policy(Protocol):
@@ -92,17 +90,17 @@ class ExecutionResult:
         return {"schema_version": RESULT_SCHEMA_VERSION, **asdict(self)}
 
 
-def node_at(obs: np.ndarray, facts: Iterable[str]) -> str | None:
+def node_at(domain: Domain, obs: np.ndarray, facts: Iterable[str]) -> str | None:
     """The graph node the TCP is on (within ``NODE_TOLERANCE``, gripper matching), if any.
 
-    A node reached only while holding something (e.g. ``cube-lifted``) counts only when the
-    gripper is closed; empty-handed nodes only when the hand is empty.
+    A node reached only while holding something counts only when the gripper is closed;
+    empty-handed nodes only when the hand is empty (the domain's ``hand_empty`` fact).
     """
     facts = set(facts)
     gripper = "open" if obs[7] == GRIPPER_OPEN_CMD else "closed"
     best, best_distance = None, NODE_TOLERANCE
-    for node in NODES.values():
-        if node.gripper != gripper or (gripper == "open") != ("hand-empty" in facts):
+    for node in domain.nodes.values():
+        if node.gripper != gripper or (gripper == "open") != (domain.hand_empty in facts):
             continue
         distance = float(np.linalg.norm(obs[:3] - np.asarray(node.position)))
         if distance <= best_distance:
@@ -111,10 +109,9 @@ def node_at(obs: np.ndarray, facts: Iterable[str]) -> str | None:
 
 
 def recorded_world_holds(skill: SkillSpec, facts: Iterable[str]) -> bool:
-    """Whether the world a skill's data was recorded in holds now: the skills recorded with
-    the door open (``start_door_opening`` > 0) need door-open. From near the closed door,
-    move-cabinet-to-cube's path (via ``skills.CABINET_CLEAR``) runs into the handle."""
-    return skill.start_door_opening == 0.0 or "door-open" in set(facts)
+    """Whether the world a skill's data was recorded in holds now: its ``start_facts`` (a
+    skill recorded only in some world may run into what differs elsewhere)."""
+    return skill.start_facts <= set(facts)
 
 
 def _segment_distance(point: np.ndarray, a: np.ndarray, b: np.ndarray) -> float:
@@ -125,24 +122,27 @@ def _segment_distance(point: np.ndarray, a: np.ndarray, b: np.ndarray) -> float:
     return float(np.linalg.norm(point - (a + t * span)))
 
 
-def skill_on_path(obs: np.ndarray, facts: Iterable[str], skills: Iterable[SkillSpec]) -> str | None:
+def skill_on_path(
+    domain: Domain, obs: np.ndarray, facts: Iterable[str], skills: Iterable[SkillSpec]
+) -> str | None:
     """The applicable manipulation skill whose scripted path the TCP is on, if any.
 
     A skill's path runs from its start node through its waypoints; on each leg the gripper
     is in the state it had on leaving (it switches only at a waypoint). Algorithm 1's data
     follows that path, so a state within ``NODE_TOLERANCE`` of a leg with the gripper
     matching is one the skill's policy was trained on: the skill can carry on from there
-    (e.g. grab-cube after the cube slipped out at the grasp). Movement skills are left to
-    the classifier: their legs are shared by both directions of travel.
+    (e.g. a grasp retried after the object slipped out). Movement skills are left to the
+    classifier: their legs are shared by both directions of travel.
     """
     facts = set(facts)
     gripper = "open" if obs[7] == GRIPPER_OPEN_CMD else "closed"
     position = np.asarray(obs[:3], dtype=float)
     best, best_distance = None, NODE_TOLERANCE
     for skill in skills:
-        if skill.kind == "movement" or not skill.preconditions <= facts:
+        if skill.is_movement or not skill.preconditions <= facts:
             continue
-        stops = [(skill.start_node.position, skill.start_node.gripper)]
+        start_node = domain.nodes[skill.start]
+        stops = [(start_node.position, start_node.gripper)]
         stops += [(w.position, w.gripper) for w in skill.waypoints]
         for (start, leg_gripper), (end, _) in zip(stops, stops[1:], strict=False):
             if leg_gripper != gripper:
@@ -154,9 +154,10 @@ def skill_on_path(obs: np.ndarray, facts: Iterable[str], skills: Iterable[SkillS
 
 
 class Executor:
-    """Classify, plan and run options on a ``KitchenEnv``.
+    """Classify, plan and run options on a domain's env.
 
     Args:
+        domain: the domain (nodes, skills, facts, watched facts).
         policies: skill name -> policy (e.g. ``policy.load_policies(dir)``).
         classifier: the state->skill classifier for starts off the graph.
         planner: a planner registry name (``"astar"`` default).
@@ -166,27 +167,35 @@ class Executor:
             with this gain, carried across the skills of an execution), and locate the
             robot on the graph from it; None uses the raw observation (the paper's
             protocol).
+        graph: the skill graph whose costs plans minimise (e.g. with the measured success
+            rates); default: the domain's specs at uniform cost.
     """
 
     def __init__(
         self,
+        domain: Domain,
         policies: Mapping[str, Policy],
         classifier: EntryClassifier,
         planner: str = "astar",
         max_replans: int = 2,
         reset_joints: bool = True,
         filter_gain: float | None = None,
+        graph: SkillGraph | None = None,
     ) -> None:
-        missing = sorted(set(SKILLS_BY_NAME) - set(policies))
+        missing = sorted(set(domain.skills_by_name) - set(policies))
         if missing:
-            raise ValueError(f"no policy for skills {missing}")
+            raise ValueError(f"domain {domain.name!r}: no policy for skills {missing}")
+        self.domain = domain
+        self.skills = domain.skills_by_name
+        self.graph = graph
+        self._pddl = graph_domain(domain, graph)
         self.policies = policies
         self.classifier = classifier
         self.planner = planner
         self.max_replans = max_replans
         self.reset_joints = reset_joints
         self.filter_gain = filter_gain
-        self.on_step: Callable[[KitchenEnv], Any] | None = None
+        self.on_step: Callable[[ArmEnv], Any] | None = None
         """Called after every env step (e.g. to record video frames)."""
 
     def plan(
@@ -198,53 +207,56 @@ class Executor:
             ``(entry skill or None, plan, planner result)``.
         """
         facts = set(facts)
-        node = node_at(obs, facts)
+        node = node_at(self.domain, obs, facts)
         entry = None
         if node is None:
             entry = self._entry_skill(obs, facts)
-            skill = SKILLS_BY_NAME[entry]
+            skill = self.skills[entry]
             node = skill.end
             facts = (facts - skill.del_effects) | skill.add_effects
-        result = plan_for_goal(list(goal), node, sorted(facts), self.planner)
+        result = plan_for_goal(
+            self.domain, list(goal), node, sorted(facts), self.planner, pddl=self._pddl
+        )
         return entry, list(result.actions), result
 
     def _entry_skill(self, obs: np.ndarray, facts: set[str]) -> str:
         """Off the graph: the manipulation skill whose path the TCP is on; else the
         classifier's movement skill when the hand is empty; else the applicable skill whose
         start node is nearest (retry from where it failed)."""
-        on_path = skill_on_path(obs, facts, SKILLS_BY_NAME.values())
+        on_path = skill_on_path(self.domain, obs, facts, self.skills.values())
         if on_path is not None:
             return on_path
-        if "hand-empty" in facts:
+        if self.domain.hand_empty in facts:
             return self._classify(obs, facts)
-        applicable = [s for s in SKILLS_BY_NAME.values() if s.preconditions <= facts]
-        return nearest_start(applicable or SKILLS_BY_NAME.values(), obs[:3]).name
+        applicable = [s for s in self.skills.values() if s.preconditions <= facts]
+        fallback = applicable or list(self.skills.values())
+        return nearest_start(fallback, self.domain.nodes, obs[:3]).name
 
     def _classify(self, obs: np.ndarray, facts: set[str]) -> str:
         """The classifier's likeliest movement skill among those whose recorded world holds
         (``recorded_world_holds``; all of them if none does)."""
         proba = np.asarray(self.classifier.predict_proba(obs), dtype=float)
         classes = self.classifier.classes
-        allowed = np.array([recorded_world_holds(SKILLS_BY_NAME[c], facts) for c in classes])
+        allowed = np.array([recorded_world_holds(self.skills[c], facts) for c in classes])
         if not allowed.any():
             allowed[:] = True
         return classes[int(np.argmax(np.where(allowed, proba, -np.inf)))]
 
     def run_skill(
         self,
-        env: KitchenEnv,
+        env: ArmEnv,
         skill: SkillSpec,
         obs: np.ndarray,
         tracker: TcpTracker | None = None,
     ) -> tuple[SkillOutcome, np.ndarray]:
         """Run one option until beta holds, its step budget runs out or it loses a watched
-        precondition (see ``WATCHED_FACTS``).
+        precondition (``Domain.watched_facts``).
 
         ``tracker``, if given, turns each observation into the policy's input; it reads
         every observation and is told every action of the skill.
         """
         policy = self.policies[skill.name]
-        watched = (skill.preconditions - skill.del_effects) & WATCHED_FACTS
+        watched = (skill.preconditions - skill.del_effects) & self.domain.watched_facts
         started = time.perf_counter()
         lost_steps = 0
         for step in range(1, skill.max_steps + 1):
@@ -261,7 +273,7 @@ class Executor:
                 ), obs
             if env.skill_success(skill):
                 return SkillOutcome(skill.name, True, step, time.perf_counter() - started), obs
-            lost = watched - world_facts(info["world"]) if watched else set()
+            lost = watched - env.facts_of(info["world"]) if watched else set()
             lost_steps = lost_steps + 1 if lost else 0
             if lost_steps >= GRASP_GRACE_STEPS:
                 return SkillOutcome(
@@ -279,11 +291,11 @@ class Executor:
             failure=f"timeout after {skill.max_steps} steps",
         ), obs
 
-    def execute(self, goal: Iterable[str], env: KitchenEnv, obs: np.ndarray) -> ExecutionResult:
+    def execute(self, goal: Iterable[str], env: ArmEnv, obs: np.ndarray) -> ExecutionResult:
         """Reach ``goal`` from the env's current state (``obs`` is its latest observation)."""
         goal = sorted(set(goal))
         started = time.perf_counter()
-        facts = world_facts(env.world_state())
+        facts = env.facts()
         result = ExecutionResult(goal=goal, success=False, entry_skill=None, plan=[])
         tracker = TcpTracker(self.filter_gain) if self.filter_gain is not None else None
         planning_time = 0.0
@@ -291,7 +303,7 @@ class Executor:
             if set(goal) <= facts:
                 result.success = True
                 break
-            if "hand-empty" in facts and obs[7] != GRIPPER_OPEN_CMD:
+            if self.domain.hand_empty in facts and obs[7] != GRIPPER_OPEN_CMD:
                 obs = _open_gripper(env)
             t0 = time.perf_counter()
             seen = obs if tracker is None else tracker.read(obs)
@@ -305,7 +317,7 @@ class Executor:
             obs, failed = self._run_sequence(
                 env, ([entry] if entry else []) + plan, obs, result, tracker
             )
-            facts = world_facts(env.world_state())
+            facts = env.facts()
             if not failed:
                 result.success = set(goal) <= facts
                 if not result.success:
@@ -327,7 +339,7 @@ class Executor:
 
     def _run_sequence(
         self,
-        env: KitchenEnv,
+        env: ArmEnv,
         sequence: list[str],
         obs: np.ndarray,
         result: ExecutionResult,
@@ -335,9 +347,9 @@ class Executor:
     ) -> tuple[np.ndarray, str | None]:
         """Run skills in order; stop at the first failure and return its reason."""
         for index, name in enumerate(sequence):
-            skill = SKILLS_BY_NAME[name]
+            skill = self.skills[name]
             outcome, obs = self.run_skill(env, skill, obs, tracker)
-            facts = world_facts(env.world_state())
+            facts = env.facts()
             if outcome.success and not (skill.add_effects <= facts):
                 outcome.success = False
                 outcome.failure = f"expected effects {sorted(skill.add_effects - facts)} missing"
@@ -352,7 +364,7 @@ class Executor:
         return obs, None
 
 
-def _open_gripper(env: KitchenEnv, steps: int = 5) -> np.ndarray:
+def _open_gripper(env: ArmEnv, steps: int = 5) -> np.ndarray:
     """Open an empty but closed gripper in place (recovery before a movement skill, whose
     termination needs it open)."""
     obs = env.observe()
@@ -361,9 +373,11 @@ def _open_gripper(env: KitchenEnv, steps: int = 5) -> np.ndarray:
     return obs
 
 
-def load_executor(directory: str | Path | None = None, **kwargs: Any) -> Executor:
-    """An executor with the policies and classifier of ``directory`` (default: shipped)."""
-    from osg_control.defaults import load_defaults
+def load_executor(domain: Domain, directory: str | Path | None = None, **kwargs: Any) -> Executor:
+    """An executor with the policies and classifier of ``directory`` (default: the domain's
+    shipped defaults), planning over the success rates its manifest records."""
+    from osg_control.execution.defaults import load_defaults
 
-    policies, classifier = load_defaults(directory)
-    return Executor(policies, classifier, **kwargs)
+    defaults = load_defaults(domain, directory)
+    kwargs.setdefault("graph", defaults.graph)
+    return Executor(domain, defaults.policies, defaults.classifier, **kwargs)

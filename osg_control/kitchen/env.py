@@ -1,102 +1,41 @@
-"""``KitchenEnv``: the Panda kitchen as a Gymnasium env with the paper's state and action.
+"""``KitchenEnv``: the kitchen scene around the Panda (``ArmEnv`` with the kitchen's world).
 
-Observation (10-D, robot base frame): ``[x, y, z, qw, qx, qy, qz, gripper command,
-grip force, finger distance]`` — TCP position [m], TCP orientation (``w, x, y, z``, sign
-chosen in the hemisphere of ``TOP_DOWN_QUAT`` so it is continuous over the task space),
-the latched gripper command (+1 open, -1 closed), the gripper actuator's force magnitude
-[N] and the distance between the fingers [m].
-
-Action (7-D): ``[dx, dy, dz, da, db, dg, g]`` — a relative TCP command (position [m],
-rotation vector [rad], base frame), each clipped to ``ACTION_BOUNDS``, and a gripper
-command: ``g < -0.5`` closes, ``g > 0.5`` opens, otherwise the gripper holds.
-
-The control rate is 20 Hz (25 physics steps of 2 ms). A differential-IK QP
-(``osg_control.control.ik``) turns each command into joint position targets within joint and
-velocity limits. With a ``skill``, the env gives the skill's sparse reward (1 on the step
-its success predicate first holds, which also terminates the episode).
+The world-state vector is ``scene.WORLD_FIELDS`` (door travel, valve angle, cube pose, which
+objects both fingers touch); its facts are ``scene.world_facts``. A start world is given by
+facts (``door-open`` slides the door to ``skills.DOOR_OPENED``) or explicitly with the
+``world`` reset option (``door_opening`` [m], ``cube_pos``); ``holding`` is ``"cube"`` or
+``"handle"``.
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
 from typing import Any
 
-import gymnasium as gym
 import mujoco
 import numpy as np
-from scipy.spatial.transform import Rotation
 
-from osg_control.control.ik import DiffIKController, IKConfig, joint_reset_controller, solve_ik
-from osg_control.control.robot import ARM_JOINTS, FINGER_JOINTS, FINGER_OPEN, HOME_Q, TCP_SITE
-from osg_control.errors import SimulationError
+from osg_control.domain.spec import SkillSpec
+from osg_control.environment.arm_env import ArmEnv, EnvConfig
+from osg_control.errors import SkillSpecError, lookup
 from osg_control.kitchen.scene import (
     CUBE_HALF_SIZE,
     SceneIndex,
     WorldState,
     build_kitchen_model,
     world_facts,
+    world_state_from_array,
 )
-from osg_control.kitchen.skills import NODES, TOP_DOWN_QUAT, SkillSpec, get_skill
+from osg_control.kitchen.skills import DOOR_OPENED, NODES, SKILLS_BY_NAME
 
-__all__ = ["ACTION_BOUNDS", "EnvConfig", "KitchenEnv", "world_facts"]
-
-OBS_DIM = 10
-ACTION_BOUNDS = np.array([0.02, 0.02, 0.02, 0.1, 0.1, 0.1, 1.0])
-"""Per-step bound of each action component: 2 cm, 0.1 rad, and the gripper's [-1, 1]."""
-CONTROL_HZ = 20.0
-GRIPPER_OPEN_CMD = 1.0
-GRIPPER_CLOSED_CMD = -1.0
 HANDLE_GRASP_SLACK = 0.015
 """How far along the handle fin [m] (x) a handle-holding start may grasp it: about the
 offset a grab under 2 cm observation noise ends with, so the slide's data covers it."""
-_TOP_DOWN = np.array(TOP_DOWN_QUAT)
-_TOP_DOWN_ROT = Rotation.from_quat(np.roll(_TOP_DOWN, -1))
-_DIVERGENCE_WARNINGS = (
-    mujoco.mjtWarning.mjWARN_BADQPOS,
-    mujoco.mjtWarning.mjWARN_BADQVEL,
-    mujoco.mjtWarning.mjWARN_BADQACC,
-)
+_FINGER_ON = {"cube": CUBE_HALF_SIZE - 0.0005, "handle": 0.0095}
+"""Finger joint position [m] with the fingers closed on the cube or the handle fin."""
 
 
-@dataclass(frozen=True)
-class EnvConfig:
-    """Options of ``KitchenEnv``.
-
-    Attributes:
-        obs_noise_std: Gaussian noise on the observed TCP position [m] (0 = none).
-        max_steps: episode step budget (truncation); a skill's own budget wins if set.
-        ik: the differential-IK controller's configuration.
-        start_radius: default random-start radius around the start pose [m].
-        start_angle: default random-start angle per axis [rad].
-    """
-
-    obs_noise_std: float = 0.0
-    max_steps: int = 200
-    ik: IKConfig = field(default_factory=IKConfig)
-    start_radius: float = 0.0
-    start_angle: float = 0.0
-
-
-def canonical_quat(quat_wxyz: np.ndarray) -> np.ndarray:
-    """Flip a quaternion's sign into the hemisphere of ``TOP_DOWN_QUAT``."""
-    return -quat_wxyz if float(np.dot(quat_wxyz, _TOP_DOWN)) < 0 else quat_wxyz
-
-
-def sample_start_pose(
-    rng: np.random.Generator, centre: np.ndarray, radius: float, angle: float
-) -> tuple[np.ndarray, np.ndarray]:
-    """A TCP pose uniform in a ball of ``radius`` [m] around ``centre`` and within ``angle``
-    [rad] per axis of the top-down orientation. Returns (position, rotation matrix)."""
-    direction = rng.normal(size=3)
-    direction /= np.linalg.norm(direction) + 1e-12
-    position = centre + direction * radius * rng.uniform() ** (1 / 3)
-    euler = rng.uniform(-angle, angle, size=3)
-    rot = Rotation.from_euler("xyz", euler) * _TOP_DOWN_ROT
-    return position, rot.as_matrix()
-
-
-class KitchenEnv(gym.Env):
-    """The kitchen with the Panda driven by relative TCP commands (see module docstring).
+class KitchenEnv(ArmEnv):
+    """The kitchen with the Panda driven by relative TCP commands (see ``ArmEnv``).
 
     Example:
         >>> env = KitchenEnv(skill="move-home-to-cube")
@@ -104,329 +43,81 @@ class KitchenEnv(gym.Env):
         >>> obs, reward, terminated, truncated, info = env.step(env.action_space.sample())
     """
 
-    metadata = {"render_modes": ["rgb_array"], "render_fps": int(CONTROL_HZ)}
-
     def __init__(
         self,
         skill: str | SkillSpec | None = None,
         config: EnvConfig | None = None,
         render_mode: str | None = None,
     ) -> None:
-        self.config = config or EnvConfig()
-        self.skill = get_skill(skill) if isinstance(skill, str) else skill
-        self.render_mode = render_mode
-        self.model = build_kitchen_model()
-        self.data = mujoco.MjData(self.model)
-        self.scene = SceneIndex(self.model)
-        self.ik = DiffIKController(self.config.ik)
-        self._reset_ik: DiffIKController | None = None
-        self.n_substeps = round(1.0 / (CONTROL_HZ * self.model.opt.timestep))
-        self._arm_qpos = np.array([self.model.joint(j).qposadr[0] for j in ARM_JOINTS])
-        self._arm_dof = np.array([self.model.joint(j).dofadr[0] for j in ARM_JOINTS])
-        self._arm_act = np.array([self.model.actuator(j).id for j in ARM_JOINTS])
-        self._finger_qpos = np.array([self.model.joint(j).qposadr[0] for j in FINGER_JOINTS])
-        self._gripper_act = self.model.actuator("gripper").id
-        self._tcp = self.model.site(TCP_SITE).id
-        self._robot_bodies = {
-            b for b in range(self.model.nbody) if self.model.body(b).name.startswith("panda_")
-        }
-        self.observation_space = gym.spaces.Box(-np.inf, np.inf, (OBS_DIM,), np.float64)
-        self.action_space = gym.spaces.Box(-ACTION_BOUNDS, ACTION_BOUNDS, (7,), np.float64)
-        self._gripper_cmd = GRIPPER_OPEN_CMD
-        self._steps = 0
-        self._succeeded = False
-        self._renderer: mujoco.Renderer | None = None
-
-    # ----------------------------------------------------------------- state
-    @property
-    def arm_q(self) -> np.ndarray:
-        """Current arm joint positions [rad] (a copy)."""
-        return self.data.qpos[self._arm_qpos].copy()
-
-    def tcp_pose(self) -> tuple[np.ndarray, np.ndarray]:
-        """True TCP position [m] and rotation matrix (no observation noise)."""
-        return (
-            self.data.site_xpos[self._tcp].copy(),
-            self.data.site_xmat[self._tcp].reshape(3, 3).copy(),
+        spec = (
+            lookup(SKILLS_BY_NAME, skill, "skill", SkillSpecError)
+            if isinstance(skill, str)
+            else skill
         )
+        super().__init__(NODES, "home", spec, config or EnvConfig(), render_mode)
+        self.scene = SceneIndex(self.model)
 
-    def world_state(self) -> WorldState:
-        """Door, valve, cube: facts for effects and evaluation, never policy input."""
+    def build_model(self) -> mujoco.MjModel:
+        """The kitchen with the Panda (``scene.build_kitchen_model``)."""
+        return build_kitchen_model()
+
+    def world(self) -> WorldState:
+        """The kitchen's world state as named fields (door, valve, cube, grasps)."""
         return self.scene.read(self.model, self.data)
 
-    def _true_obs(self) -> np.ndarray:
-        pos, _ = self.tcp_pose()
-        quat = np.zeros(4)
-        mujoco.mju_mat2Quat(quat, self.data.site_xmat[self._tcp])
-        fingers = self.data.qpos[self._finger_qpos]
-        force = abs(float(self.data.actuator_force[self._gripper_act]))
-        return np.concatenate(
-            [pos, canonical_quat(quat), [self._gripper_cmd, force, float(fingers.sum())]]
-        )
+    def read_world(self) -> np.ndarray:
+        """``scene.WORLD_FIELDS`` of the current state."""
+        return self.scene.read(self.model, self.data).as_array()
 
-    def observe(self) -> np.ndarray:
-        """The current observation (with the configured noise on the TCP position)."""
-        obs = self._true_obs()
-        if self.config.obs_noise_std > 0:
-            obs[:3] += self.np_random.normal(0.0, self.config.obs_noise_std, 3)
-        return obs
+    def facts_of(self, world: np.ndarray) -> frozenset[str]:
+        """``scene.world_facts`` of a world-state vector."""
+        return world_facts(world_state_from_array(world))
 
-    # ----------------------------------------------------------------- reset
-    def reset(
-        self, *, seed: int | None = None, options: dict[str, Any] | None = None
-    ) -> tuple[np.ndarray, dict[str, Any]]:
-        """Reset to a start state.
-
-        Args:
-            seed: seeds the env's generator (start-state sampling and observation noise).
-            options: ``node`` (a node name; default: the skill's start node, else home),
-                ``position`` (TCP centre [m], overrides the node's), ``radius`` [m] and
-                ``angle`` [rad] of the random start (defaults: the config's), ``gripper``
-                (``"open"``/``"closed"``), ``world`` (dict: ``door_opening`` [m],
-                ``cube_pos``), ``holding`` (``"cube"``, ``"handle"`` or ``None``; default
-                from the skill's preconditions).
-        """
-        super().reset(seed=seed)
-        options = dict(options or {})
-        node = NODES[options.get("node") or (self.skill.start if self.skill else "home")]
-        centre = np.asarray(options.get("position", node.position), dtype=float)
-        radius = float(options.get("radius", self.config.start_radius))
-        angle = float(options.get("angle", self.config.start_angle))
-        gripper = options.get("gripper", node.gripper)
-        holding = options.get("holding", self._default_holding())
-        world = dict(options.get("world", {}))
-        if self.skill is not None:
-            world.setdefault("door_opening", self.skill.start_door_opening)
-        for _attempt in range(50):
-            pos, rot = sample_start_pose(self.np_random, centre, radius, angle)
-            if holding == "handle":
-                pos, rot = self._snap_to_handle(pos, rot, world)
-            if self._place(pos, rot, gripper, holding, world):
-                break
-        else:
-            raise SimulationError(
-                f"no collision-free start found within {radius} m of {centre.tolist()}"
-            )
-        self._steps = 0
-        self._succeeded = False
-        return self.observe(), self._info()
-
-    def _default_holding(self) -> str | None:
-        if self.skill is None:
-            return None
-        if "holding-cube" in self.skill.preconditions:
-            return "cube"
-        if "holding-handle" in self.skill.preconditions:
-            return "handle"
-        return None
-
-    def _snap_to_handle(
-        self, pos: np.ndarray, rot: np.ndarray, world: dict[str, Any]
-    ) -> tuple[np.ndarray, np.ndarray]:
-        """Keep a handle-holding start physically consistent: the fin between the fingers,
-        anywhere within ``HANDLE_GRASP_SLACK`` of the nominal grasp along it."""
-        handle = NODES["handle"].position
-        door = float(world.get("door_opening", 0.0))
-        snapped = np.array([handle[0], handle[1] + door, pos[2]])
-        snapped[0] += np.clip(pos[0] - handle[0], -HANDLE_GRASP_SLACK, HANDLE_GRASP_SLACK)
-        return snapped, _TOP_DOWN_ROT.as_matrix()
-
-    def _place(
-        self,
-        pos: np.ndarray,
-        rot: np.ndarray,
-        gripper: str,
-        holding: str | None,
-        world: dict[str, Any],
-    ) -> bool:
-        """Teleport the arm (IK) and the world; return False if the start is in collision."""
-        mujoco.mj_resetDataKeyframe(self.model, self.data, self.model.key("home").id)
-        q, converged = solve_ik(self.ik, HOME_Q, pos, rot, iterations=300)
-        if not converged:
-            return False
-        self.data.qpos[self._arm_qpos] = q
-        self.data.ctrl[self._arm_act] = q
-        self.data.qpos[self.scene.door_qpos] = float(world.get("door_opening", 0.0))
+    def place_world(
+        self, world: dict[str, Any], facts: frozenset[str], holding: str | None
+    ) -> None:
+        """Slide the door (open if ``door-open`` is a start fact) and place the cube (in the
+        fingers when held)."""
+        default_door = DOOR_OPENED if "door-open" in facts else 0.0
+        self.data.qpos[self.scene.door_qpos] = float(world.get("door_opening", default_door))
         cube_pos = world.get("cube_pos")
-        closed = gripper == "closed"
-        finger = FINGER_OPEN
         if holding == "cube":
-            mujoco.mj_kinematics(self.model, self.data)
             cube_pos = self.data.site_xpos[self._tcp].copy()
-            finger = CUBE_HALF_SIZE - 0.0005
-            closed = True
-        elif holding == "handle":
-            finger = 0.0095
-            closed = True
         if cube_pos is not None:
             adr = self.scene.cube_qpos
             self.data.qpos[adr : adr + 3] = cube_pos
             self.data.qpos[adr + 3 : adr + 7] = (1.0, 0.0, 0.0, 0.0)
-        self.data.qpos[self._finger_qpos] = finger if (holding or not closed) else 0.0
-        self._gripper_cmd = GRIPPER_CLOSED_CMD if closed else GRIPPER_OPEN_CMD
-        self.data.ctrl[self._gripper_act] = 0.0 if closed else FINGER_OPEN
-        mujoco.mj_forward(self.model, self.data)
-        if self._robot_in_collision(allowed_geoms=self._held_geoms(holding)):
-            return False
-        self._settle(0.1)
-        return not self._robot_in_collision(allowed_geoms=self._held_geoms(holding))
 
-    def _held_geoms(self, holding: str | None) -> set[int]:
+    def snap_start(
+        self,
+        pos: np.ndarray,
+        rot: np.ndarray,
+        holding: str | None,
+        world: dict[str, Any],
+        facts: frozenset[str],
+    ) -> tuple[np.ndarray, np.ndarray]:
+        """A handle-holding start has the fin between the fingers, anywhere within
+        ``HANDLE_GRASP_SLACK`` of the nominal grasp along it."""
+        if holding != "handle":
+            return pos, rot
+        handle = NODES["handle"].position
+        door = float(world.get("door_opening", DOOR_OPENED if "door-open" in facts else 0.0))
+        snapped = np.array([handle[0], handle[1] + door, pos[2]])
+        snapped[0] += np.clip(pos[0] - handle[0], -HANDLE_GRASP_SLACK, HANDLE_GRASP_SLACK)
+        return snapped, _TOP_DOWN_MATRIX
+
+    def held_geoms(self, holding: str | None) -> set[int]:
+        """The cube's or the handle's geom."""
         if holding == "cube":
             return {self.scene.cube_geom}
         if holding == "handle":
             return {self.scene.handle_geom}
         return set()
 
-    def _robot_in_collision(self, allowed_geoms: set[int]) -> bool:
-        for contact in self.data.contact[: self.data.ncon]:
-            bodies = {self.model.geom_bodyid[contact.geom1], self.model.geom_bodyid[contact.geom2]}
-            robot = bodies & self._robot_bodies
-            if not robot or len(robot) == 2:
-                continue
-            if {contact.geom1, contact.geom2} & allowed_geoms:
-                continue
-            if contact.dist < -0.002:
-                return True
-        return False
+    def finger_opening(self, holding: str) -> float:
+        """Fingers closed on the cube or on the handle fin."""
+        return _FINGER_ON[holding]
 
-    def _settle(self, seconds: float) -> None:
-        """Let contacts settle with the arm servoed in place."""
-        for _ in range(round(seconds / self.model.opt.timestep)):
-            mujoco.mj_step(self.model, self.data)
 
-    # ----------------------------------------------------------------- step
-    def check_action(self, action: np.ndarray) -> np.ndarray:
-        """Validate an action (shape (7,), finite) and clip it to ``ACTION_BOUNDS``.
-
-        Raises:
-            ValueError: wrong shape or NaN/inf; nothing reaches the actuators.
-        """
-        action = np.asarray(action, dtype=float)
-        if action.shape != (7,):
-            raise ValueError(f"action must have shape (7,), got {action.shape}")
-        if not np.all(np.isfinite(action)):
-            raise ValueError(f"action must be finite, got {action.tolist()}")
-        return np.clip(action, -ACTION_BOUNDS, ACTION_BOUNDS)
-
-    def step(self, action: np.ndarray) -> tuple[np.ndarray, float, bool, bool, dict[str, Any]]:
-        """Apply one 50 ms control step (see module docstring)."""
-        action = self.check_action(action)
-        if action[6] < -0.5:
-            self._gripper_cmd = GRIPPER_CLOSED_CMD
-        elif action[6] > 0.5:
-            self._gripper_cmd = GRIPPER_OPEN_CMD
-        q_target = self.ik.relative_step(self.arm_q, action[:6])
-        self.data.ctrl[self._arm_act] = q_target
-        self.data.ctrl[self._gripper_act] = (
-            FINGER_OPEN if self._gripper_cmd == GRIPPER_OPEN_CMD else 0.0
-        )
-        failure = self._simulate()
-        self._steps += 1
-        world = self.world_state()
-        reward = 0.0
-        terminated = False
-        if failure is None and self.skill is not None and not self._succeeded:
-            if self.skill_success(world=world):
-                self._succeeded = True
-                reward = 1.0
-                terminated = True
-        if failure is not None:
-            terminated = True
-        budget = self.skill.max_steps if self.skill else self.config.max_steps
-        truncated = not terminated and self._steps >= budget
-        info = self._info(world)
-        info["action_applied"] = action
-        if failure is not None:
-            info["failure"] = failure
-        return self.observe(), reward, terminated, truncated, info
-
-    def _simulate(self) -> str | None:
-        """Run the physics substeps; return a failure reason if the simulation diverged."""
-        # MuJoCo resets the data (time back to 0) when it meets a bad qpos/qvel/qacc, so a
-        # divergence leaves a finite state behind: detect it by the warnings and the clock.
-        time_before = self.data.time
-        counts_before = [int(self.data.warning[w].number) for w in _DIVERGENCE_WARNINGS]
-        for _ in range(self.n_substeps):
-            mujoco.mj_step(self.model, self.data)
-        for warning, count in zip(_DIVERGENCE_WARNINGS, counts_before, strict=True):
-            if int(self.data.warning[warning].number) > count:
-                return f"physics diverged: MuJoCo reported {warning.name} and reset the state"
-        if self.data.time < time_before:
-            return "physics diverged: MuJoCo reset the state"
-        if not (np.all(np.isfinite(self.data.qpos)) and np.all(np.isfinite(self.data.qvel))):
-            return "physics diverged: non-finite joint state"
-        return None
-
-    def skill_success(
-        self, skill: SkillSpec | None = None, world: WorldState | None = None
-    ) -> bool:
-        """The success predicate: TCP within tolerance of beta, gripper state, world effect.
-
-        Args:
-            skill: the skill to check (default: the env's own).
-            world: the current world state, if the caller has read it already.
-        """
-        skill = skill or self.skill
-        if skill is None:
-            return False
-        pos, _ = self.tcp_pose()
-        end = skill.end_node
-        if np.linalg.norm(pos - np.asarray(end.position)) > skill.success_tolerance:
-            return False
-        wanted = GRIPPER_OPEN_CMD if end.gripper == "open" else GRIPPER_CLOSED_CMD
-        if self._gripper_cmd != wanted:
-            return False
-        facts = world_facts(world or self.world_state())
-        return skill.add_effects <= facts and not (skill.del_effects & facts)
-
-    def _info(self, world: WorldState | None = None) -> dict[str, Any]:
-        world = world or self.world_state()
-        return {
-            "world": world,
-            "world_facts": sorted(world_facts(world)),
-            "steps": self._steps,
-            "success": self._succeeded,
-            "arm_q": self.arm_q,
-        }
-
-    # ----------------------------------------------------------------- joint reset
-    def joint_reset(self, max_steps: int = 40, tolerance: float = 0.05) -> int:
-        """Drive the joints toward the home posture while the TCP holds its pose.
-
-        Null-space motion: the TCP pose is an equality constraint of the IK QP and the
-        posture task pulls toward ``IKConfig.posture``. Runs until every joint is within
-        ``tolerance`` [rad] of the posture or the posture error stops shrinking.
-
-        Returns:
-            The number of control steps used.
-        """
-        if self._reset_ik is None:
-            self._reset_ik = joint_reset_controller(self.config.ik)
-        pos, rot = self.tcp_pose()
-        posture = np.asarray(self.config.ik.posture)
-        previous = np.inf
-        for step in range(max_steps):
-            error = float(np.abs(self.arm_q - posture).max())
-            if error < tolerance or error > previous - 1e-4:
-                return step
-            previous = error
-            self.data.ctrl[self._arm_act] = self._reset_ik.reset_step(self.arm_q, pos, rot)
-            if self._simulate() is not None:
-                raise SimulationError("physics diverged during joint reset")
-        return max_steps
-
-    # ----------------------------------------------------------------- render
-    def render(self) -> np.ndarray | None:  # type: ignore[override]
-        """An RGB frame from the ``overview`` camera (needs an OpenGL context, e.g. EGL)."""
-        if self.render_mode != "rgb_array":
-            return None
-        if self._renderer is None:
-            self._renderer = mujoco.Renderer(self.model, height=480, width=640)
-        self._renderer.update_scene(self.data, camera="overview")
-        return np.asarray(self._renderer.render())
-
-    def close(self) -> None:
-        if self._renderer is not None:
-            self._renderer.close()
-            self._renderer = None
+_TOP_DOWN_MATRIX = np.diag([1.0, -1.0, -1.0])
+"""``TOP_DOWN_QUAT`` as a rotation matrix (a half turn about x)."""

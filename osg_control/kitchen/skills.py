@@ -11,33 +11,29 @@ All poses are TCP positions in the robot base frame [m] with the top-down orient
 
 from __future__ import annotations
 
-import json
-from collections.abc import Iterable, Mapping
-from dataclasses import asdict, dataclass, field, replace
-from typing import Any, Literal
+from collections.abc import Iterable
+from dataclasses import replace
 
 import numpy as np
 
+from osg_control.domain.spec import (
+    MOVEMENT,
+    TOP_DOWN_QUAT,
+    Gripper,
+    Node,
+    ScriptParams,
+    SkillSpec,
+    Waypoint,
+    check_skill_fields,
+)
+from osg_control.domain.spec import nearest_start as _nearest_start
 from osg_control.errors import SkillSpecError, lookup
 
-TOP_DOWN_QUAT = (0.0, 1.0, 0.0, 0.0)
-"""TCP orientation of every named pose: a half turn about x (z down, y flipped)."""
+__all__ = ["NODES", "SKILLS", "TOP_DOWN_QUAT", "WORLD_FACTS", "Node", "SkillSpec", "get_skill"]
+
 WORKSPACE_RADIUS = 0.855
 """The Panda's reach from the shoulder (joint 2 axis, 0.333 m above the base) [m]."""
 SHOULDER = np.array([0.0, 0.0, 0.333])
-
-Gripper = Literal["open", "closed"]
-SkillKind = Literal["movement", "door", "cube"]
-
-
-@dataclass(frozen=True)
-class Node:
-    """A named TCP pose of the skill graph: position [m] and gripper state."""
-
-    name: str
-    position: tuple[float, float, float]
-    gripper: Gripper = "open"
-
 
 NODES: dict[str, Node] = {
     node.name: node
@@ -55,102 +51,6 @@ NODES: dict[str, Node] = {
     )
 }
 """Every node of the skill graph. The first four are where the movement skills meet."""
-
-
-@dataclass(frozen=True)
-class Waypoint:
-    """One target of the scripted policy: TCP position [m] and gripper state to reach there.
-
-    ``steps`` overrides the script's ``steps_per_waypoint`` for this waypoint; the release
-    waypoints use a short one (``RELEASE_STEPS``) so that the recorded data does not idle
-    at the release pose, which the policy would learn as a place to stop.
-
-    ``reach`` [m], if set, is the distance within which the waypoint counts as reached,
-    instead of the episode's threshold. The release waypoints use ``RELEASE_REACH``: where
-    in its initiation region a release opens the fingers does not matter, and a script that
-    opened only within ~8 mm taught policies under observation noise to carry the object
-    off (see docs/learning.md).
-    """
-
-    position: tuple[float, float, float]
-    gripper: Gripper
-    steps: int | None = None
-    reach: float | None = None
-
-
-@dataclass(frozen=True)
-class ScriptParams:
-    """Algorithm 1's noise parameters for one skill (see ``osg_control.data.scripted``).
-
-    Attributes:
-        threshold_mean: mu_1, mean distance [m] below which a waypoint counts as reached.
-        threshold_std: sigma_1 [m].
-        noise_mean: mu_2, mean of the Gaussian noise added to every action component.
-        noise_std: sigma_2, its standard deviation (position in m, angles in rad, gripper).
-        steps_per_waypoint: the fixed step budget per waypoint.
-    """
-
-    threshold_mean: float = 0.01
-    threshold_std: float = 0.005
-    noise_mean: float = 0.0
-    noise_std: float = 0.01
-    steps_per_waypoint: int = 20
-
-
-@dataclass(frozen=True)
-class SkillSpec:
-    """A skill: its graph edge, script, success predicate and symbolic pre/effects.
-
-    Attributes:
-        name: lower-case hyphenated, also its PDDL operator name.
-        kind: movement (no contact), door or cube.
-        start: the node whose pose is the centre of the initiation region.
-        end: the node whose pose is the termination condition beta.
-        waypoints: positions and gripper states the scripted policy visits in order.
-        preconditions: world facts that must hold to start (besides being at ``start``).
-        add_effects: world facts the skill makes true.
-        del_effects: world facts the skill makes false.
-        success_tolerance: TCP distance to ``end`` [m] within which beta holds.
-        script: Algorithm 1's parameters for data collection.
-        max_steps: the step budget of a learned policy's episode.
-        start_door_opening: door travel [m] in the world this skill starts in (data
-            collection and evaluation): skills that start at the cabinet run with it open.
-        start_radius: radius [m] of the random starts around ``start`` (the initiation
-            region used for data collection and evaluation).
-        start_angle: per-axis orientation range [rad] of the random starts.
-    """
-
-    name: str
-    kind: SkillKind
-    start: str
-    end: str
-    waypoints: tuple[Waypoint, ...]
-    preconditions: frozenset[str] = frozenset()
-    add_effects: frozenset[str] = frozenset()
-    del_effects: frozenset[str] = frozenset()
-    success_tolerance: float = 0.02
-    script: ScriptParams = field(default_factory=ScriptParams)
-    max_steps: int = 80
-    start_door_opening: float = 0.0
-    start_radius: float = 0.02
-    start_angle: float = 0.05
-
-    @property
-    def start_node(self) -> Node:
-        """The initiation node."""
-        return NODES[self.start]
-
-    @property
-    def end_node(self) -> Node:
-        """The termination node."""
-        return NODES[self.end]
-
-    def to_json(self) -> str:
-        """Serialise (for data-set attributes and checkpoint sidecars)."""
-        data = asdict(self)
-        for key in ("preconditions", "add_effects", "del_effects"):
-            data[key] = sorted(data[key])
-        return json.dumps(data, sort_keys=True)
 
 
 WORLD_FACTS: tuple[str, ...] = (
@@ -184,22 +84,23 @@ def _movement(
     name: str,
     start: str,
     end: str,
-    door: float = 0.0,
+    door: bool = False,
     via: tuple[float, float, float] | None = None,
 ) -> SkillSpec:
     return SkillSpec(
         name=name,
-        kind="movement",
+        kind=MOVEMENT,
         start=start,
         end=end,
         waypoints=((_at(via, "open", VIA_STEPS),) if via else ()) + (_wp(end),),
         preconditions=frozenset({"hand-empty"}),
-        start_door_opening=door,
+        start_facts=frozenset({"door-open"}) if door else frozenset(),
         start_radius=0.15,
         start_angle=0.2,
     )
 
 
+_DOOR_OPEN = frozenset({"door-open"})
 DOOR_OPENED = 0.40
 """Door travel [m] after the slide skill: the ``handle-open`` node is the ``handle`` node
 moved +y by as much."""
@@ -245,8 +146,8 @@ _UNTUNED_SKILLS: tuple[SkillSpec, ...] = (
     _movement("move-cube-to-home", "above-cube", "home"),
     _movement("move-home-to-door", "home", "door-front"),
     _movement("move-door-to-home", "door-front", "home"),
-    _movement("move-cabinet-to-cube", "cabinet-front", "above-cube", DOOR_OPENED, CABINET_CLEAR),
-    _movement("move-cabinet-to-home", "cabinet-front", "home", DOOR_OPENED),
+    _movement("move-cabinet-to-cube", "cabinet-front", "above-cube", True, CABINET_CLEAR),
+    _movement("move-cabinet-to-home", "cabinet-front", "home", True),
     SkillSpec(
         name="grab-handle",
         kind="door",
@@ -281,7 +182,7 @@ _UNTUNED_SKILLS: tuple[SkillSpec, ...] = (
         add_effects=frozenset({"hand-empty"}),
         del_effects=frozenset({"holding-handle"}),
         max_steps=100,
-        start_door_opening=DOOR_OPENED,
+        start_facts=_DOOR_OPEN,
     ),
     SkillSpec(
         name="grab-cube",
@@ -310,7 +211,7 @@ _UNTUNED_SKILLS: tuple[SkillSpec, ...] = (
         end="place-front",
         waypoints=(_wp("place-front"),),
         preconditions=frozenset({"holding-cube", "cube-lifted", "door-open"}),
-        start_door_opening=DOOR_OPENED,
+        start_facts=_DOOR_OPEN,
     ),
     SkillSpec(
         name="place-cube-in-cabinet",
@@ -319,7 +220,7 @@ _UNTUNED_SKILLS: tuple[SkillSpec, ...] = (
         end="cube-inside",
         waypoints=(_wp("cube-inside"),),
         preconditions=frozenset({"holding-cube", "cube-lifted", "door-open"}),
-        start_door_opening=DOOR_OPENED,
+        start_facts=_DOOR_OPEN,
     ),
     SkillSpec(
         name="release-cube",
@@ -334,18 +235,27 @@ _UNTUNED_SKILLS: tuple[SkillSpec, ...] = (
         add_effects=frozenset({"cube-in-cabinet", "hand-empty"}),
         del_effects=frozenset({"holding-cube", "cube-lifted"}),
         max_steps=100,
-        start_door_opening=DOOR_OPENED,
+        start_facts=_DOOR_OPEN,
     ),
 )
 
+HELD_OBJECTS = {"holding-cube": "cube", "holding-handle": "handle"}
+"""The fact that a start holds an object -> the object's name (``KitchenEnv`` places it)."""
+
+
+def _held(skill: SkillSpec) -> str | None:
+    return next((obj for fact, obj in HELD_OBJECTS.items() if fact in skill.preconditions), None)
+
+
 SKILLS: tuple[SkillSpec, ...] = tuple(
-    replace(skill, script=SCRIPT_PARAMS[skill.name]) for skill in _UNTUNED_SKILLS
+    replace(skill, script=SCRIPT_PARAMS[skill.name], holding=_held(skill))
+    for skill in _UNTUNED_SKILLS
 )
 """The kitchen's skills in the paper's order (movement, door, cube): its twelve, with the
 two that end in a gripper release (slide the door open, place the cube) each split at the
 release into two (see ``docs/learning.md``)."""
 SKILLS_BY_NAME: dict[str, SkillSpec] = {skill.name: skill for skill in SKILLS}
-MOVEMENT_SKILLS: tuple[str, ...] = tuple(s.name for s in SKILLS if s.kind == "movement")
+MOVEMENT_SKILLS: tuple[str, ...] = tuple(s.name for s in SKILLS if s.is_movement)
 
 
 def get_skill(name: str) -> SkillSpec:
@@ -359,9 +269,7 @@ def get_skill(name: str) -> SkillSpec:
 
 def nearest_start(skills: Iterable[SkillSpec], position: np.ndarray) -> SkillSpec:
     """The skill whose start node is nearest to a TCP position [m] (first on ties)."""
-    return min(
-        skills, key=lambda s: float(np.linalg.norm(position - np.asarray(s.start_node.position)))
-    )
+    return _nearest_start(skills, NODES, position)
 
 
 def in_workspace(position: tuple[float, float, float] | np.ndarray) -> bool:
@@ -371,62 +279,27 @@ def in_workspace(position: tuple[float, float, float] | np.ndarray) -> bool:
 
 
 def validate_skill(skill: SkillSpec) -> None:
-    """Check a spec's fields.
+    """Check a kitchen spec: its fields, nodes, facts and that its waypoints are in reach.
 
     Raises:
         SkillSpecError: naming the skill and the field at fault.
     """
+    check_skill_fields(skill)
     for field_name in ("start", "end"):
         if getattr(skill, field_name) not in NODES:
             raise SkillSpecError(
                 f"skill {skill.name!r}: field {field_name!r} names unknown node "
                 f"{getattr(skill, field_name)!r}"
             )
-    if not skill.waypoints:
-        raise SkillSpecError(f"skill {skill.name!r}: field 'waypoints' is empty")
     for i, waypoint in enumerate(skill.waypoints):
         if not in_workspace(waypoint.position):
             raise SkillSpecError(
                 f"skill {skill.name!r}: field 'waypoints[{i}]' position {waypoint.position} is "
                 "outside the Panda's workspace"
             )
-        if waypoint.steps is not None and waypoint.steps < 1:
-            raise SkillSpecError(
-                f"skill {skill.name!r}: field 'waypoints[{i}].steps' must be >= 1, "
-                f"got {waypoint.steps}"
-            )
-        if waypoint.reach is not None and not waypoint.reach > 0:
-            raise SkillSpecError(
-                f"skill {skill.name!r}: field 'waypoints[{i}].reach' must be > 0, "
-                f"got {waypoint.reach}"
-            )
-    facts = skill.preconditions | skill.add_effects | skill.del_effects
-    unknown = sorted(facts - set(WORLD_FACTS))
+    unknown = sorted(skill.facts - set(WORLD_FACTS))
     if unknown:
         raise SkillSpecError(f"skill {skill.name!r}: unknown world facts {unknown}")
-
-
-def skill_from_json(text: str | Mapping[str, Any]) -> SkillSpec:
-    """Rebuild a spec from ``SkillSpec.to_json`` output, validating it.
-
-    Raises:
-        SkillSpecError: a missing or malformed field, named.
-    """
-    data = dict(json.loads(text) if isinstance(text, str) else text)
-    name = data.get("name", "<unnamed>")
-    try:
-        waypoints = tuple(
-            Waypoint(tuple(w["position"]), w["gripper"], w.get("steps"), w.get("reach"))
-            for w in data.pop("waypoints")
-        )
-        script = ScriptParams(**data.pop("script"))
-        for key in ("preconditions", "add_effects", "del_effects"):
-            data[key] = frozenset(data.get(key, ()))
-        skill = SkillSpec(waypoints=waypoints, script=script, **data)
-    except (KeyError, TypeError) as err:
-        raise SkillSpecError(f"skill {name!r}: missing or malformed field: {err}") from err
-    validate_skill(skill)
-    return skill
 
 
 for _skill in SKILLS:

@@ -33,8 +33,8 @@ from safetensors.numpy import save as save_safetensors
 
 from osg_control import __version__
 from osg_control.data.datasets import ACTION_DIM, OBS_DIM
+from osg_control.domain.spec import SkillSpec, skill_from_json
 from osg_control.errors import CheckpointError, SkillSpecError
-from osg_control.kitchen.skills import SkillSpec, skill_from_json
 
 FORMAT_VERSION = 1
 OBS_CLIP = 10.0

@@ -21,7 +21,6 @@ a physical action is the actor's tanh output times ``action_scale``.
 
 from __future__ import annotations
 
-import hashlib
 from collections.abc import Sequence
 from dataclasses import asdict, dataclass
 from typing import Any
@@ -84,23 +83,6 @@ class TD3BCConfig:
 
 
 # ----------------------------------------------------------------------------- helpers
-
-
-def skill_seed(seed: int, name: str) -> int:
-    """Derive a skill's own seed from the run's seed and the skill's name.
-
-    Stable across processes and platforms (unlike ``hash``), so a skill gets the same seed
-    whether it is trained alone or with others.
-
-    Args:
-        seed: the run's seed.
-        name: the skill's name.
-
-    Returns:
-        A seed in [0, 2**63).
-    """
-    digest = hashlib.sha256(f"{seed}:{name}".encode()).digest()
-    return int.from_bytes(digest[:8], "little") >> 1
 
 
 def observation_stats(observations: np.ndarray, eps: float) -> tuple[np.ndarray, np.ndarray]:

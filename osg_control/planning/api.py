@@ -1,8 +1,7 @@
-"""The planner registry and the entry points: plan for a kitchen goal, or for PDDL files."""
+"""The planner registry and the entry points: plan for a domain's goal, or for PDDL files."""
 
 from __future__ import annotations
 
-import functools
 import tempfile
 from collections.abc import Callable, Iterable
 from dataclasses import dataclass
@@ -10,15 +9,16 @@ from pathlib import Path
 
 from pddl.core import Domain, Problem
 
+from osg_control.domain.base import Domain as OSGDomain
 from osg_control.errors import PlanningError
-from osg_control.kitchen.tasks import DEFAULT_WORLD
 from osg_control.planning.fast_downward import run_fast_downward
-from osg_control.planning.graph import SkillGraph
+from osg_control.planning.graph import SkillGraph, graph_from_specs
 from osg_control.planning.grounding import ground
 from osg_control.planning.heuristics import HMax, blind
 from osg_control.planning.pddl_io import (
     build_domain,
     build_problem,
+    pddl_domain_name,
     read_domain,
     read_problem,
     write_pddl,
@@ -123,27 +123,42 @@ def plan_files(
     return solve(read_domain(files[0]), read_problem(files[1]), planner, files)
 
 
-@functools.cache
-def _spec_domain() -> Domain:
-    """The domain of the skill specs (default costs), built once: it never changes."""
-    return build_domain()
+_SPEC_DOMAINS: dict[str, Domain] = {}
+
+
+def graph_domain(domain: OSGDomain, graph: SkillGraph | None = None) -> Domain:
+    """The PDDL domain of a skill graph (default: the domain's specs, uniform costs; that
+    one is built once per domain, it never changes)."""
+    if graph is not None:
+        return build_domain(graph, pddl_domain_name(domain))
+    if domain.name not in _SPEC_DOMAINS:
+        _SPEC_DOMAINS[domain.name] = build_domain(
+            graph_from_specs(domain), pddl_domain_name(domain)
+        )
+    return _SPEC_DOMAINS[domain.name]
 
 
 def plan_for_goal(
+    domain: OSGDomain,
     goal: str | Iterable[str],
-    node: str = "home",
-    world: Iterable[str] = DEFAULT_WORLD,
+    node: str | None = None,
+    world: Iterable[str] | None = None,
     planner: str = "astar",
     graph: SkillGraph | None = None,
+    pddl: Domain | None = None,
 ) -> PlanResult:
-    """Plan a skill sequence for a kitchen goal.
+    """Plan a skill sequence for a goal of a domain.
 
     Args:
-        goal: facts to reach, e.g. ``"door-open cube-in-cabinet"``, or ``"(at home)"``.
-        node: the node the robot starts at.
-        world: the world facts true at the start (all others false).
+        domain: the domain.
+        goal: facts to reach (e.g. two of the domain's facts separated by a space), or an
+            ``(at NODE)`` atom.
+        node: the node the robot starts at (default: the domain's ``home``).
+        world: the world facts true at the start, all others false (default: the domain's
+            ``start_world``).
         planner: a ``PLANNERS`` name.
-        graph: the skill graph (with success rates for costs); default: the skill specs.
+        graph: the skill graph (with success rates for costs); default: the domain's specs.
+        pddl: the PDDL domain of ``graph``, if the caller has built it already.
 
     Returns:
         The plan or a "no plan" result.
@@ -152,6 +167,24 @@ def plan_for_goal(
         PlanningError: an unknown goal fact, node or planner (the known ones listed), or the
             backend failed.
     """
+    pddl = pddl if pddl is not None else graph_domain(domain, graph)
+    node = domain.home if node is None else node
+    world = domain.start_world if world is None else tuple(world)
+    return plan_on_graph(pddl, goal, node, world, planner)
+
+
+def plan_on_graph(
+    graph: SkillGraph | Domain,
+    goal: str | Iterable[str],
+    node: str,
+    world: Iterable[str],
+    planner: str = "astar",
+) -> PlanResult:
+    """Plan over a skill graph (or its PDDL domain) from ``node`` with ``world`` true.
+
+    Raises:
+        PlanningError: an unknown goal fact, node or planner, or the backend failed.
+    """
     get_planner(planner)
-    domain = build_domain(graph) if graph is not None else _spec_domain()
-    return solve(domain, build_problem(domain, node, world, goal, name="goal"), planner)
+    pddl = build_domain(graph) if isinstance(graph, SkillGraph) else graph
+    return solve(pddl, build_problem(pddl, node, world, goal, name="goal"), planner)

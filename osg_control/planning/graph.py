@@ -14,14 +14,12 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
-from matplotlib.figure import Figure
-from matplotlib.patches import FancyArrowPatch
 from scipy.cluster.hierarchy import fcluster, linkage
 
 from osg_control.data.datasets import Dataset
+from osg_control.domain.base import Domain
+from osg_control.domain.spec import Node, SkillSpec, skill_from_json
 from osg_control.errors import DatasetError, SkillSpecError
-from osg_control.kitchen.scene import world_facts, world_state_from_array
-from osg_control.kitchen.skills import NODES, SKILLS, WORLD_FACTS, SkillSpec, get_skill
 
 GRAPH_FORMAT = "osg-skill-graph"
 GRAPH_VERSION = 1
@@ -98,7 +96,7 @@ class SkillGraph:
 
     nodes: tuple[GraphNode, ...]
     edges: tuple[SkillEdge, ...]
-    facts: tuple[str, ...] = WORLD_FACTS
+    facts: tuple[str, ...] = ()
     disagreements: tuple[Disagreement, ...] = field(default=())
 
     @property
@@ -134,22 +132,25 @@ def _edge_from_spec(spec: SkillSpec, success_rate: float | None) -> SkillEdge:
     )
 
 
-def _checked_rates(success_rates: Mapping[str, float] | None) -> dict[str, float]:
+def _checked_rates(domain: Domain, success_rates: Mapping[str, float] | None) -> dict[str, float]:
     rates = dict(success_rates or {})
     for name, rate in rates.items():
-        get_skill(name)
+        domain.skill(name)
         if not 0.0 <= rate <= 1.0:
             raise SkillSpecError(f"skill {name!r}: success rate {rate} is outside [0, 1]")
     return rates
 
 
 def graph_from_specs(
-    skills: Sequence[SkillSpec] = SKILLS, success_rates: Mapping[str, float] | None = None
+    domain: Domain,
+    skills: Sequence[SkillSpec] | None = None,
+    success_rates: Mapping[str, float] | None = None,
 ) -> SkillGraph:
     """Build the graph from the skill specs alone (no data needed).
 
     Args:
-        skills: the skills to include.
+        domain: the domain whose nodes and facts the graph has.
+        skills: the skills to include (default: all the domain's).
         success_rates: measured success rate per skill name (optional, each in [0, 1]).
 
     Returns:
@@ -158,15 +159,16 @@ def graph_from_specs(
     Raises:
         SkillSpecError: a rate names an unknown skill or lies outside [0, 1].
     """
-    rates = _checked_rates(success_rates)
+    rates = _checked_rates(domain, success_rates)
+    skills = domain.skills if skills is None else skills
     used = {name for spec in skills for name in (spec.start, spec.end)}
     nodes = tuple(
         GraphNode(node.name, node.position, node.gripper)
-        for node in NODES.values()
+        for node in domain.nodes.values()
         if node.name in used
     )
     edges = tuple(_edge_from_spec(spec, rates.get(spec.name)) for spec in skills)
-    return SkillGraph(nodes=nodes, edges=edges)
+    return SkillGraph(nodes=nodes, edges=edges, facts=domain.facts)
 
 
 @dataclass(frozen=True)
@@ -214,12 +216,15 @@ def _fmt(position: Iterable[float]) -> str:
 
 
 def _match_regions(
-    sets: Sequence[_PointSet], cluster_distance: float, match_radius: float
+    nodes: Mapping[str, Node],
+    sets: Sequence[_PointSet],
+    cluster_distance: float,
+    match_radius: float,
 ) -> tuple[dict[str, Observed], list[Disagreement]]:
     """Cluster the start/end positions and match clusters to the spec nodes."""
     centres, labels = _cluster(sets, cluster_distance)
-    names = list(NODES)
-    spec_positions = np.array([NODES[name].position for name in names])
+    names = list(nodes)
+    spec_positions = np.array([nodes[name].position for name in names])
     distances = np.linalg.norm(centres[:, None, :] - spec_positions[None, :, :], axis=2)
     nearest = distances.argmin(axis=1)
     counts = np.bincount(np.concatenate(labels), minlength=len(centres))
@@ -265,7 +270,7 @@ def _match_regions(
     return observed, issues
 
 
-def _observed_effects(dataset: Dataset) -> Observed:
+def _observed_effects(domain: Domain, dataset: Dataset) -> Observed:
     """Majority-vote add/delete effects over the successful episodes (first step vs the step
     that first reached beta)."""
     worlds = dataset.arrays["world_states"]
@@ -274,8 +279,8 @@ def _observed_effects(dataset: Dataset) -> Observed:
     added: dict[str, int] = {}
     deleted: dict[str, int] = {}
     for first, last in zip(firsts, lasts, strict=True):
-        before = world_facts(world_state_from_array(worlds[first]))
-        after = world_facts(world_state_from_array(worlds[last]))
+        before = domain.facts_of(worlds[first])
+        after = domain.facts_of(worlds[last])
         for fact in after - before:
             added[fact] = added.get(fact, 0) + 1
         for fact in before - after:
@@ -308,6 +313,7 @@ def _effect_disagreement(edge: SkillEdge, observed: Observed) -> Disagreement | 
 
 
 def graph_from_datasets(
+    domain: Domain,
     datasets: Sequence[Dataset],
     success_rates: Mapping[str, float] | None = None,
     cluster_distance: float = CLUSTER_DISTANCE,
@@ -319,10 +325,12 @@ def graph_from_datasets(
     Regions: the start TCP positions of all episodes and the end positions of the successful
     ones are clustered together (average linkage) and each cluster is matched to the nearest
     spec node. Effects: per skill, the facts that change between the first and the last step
-    of a successful episode (majority vote). Edges keep the spec's pre/effects; what the data
-    showed is stored beside them (``observed``) and every mismatch is a ``Disagreement``.
+    of a successful episode (majority vote). Edges keep the pre/effects of the spec each data
+    set was recorded with (its ``skill`` attribute); what the data showed is stored beside
+    them (``observed``) and every mismatch is a ``Disagreement``.
 
     Args:
+        domain: the domain the data sets belong to (nodes, facts, the skills expected).
         datasets: one loaded data set per skill (``datasets.load_dataset``).
         success_rates: measured success rate per skill name (optional, each in [0, 1]).
         cluster_distance: average-linkage cut [m].
@@ -334,7 +342,8 @@ def graph_from_datasets(
 
     Raises:
         DatasetError: no data set, or two data sets for the same skill.
-        SkillSpecError: a data set or rate names an unknown skill, or a rate is out of range.
+        SkillSpecError: a data set or rate names an unknown skill, a data set's recorded
+            spec is unreadable, or a rate is out of range.
     """
     if not datasets:
         raise DatasetError("no data sets given to build the skill graph from")
@@ -345,14 +354,16 @@ def graph_from_datasets(
             raise DatasetError(
                 f"{dataset.path}: skill {name!r} already read from {by_skill[name].path}"
             )
-        get_skill(name)
+        domain.skill(name)
         by_skill[name] = dataset
+    recorded = {name: _recorded_spec(d) for name, d in by_skill.items()}
+    specs = [recorded.get(s.name, s) for s in domain.skills]
     usable = {name: d for name, d in by_skill.items() if d.num_episodes}
-    graph = graph_from_specs(success_rates=success_rates)
+    graph = graph_from_specs(domain, specs, success_rates=success_rates)
     rng = np.random.default_rng(seed)
-    sets = [s for name, d in usable.items() for s in _point_sets(d, get_skill(name), rng)]
+    sets = [s for name, d in usable.items() for s in _point_sets(d, recorded[name], rng)]
     observed_nodes, issues = (
-        _match_regions(sets, cluster_distance, match_radius) if sets else ({}, [])
+        _match_regions(domain.nodes, sets, cluster_distance, match_radius) if sets else ({}, [])
     )
     edges = []
     for edge in graph.edges:
@@ -365,12 +376,20 @@ def graph_from_datasets(
             issues.append(Disagreement("no-data", edge.name, where))
             edges.append(edge)
             continue
-        observed = _observed_effects(usable[edge.name])
+        observed = _observed_effects(domain, usable[edge.name])
         if (issue := _effect_disagreement(edge, observed)) is not None:
             issues.append(issue)
         edges.append(replace(edge, observed=observed))
     nodes = tuple(replace(node, observed=observed_nodes.get(node.name)) for node in graph.nodes)
     return replace(graph, nodes=nodes, edges=tuple(edges), disagreements=tuple(issues))
+
+
+def _recorded_spec(dataset: Dataset) -> SkillSpec:
+    """The spec a data set was recorded with (its ``skill`` attribute)."""
+    try:
+        return skill_from_json(str(dataset.attrs["skill"]))
+    except SkillSpecError as err:
+        raise SkillSpecError(f"{dataset.path}: recorded skill spec: {err}") from err
 
 
 def _observed_from(data: Mapping[str, Any] | None) -> Observed | None:
@@ -473,77 +492,3 @@ def load_graph(path: str | Path) -> SkillGraph:
     if not isinstance(data, dict):
         raise DatasetError(f"{path}: expected a JSON object")
     return graph_from_dict(data, source=str(path))
-
-
-PROJECTIONS: dict[str, tuple[int, int]] = {"xy": (0, 1), "xz": (0, 2), "yz": (1, 2)}
-"""Axis pairs for ``draw_graph``; y-z (the robot seen from the front) separates the kitchen
-nodes best: several share x and y."""
-
-
-def draw_graph(graph: SkillGraph, path: str | Path, projection: str = "yz") -> None:
-    """Draw the graph as a PNG: nodes at their TCP positions, edges labelled by skill.
-
-    Args:
-        graph: the graph to draw.
-        path: the PNG file to write.
-        projection: ``xy``, ``xz`` or ``yz``, the plane the positions are projected on.
-
-    Raises:
-        ValueError: an unknown projection.
-    """
-    if projection not in PROJECTIONS:
-        raise ValueError(f"unknown projection {projection!r}; known: {', '.join(PROJECTIONS)}")
-    a, b = PROJECTIONS[projection]
-    where = {n.name: (n.position[a], n.position[b]) for n in graph.nodes}
-    fig = Figure(figsize=(10, 8))  # Agg canvas, no pyplot: never touches the global backend
-    ax = fig.subplots()
-    bend = 0.2
-    for edge in graph.edges:
-        p, q = np.array(where[edge.start]), np.array(where[edge.end])
-        ax.add_patch(
-            FancyArrowPatch(
-                where[edge.start],
-                where[edge.end],
-                connectionstyle=f"arc3,rad={bend}",
-                arrowstyle="-|>",
-                mutation_scale=14,
-                shrinkA=14,
-                shrinkB=14,
-                color="tab:gray",
-            )
-        )
-        normal = np.array([q[1] - p[1], p[0] - q[0]])  # arc3 bends towards this side
-        label = edge.name if edge.success_rate is None else f"{edge.name} ({edge.success_rate:.2f})"
-        x, y = (p + q) / 2 + bend / 2 * normal
-        ax.text(
-            x,
-            y,
-            label,
-            fontsize=7,
-            ha="center",
-            va="center",
-            bbox={"boxstyle": "round", "fc": "white", "ec": "none", "alpha": 0.8},
-        )
-    for node in graph.nodes:
-        x, y = where[node.name]
-        ax.scatter(
-            [x], [y], s=250, c="tab:orange" if node.gripper == "closed" else "tab:blue", zorder=3
-        )
-        ax.annotate(
-            node.name,
-            (x, y),
-            xytext=(0, 12),
-            textcoords="offset points",
-            ha="center",
-            fontsize=9,
-            weight="bold",
-        )
-    names = "xyz"
-    ax.set_xlabel(f"{names[a]} [m]")
-    ax.set_ylabel(f"{names[b]} [m]")
-    ax.set_aspect("equal")
-    ax.margins(0.15)
-    ax.set_title("Skill graph (blue: gripper open, orange: closed)")
-    fig.tight_layout()
-    Path(path).parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(path, dpi=120)

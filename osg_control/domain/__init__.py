@@ -1,0 +1,1 @@
+"""The domain interface: skill-graph data types, the ``Domain`` object and its registry."""

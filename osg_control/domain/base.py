@@ -1,0 +1,264 @@
+"""The ``Domain`` interface: everything the generic OSG core needs to know about a scene.
+
+A domain is data plus two functions: its nodes, world facts, skill specs, tasks and start
+regions; an env factory (the paper's 10-D state, 7-D relative TCP action); the names of
+its world-state fields and ``facts_of(world)``, the predicate function that abstracts a
+world state into PDDL facts; which fact means "hand empty" and which facts a running skill
+must keep (a lost one stops the skill); where its shipped defaults live. The core
+(collection, learning, graph, PDDL, planning, classifier, execution, evaluation) takes a
+``Domain`` as an argument and never imports one; ``osg_control.domain.registry`` finds
+them by name.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from osg_control.domain.spec import Node, SkillSpec, check_skill_fields
+from osg_control.errors import DomainError, SkillSpecError, lookup
+
+
+@dataclass(frozen=True)
+class Task:
+    """A task of a domain: goal facts from a start world.
+
+    Attributes:
+        name: hyphenated (also the PDDL problem's name and file name).
+        goal: the world facts to reach.
+        world: the world facts at the start (empty: the domain's ``start_world``).
+        node: the graph node the PDDL problem starts at (evaluations start anywhere).
+        description: one line for humans.
+    """
+
+    name: str
+    goal: tuple[str, ...]
+    world: tuple[str, ...] = ()
+    node: str = ""
+    description: str = ""
+
+
+@dataclass(frozen=True)
+class StartRegion:
+    """A region of random starts for the reach table (III) and the task tables (IV/V).
+
+    Attributes:
+        name: shown in the tables.
+        position: the centre [m] of the random starts.
+        radius: their radius [m].
+        angle: their per-axis orientation range [rad].
+        facts: world facts the reach table starts in (beyond the start world), e.g. a
+            world where every movement skill's path is clear.
+    """
+
+    name: str
+    position: tuple[float, float, float]
+    radius: float = 0.15
+    angle: float = 0.2
+    facts: tuple[str, ...] = ()
+
+
+EnvFactory = Callable[..., Any]
+"""``make_env(skill=None, config=None, render_mode=None)``: a Gymnasium env of the domain
+(``osg_control.environment.ArmEnv`` or one with its methods)."""
+
+
+@dataclass(frozen=True)
+class Domain:
+    """One scene and its skill graph, as data for the generic core (see module docstring).
+
+    Attributes:
+        name: registry key (``osg --domain NAME``), also the PDDL domain's name suffix.
+        description: one line for humans.
+        nodes: node name -> pose.
+        facts: the 0-ary world predicates.
+        skills: the skill specs (their order does not matter: seeds come from names).
+        tasks: named goals.
+        start_regions: random-start regions of Tables III-V.
+        start_world: the world facts of a task's start unless the task says otherwise.
+        home: the node a task's PDDL problem starts at unless the task says otherwise.
+        world_fields: the names of the world-state vector's entries.
+        facts_of: world-state vector -> the facts that hold.
+        make_env: the env factory (see ``EnvFactory``).
+        hand_empty: the fact meaning nothing is held.
+        watched_facts: preconditions a running skill must keep (lost: the skill stops).
+        defaults_dir: the shipped skills and classifier (``skills/``, ``classifier/``,
+            ``manifest.json``), or None if the domain ships none.
+        env_id: the Gymnasium id its env is registered under, if any.
+        published: published figures to report beside ours (see
+            ``osg_control.evaluation.report.PUBLISHED_KEYS``).
+    """
+
+    name: str
+    description: str
+    nodes: Mapping[str, Node]
+    facts: tuple[str, ...]
+    skills: tuple[SkillSpec, ...]
+    tasks: tuple[Task, ...]
+    start_regions: tuple[StartRegion, ...]
+    start_world: tuple[str, ...]
+    home: str
+    world_fields: tuple[str, ...]
+    facts_of: Callable[[np.ndarray], frozenset[str]]
+    make_env: EnvFactory
+    hand_empty: str
+    watched_facts: frozenset[str] = frozenset()
+    defaults_dir: Path | None = None
+    env_id: str | None = None
+    published: Mapping[str, Any] = field(default_factory=dict)
+    skills_by_name: dict[str, SkillSpec] = field(init=False, repr=False, compare=False)
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "skills_by_name", {s.name: s for s in self.skills})
+        validate_domain(self)
+
+    def skill(self, name: str) -> SkillSpec:
+        """Look a skill up by name.
+
+        Raises:
+            SkillSpecError: for an unknown name, listing the known ones.
+        """
+        return lookup(
+            self.skills_by_name,
+            name,
+            "skill",
+            lambda m: SkillSpecError(f"domain {self.name!r}: {m}"),
+        )
+
+    def task(self, name: str) -> Task:
+        """Look a task up by name.
+
+        Raises:
+            DomainError: for an unknown name, listing the known ones.
+        """
+        tasks = {t.name: t for t in self.tasks}
+        return lookup(tasks, name, "task", lambda m: DomainError(f"domain {self.name!r}: {m}"))
+
+    @property
+    def movement_skills(self) -> tuple[SkillSpec, ...]:
+        """The contact-free moves between meeting nodes (the classifier's classes)."""
+        return tuple(s for s in self.skills if s.is_movement)
+
+    def node_of(self, skill: SkillSpec, role: str) -> Node:
+        """The start (``role="start"``) or end node of a skill."""
+        return self.nodes[skill.start if role == "start" else skill.end]
+
+    def task_world(self, task: Task) -> tuple[str, ...]:
+        """The start facts of a task (its own, else the domain's start world)."""
+        return task.world or self.start_world
+
+    def task_node(self, task: Task) -> str:
+        """The node a task's PDDL problem starts at."""
+        return task.node or self.home
+
+    def summary(self) -> dict[str, Any]:
+        """A JSON-ready description (``osg domains --json``)."""
+        return {
+            "name": self.name,
+            "description": self.description,
+            "nodes": {
+                n.name: {
+                    "position": list(n.position),
+                    "gripper": n.gripper,
+                    "orientation": list(n.orientation),
+                }
+                for n in self.nodes.values()
+            },
+            "facts": list(self.facts),
+            "skills": [
+                {
+                    "name": s.name,
+                    "kind": s.kind,
+                    "start": s.start,
+                    "end": s.end,
+                    "preconditions": sorted(s.preconditions),
+                    "add_effects": sorted(s.add_effects),
+                    "del_effects": sorted(s.del_effects),
+                }
+                for s in self.skills
+            ],
+            "tasks": [
+                {
+                    "name": t.name,
+                    "goal": list(t.goal),
+                    "world": list(self.task_world(t)),
+                    "node": self.task_node(t),
+                    "description": t.description,
+                }
+                for t in self.tasks
+            ],
+            "start_regions": [
+                {
+                    "name": r.name,
+                    "position": list(r.position),
+                    "radius": r.radius,
+                    "angle": r.angle,
+                    "facts": list(r.facts),
+                }
+                for r in self.start_regions
+            ],
+            "world_fields": list(self.world_fields),
+            "hand_empty": self.hand_empty,
+            "watched_facts": sorted(self.watched_facts),
+            "env_id": self.env_id,
+        }
+
+
+def validate_domain(domain: Domain) -> None:
+    """Check a domain's fields refer to each other correctly.
+
+    Raises:
+        DomainError: naming the domain and the field at fault.
+    """
+    where = f"domain {domain.name!r}"
+    for attr in ("name", "nodes", "facts", "skills", "world_fields", "hand_empty"):
+        if not getattr(domain, attr):
+            raise DomainError(f"{where}: field {attr!r} is empty")
+    if not callable(domain.facts_of) or not callable(domain.make_env):
+        raise DomainError(f"{where}: fields 'facts_of' and 'make_env' must be callable")
+    facts = set(domain.facts)
+    names = [s.name for s in domain.skills]
+    duplicates = sorted({n for n in names if names.count(n) > 1})
+    if duplicates:
+        raise DomainError(f"{where}: field 'skills' has duplicate names {duplicates}")
+    for node_name, node in domain.nodes.items():
+        if node.name != node_name:
+            raise DomainError(f"{where}: field 'nodes' key {node_name!r} names {node.name!r}")
+    for skill in domain.skills:
+        try:
+            check_skill_fields(skill)
+        except SkillSpecError as err:
+            raise DomainError(f"{where}: field 'skills': {err}") from err
+        for role in ("start", "end"):
+            if getattr(skill, role) not in domain.nodes:
+                raise DomainError(
+                    f"{where}: skill {skill.name!r} field {role!r} names unknown node "
+                    f"{getattr(skill, role)!r}; nodes: {sorted(domain.nodes)}"
+                )
+        unknown = sorted(skill.facts - facts)
+        if unknown:
+            raise DomainError(f"{where}: skill {skill.name!r} names unknown facts {unknown}")
+    _check_facts(where, "start_world", domain.start_world, facts)
+    _check_facts(where, "watched_facts", domain.watched_facts, facts)
+    _check_facts(where, "hand_empty", (domain.hand_empty,), facts)
+    if domain.home not in domain.nodes:
+        raise DomainError(f"{where}: field 'home' names unknown node {domain.home!r}")
+    for task in domain.tasks:
+        if not task.goal:
+            raise DomainError(f"{where}: task {task.name!r} has an empty goal")
+        _check_facts(where, f"tasks[{task.name}].goal", task.goal, facts)
+        _check_facts(where, f"tasks[{task.name}].world", task.world, facts)
+        if task.node and task.node not in domain.nodes:
+            raise DomainError(f"{where}: task {task.name!r} names unknown node {task.node!r}")
+    for region in domain.start_regions:
+        _check_facts(where, f"start_regions[{region.name}].facts", region.facts, facts)
+
+
+def _check_facts(where: str, field_name: str, named: Any, facts: set[str]) -> None:
+    unknown = sorted(set(named) - facts)
+    if unknown:
+        raise DomainError(f"{where}: field {field_name!r} names unknown facts {unknown}")

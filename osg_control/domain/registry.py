@@ -1,0 +1,64 @@
+"""Domains by name: registered in process, or announced by installed packages.
+
+A package announces a domain with an entry point in the ``osg_control.domains`` group whose
+object is a zero-argument function returning a ``Domain`` (the kitchen's is declared in
+``pyproject.toml``); ``register_domain`` adds one at run time (e.g. from a test or a
+notebook). Domains are built on first use and cached.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from importlib.metadata import entry_points
+
+from osg_control.domain.base import Domain
+from osg_control.errors import DomainError
+
+ENTRY_POINT_GROUP = "osg_control.domains"
+DEFAULT_DOMAIN = "kitchen"
+"""The domain ``osg`` uses without ``--domain``."""
+
+_FACTORIES: dict[str, Callable[[], Domain]] = {}
+_BUILT: dict[str, Domain] = {}
+
+
+def register_domain(name: str, factory: Callable[[], Domain]) -> None:
+    """Make a domain available under ``name`` (replacing one of the same name)."""
+    _FACTORIES[name] = factory
+    _BUILT.pop(name, None)
+
+
+def _installed() -> dict[str, Callable[[], Callable[[], Domain]]]:
+    """Entry point name -> its loader (which imports the module and gives the factory)."""
+    return {point.name: point.load for point in entry_points(group=ENTRY_POINT_GROUP)}
+
+
+def domain_names() -> list[str]:
+    """Every known domain name, sorted."""
+    return sorted(set(_FACTORIES) | set(_installed()))
+
+
+def get_domain(name: str = DEFAULT_DOMAIN) -> Domain:
+    """The domain registered under ``name``.
+
+    Raises:
+        DomainError: an unknown name (the known ones listed), or a factory that does not
+            give a valid ``Domain``.
+    """
+    if name in _BUILT:
+        return _BUILT[name]
+    factory = _FACTORIES.get(name)
+    if factory is None:
+        loader = _installed().get(name)
+        if loader is None:
+            raise DomainError(
+                f"unknown domain {name!r}; known domains: {', '.join(domain_names())}"
+            )
+        factory = loader()
+    domain = factory()
+    if not isinstance(domain, Domain):
+        raise DomainError(f"domain {name!r}: its factory returned {type(domain).__name__}")
+    if domain.name != name:
+        raise DomainError(f"domain {name!r}: its factory built a domain named {domain.name!r}")
+    _BUILT[name] = domain
+    return domain

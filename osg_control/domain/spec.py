@@ -1,0 +1,214 @@
+"""The data a skill graph is made of: nodes, waypoints, Algorithm 1 parameters, skill specs.
+
+A skill is an option <I, pi, beta, effects>: it starts at the pose of its ``start`` node
+(initiation region I: within ``start_radius`` of it), follows a scripted waypoint sequence
+when collecting data (Algorithm 1), and terminates (beta) at its ``end`` node's pose with the
+node's gripper state. World facts (PDDL predicates) are its preconditions and effects.
+
+Poses are TCP positions in the robot base frame [m] with an orientation (``w, x, y, z``);
+the default ``TOP_DOWN_QUAT`` points the tool z axis down with the fingers closing along
+world y. Nothing here knows any particular scene: a domain (``osg_control.domain.base``)
+lists its nodes, facts and skills with these types.
+"""
+
+from __future__ import annotations
+
+import json
+from collections.abc import Iterable, Mapping
+from dataclasses import asdict, dataclass, field
+from typing import Any, Literal
+
+import numpy as np
+
+from osg_control.errors import SkillSpecError
+
+TOP_DOWN_QUAT = (0.0, 1.0, 0.0, 0.0)
+"""The default TCP orientation: a half turn about x (z down, y flipped)."""
+MOVEMENT = "movement"
+"""The skill kind the core treats specially: contact-free moves between meeting nodes, the
+classifier's classes and the way onto the graph from anywhere."""
+
+Gripper = Literal["open", "closed"]
+Quat = tuple[float, float, float, float]
+
+
+@dataclass(frozen=True)
+class Node:
+    """A named TCP pose of the skill graph: position [m], gripper state, orientation."""
+
+    name: str
+    position: tuple[float, float, float]
+    gripper: Gripper = "open"
+    orientation: Quat = TOP_DOWN_QUAT
+
+
+@dataclass(frozen=True)
+class Waypoint:
+    """One target of the scripted policy: TCP position [m] and gripper state to reach there.
+
+    Attributes:
+        position: TCP target [m].
+        gripper: the gripper state to switch to once there.
+        steps: overrides the script's ``steps_per_waypoint`` for this waypoint.
+        reach: distance [m] within which the waypoint counts as reached, instead of the
+            episode's drawn threshold.
+        orientation: TCP orientation target (``w, x, y, z``); None keeps the default
+            ``TOP_DOWN_QUAT``.
+    """
+
+    position: tuple[float, float, float]
+    gripper: Gripper
+    steps: int | None = None
+    reach: float | None = None
+    orientation: Quat | None = None
+
+
+@dataclass(frozen=True)
+class ScriptParams:
+    """Algorithm 1's noise parameters for one skill (see ``osg_control.data.scripted``).
+
+    Attributes:
+        threshold_mean: mu_1, mean distance [m] below which a waypoint counts as reached.
+        threshold_std: sigma_1 [m].
+        noise_mean: mu_2, mean of the Gaussian noise added to every action component.
+        noise_std: sigma_2, its standard deviation (position in m, angles in rad, gripper).
+        steps_per_waypoint: the fixed step budget per waypoint.
+    """
+
+    threshold_mean: float = 0.01
+    threshold_std: float = 0.005
+    noise_mean: float = 0.0
+    noise_std: float = 0.01
+    steps_per_waypoint: int = 20
+
+
+@dataclass(frozen=True)
+class SkillSpec:
+    """A skill: its graph edge, script, success predicate and symbolic pre/effects.
+
+    Attributes:
+        name: lower-case hyphenated, also its PDDL operator name.
+        kind: ``"movement"`` (no contact, see ``MOVEMENT``) or a domain's own label.
+        start: the node whose pose is the centre of the initiation region.
+        end: the node whose pose is the termination condition beta.
+        waypoints: positions and gripper states the scripted policy visits in order.
+        preconditions: world facts that must hold to start (besides being at ``start``).
+        add_effects: world facts the skill makes true.
+        del_effects: world facts the skill makes false.
+        start_facts: world facts its data are recorded in beyond the domain's default
+            start world (the domain's scene sets them up); the executor enters a skill
+            from off the graph only where they hold.
+        holding: the object the skill starts holding (a domain's name), if any.
+        success_tolerance: TCP distance to ``end`` [m] within which beta holds.
+        script: Algorithm 1's parameters for data collection.
+        max_steps: the step budget of a learned policy's episode.
+        start_radius: radius [m] of the random starts around ``start``.
+        start_angle: per-axis orientation range [rad] of the random starts.
+    """
+
+    name: str
+    kind: str
+    start: str
+    end: str
+    waypoints: tuple[Waypoint, ...]
+    preconditions: frozenset[str] = frozenset()
+    add_effects: frozenset[str] = frozenset()
+    del_effects: frozenset[str] = frozenset()
+    start_facts: frozenset[str] = frozenset()
+    holding: str | None = None
+    success_tolerance: float = 0.02
+    script: ScriptParams = field(default_factory=ScriptParams)
+    max_steps: int = 80
+    start_radius: float = 0.02
+    start_angle: float = 0.05
+
+    @property
+    def is_movement(self) -> bool:
+        """A contact-free move between meeting nodes (a classifier class)."""
+        return self.kind == MOVEMENT
+
+    @property
+    def facts(self) -> frozenset[str]:
+        """Every world fact the spec names."""
+        return self.preconditions | self.add_effects | self.del_effects | self.start_facts
+
+    def to_json(self) -> str:
+        """Serialise (for data-set attributes and checkpoint sidecars)."""
+        data = asdict(self)
+        for key in ("preconditions", "add_effects", "del_effects", "start_facts"):
+            data[key] = sorted(data[key])
+        return json.dumps(data, sort_keys=True)
+
+
+def check_skill_fields(skill: SkillSpec) -> None:
+    """Check the fields a spec can get wrong by itself (not the nodes or facts it names).
+
+    Raises:
+        SkillSpecError: naming the skill and the field at fault.
+    """
+    if not skill.waypoints:
+        raise SkillSpecError(f"skill {skill.name!r}: field 'waypoints' is empty")
+    for i, waypoint in enumerate(skill.waypoints):
+        if not np.all(np.isfinite(waypoint.position)) or len(waypoint.position) != 3:
+            raise SkillSpecError(
+                f"skill {skill.name!r}: field 'waypoints[{i}].position' must be 3 finite "
+                f"numbers, got {waypoint.position}"
+            )
+        if waypoint.steps is not None and waypoint.steps < 1:
+            raise SkillSpecError(
+                f"skill {skill.name!r}: field 'waypoints[{i}].steps' must be >= 1, "
+                f"got {waypoint.steps}"
+            )
+        if waypoint.reach is not None and not waypoint.reach > 0:
+            raise SkillSpecError(
+                f"skill {skill.name!r}: field 'waypoints[{i}].reach' must be > 0, "
+                f"got {waypoint.reach}"
+            )
+    for name in ("success_tolerance", "start_radius", "start_angle"):
+        value = getattr(skill, name)
+        if not (np.isfinite(value) and value >= 0):
+            raise SkillSpecError(f"skill {skill.name!r}: field {name!r} must be >= 0, got {value}")
+    if skill.max_steps < 1:
+        raise SkillSpecError(f"skill {skill.name!r}: field 'max_steps' must be >= 1")
+
+
+def skill_from_json(text: str | Mapping[str, Any]) -> SkillSpec:
+    """Rebuild a spec from ``SkillSpec.to_json`` output, checking its fields.
+
+    Raises:
+        SkillSpecError: a missing or malformed field, named.
+    """
+    try:
+        data = dict(json.loads(text) if isinstance(text, str) else text)
+    except (TypeError, ValueError) as err:
+        raise SkillSpecError(f"skill spec is not JSON: {err}") from err
+    name = data.get("name", "<unnamed>")
+    try:
+        waypoints = tuple(
+            Waypoint(
+                tuple(w["position"]),
+                w["gripper"],
+                w.get("steps"),
+                w.get("reach"),
+                tuple(w["orientation"]) if w.get("orientation") is not None else None,
+            )
+            for w in data.pop("waypoints")
+        )
+        script = ScriptParams(**data.pop("script"))
+        for key in ("preconditions", "add_effects", "del_effects", "start_facts"):
+            data[key] = frozenset(data.get(key, ()))
+        skill = SkillSpec(waypoints=waypoints, script=script, **data)
+    except (KeyError, TypeError, ValueError) as err:
+        raise SkillSpecError(f"skill {name!r}: missing or malformed field: {err}") from err
+    check_skill_fields(skill)
+    return skill
+
+
+def nearest_start(
+    skills: Iterable[SkillSpec], nodes: Mapping[str, Node], position: np.ndarray
+) -> SkillSpec:
+    """The skill whose start node is nearest to a TCP position [m] (first on ties)."""
+    return min(
+        skills,
+        key=lambda s: float(np.linalg.norm(position - np.asarray(nodes[s.start].position))),
+    )

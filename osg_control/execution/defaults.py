@@ -1,0 +1,77 @@
+"""A domain's trained defaults (skills + classifier + measured success rates), and their loader.
+
+A defaults directory holds ``skills/`` (one checkpoint per skill), ``classifier/`` and
+``manifest.json`` (the command, seeds, data-set hashes and package version that produced
+them, and ``success_rates``: each skill's measured Table I rate at the deployment noise,
+which become the plan costs). A domain ships one (``Domain.defaults_dir``); ``osg
+reproduce`` writes a directory of the same layout.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+from osg_control.classifier.data import movement_classes
+from osg_control.classifier.model import StateClassifier
+from osg_control.domain.base import Domain
+from osg_control.errors import CheckpointError
+from osg_control.learning.policy import SkillPolicy, load_policies
+from osg_control.planning.costs import MANIFEST, read_manifest, success_rates
+from osg_control.planning.graph import SkillGraph, graph_from_specs
+
+__all__ = ["MANIFEST", "Defaults", "defaults_root", "load_defaults", "read_manifest"]
+
+
+@dataclass(frozen=True)
+class Defaults:
+    """What a defaults directory holds, loaded.
+
+    Attributes:
+        directory: where it was read from.
+        policies: skill name -> policy.
+        classifier: the state->skill classifier.
+        graph: the domain's skill graph with the manifest's success rates (uniform costs
+            for skills without one).
+        manifest: the manifest as read.
+    """
+
+    directory: Path
+    policies: dict[str, SkillPolicy]
+    classifier: StateClassifier
+    graph: SkillGraph
+    manifest: dict[str, Any]
+
+
+def defaults_root(domain: Domain, directory: str | Path | None = None) -> Path:
+    """The defaults directory to use: ``directory``, else the domain's shipped one.
+
+    Raises:
+        CheckpointError: the domain ships none and no directory is given.
+    """
+    if directory is not None:
+        return Path(directory)
+    if domain.defaults_dir is None:
+        raise CheckpointError(f"domain {domain.name!r} ships no defaults; pass a directory")
+    return domain.defaults_dir
+
+
+def load_defaults(domain: Domain, directory: str | Path | None = None) -> Defaults:
+    """Load skill policies, the classifier and the success rates of a defaults directory.
+
+    Raises:
+        CheckpointError: a missing or corrupt checkpoint or manifest, named.
+    """
+    root = defaults_root(domain, directory)
+    if not root.is_dir():
+        raise CheckpointError(f"{root}: defaults directory not found")
+    manifest = read_manifest(root)
+    rates = success_rates(manifest, root / MANIFEST, domain)
+    return Defaults(
+        directory=root,
+        policies=load_policies(root / "skills"),
+        classifier=StateClassifier.load(root / "classifier", movement_classes(domain)),
+        graph=graph_from_specs(domain, success_rates=rates),
+        manifest=manifest,
+    )
