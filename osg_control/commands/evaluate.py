@@ -6,9 +6,10 @@ import argparse
 import json
 from pathlib import Path
 
-from osg_control.commands import add_filter_argument
+from osg_control.commands import add_backend_arguments, add_filter_argument
 from osg_control.evaluation.evaluate import format_task_table, task_table
 from osg_control.kitchen.tasks import TASKS_BY_NAME
+from osg_control.parallel import open_executor
 
 
 def register(subparsers: argparse._SubParsersAction) -> None:
@@ -20,6 +21,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     tasks.add_argument("--noise", type=float, default=0.02, help="TCP observation noise [m]")
     tasks.add_argument("--seed", type=int, default=0)
     tasks.add_argument("--workers", type=int, default=2)
+    add_backend_arguments(tasks)
     tasks.add_argument(
         "--task", nargs="*", default=list(TASKS_BY_NAME), choices=list(TASKS_BY_NAME)
     )
@@ -38,15 +40,17 @@ def register(subparsers: argparse._SubParsersAction) -> None:
 
 def run_tasks(args: argparse.Namespace) -> int:
     """Print Tables IV and V."""
-    table = task_table(
-        str(args.models) if args.models else None,
-        args.episodes,
-        args.seed,
-        args.workers,
-        args.noise,
-        args.task,
-        args.replans,
-        args.filter,
-    )
+    with open_executor(args.backend, args.workers, args.address) as executor:
+        table = task_table(
+            str(args.models) if args.models else None,
+            args.episodes,
+            args.seed,
+            args.workers,
+            args.noise,
+            args.task,
+            args.replans,
+            args.filter,
+            executor,
+        )
     print(json.dumps(table, indent=2) if args.json else format_task_table(table))
     return 0

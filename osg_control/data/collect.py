@@ -1,20 +1,19 @@
 """Scripted noisy data collection (Algorithm 1): parallel, deterministic, resumable.
 
 Episode ``i`` of skill ``k`` draws everything from ``SeedSequence([seed, k, i])``, so the
-data set is the same whatever the number of workers. Episodes are written in chunks, each
-atomically, under ``<out>/.parts/<skill>/``; an interrupted run keeps every finished chunk
-and the same command continues where it stopped. When all chunks exist they are merged
+data set is the same whatever the number of workers or the backend. Workers return each
+chunk's episodes and this process writes the chunk, atomically, under
+``<out>/.parts/<skill>/``; an interrupted run keeps every finished chunk and the same
+command continues where it stopped. When all chunks exist they are merged
 into ``<out>/<skill>.h5`` (atomically) and the parts are removed.
 """
 
 from __future__ import annotations
 
 import shutil
-from collections.abc import Callable, Iterable, Iterator
-from concurrent.futures import ProcessPoolExecutor
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any, Protocol, TypeVar
+from typing import Any
 
 import numpy as np
 from tqdm import tqdm
@@ -25,6 +24,7 @@ from osg_control.data.scripted import ScriptedPolicy
 from osg_control.kitchen.env import EnvConfig, KitchenEnv
 from osg_control.kitchen.scene import WORLD_FIELDS
 from osg_control.kitchen.skills import SKILLS, SkillSpec, get_skill
+from osg_control.parallel import LocalExecutor, TaskExecutor
 
 DEFAULT_EPISODES = 300
 CHUNK_EPISODES = 25
@@ -33,33 +33,6 @@ HOLD_STEPS = 10
 (Algorithm 1 acting on it past its budget). Without them the data ends where beta is first
 reached, and learned policies that missed the goal by a little under observation noise
 carried on past it (see docs/learning.md)."""
-T = TypeVar("T")
-R = TypeVar("R")
-
-
-class TaskExecutor(Protocol):
-    """Maps a function over items, yielding results in order (local pool, Ray, ...)."""
-
-    def map(self, fn: Callable[[T], R], items: Iterable[T]) -> Iterator[R]:
-        """Apply ``fn`` to every item; results come back in the items' order."""
-        ...
-
-
-class LocalExecutor:
-    """Runs tasks in this process (``workers=1``) or a local process pool."""
-
-    def __init__(self, workers: int = 1) -> None:
-        if workers < 1:
-            raise ValueError(f"workers must be >= 1, got {workers}")
-        self.workers = workers
-
-    def map(self, fn: Callable[[T], R], items: Iterable[T]) -> Iterator[R]:
-        if self.workers == 1:
-            yield from map(fn, items)
-            return
-        with ProcessPoolExecutor(max_workers=self.workers) as pool:
-            yield from pool.map(fn, items)
-
 
 _ENVS: dict[str, KitchenEnv] = {}
 _SKILL_INDEX = {skill.name: index for index, skill in enumerate(SKILLS)}
@@ -133,12 +106,9 @@ class ChunkTask:
     path: Path
 
 
-def _run_chunk(task: ChunkTask) -> tuple[int, int]:
-    episodes = [
-        run_scripted_episode(task.skill, task.seed, i) for i in range(task.start, task.stop)
-    ]
-    write_episodes(task.path, episodes, _attrs(task.skill, task.seed))
-    return len(episodes), sum(e.success for e in episodes)
+def _run_chunk(task: ChunkTask) -> list[Episode]:
+    """A chunk's episodes; the caller writes them, so workers need no shared file system."""
+    return [run_scripted_episode(task.skill, task.seed, i) for i in range(task.start, task.stop)]
 
 
 def _attrs(skill: SkillSpec, seed: int) -> dict[str, Any]:
@@ -191,10 +161,12 @@ def collect_skill(
         int(load_dataset(t.path).episode_successes.sum()) for t in tasks if t.path.exists()
     )
     bar = tqdm(total=episodes, initial=done_eps, desc=skill.name, unit="ep", disable=not progress)
-    for count, wins in (executor or LocalExecutor()).map(_run_chunk, todo):
-        done_eps += count
-        successes += wins
-        bar.update(count)
+    chunks = (executor or LocalExecutor()).map(_run_chunk, todo)
+    for task, chunk in zip(todo, chunks, strict=True):
+        write_episodes(task.path, chunk, _attrs(skill, seed))
+        done_eps += len(chunk)
+        successes += sum(e.success for e in chunk)
+        bar.update(len(chunk))
         bar.set_postfix(success=f"{successes / max(done_eps, 1):.2f}")
     bar.close()
     merged = [load_dataset(t.path) for t in tasks]

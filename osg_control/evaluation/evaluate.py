@@ -15,10 +15,11 @@ from typing import Any
 import numpy as np
 
 from osg_control.control.estimator import FilteredPolicy
-from osg_control.data.collect import LocalExecutor, run_scripted_episode
+from osg_control.data.collect import run_scripted_episode
 from osg_control.kitchen.env import EnvConfig, KitchenEnv
 from osg_control.kitchen.skills import NODES, SKILLS, SKILLS_BY_NAME, get_skill, nearest_start
 from osg_control.kitchen.tasks import TASKS_BY_NAME, get_task
+from osg_control.parallel import LocalExecutor, TaskExecutor
 
 START_NODES: tuple[str, ...] = ("home", "above-cube", "door-front", "cabinet-front")
 
@@ -94,19 +95,21 @@ def skill_table(
     skills: Sequence[str] | None = None,
     scripted_episodes: int = 100,
     filter_gain: float | None = None,
+    executor: TaskExecutor | None = None,
 ) -> dict[str, Any]:
     """Table I: success rate of every learned skill at each observation-noise level.
 
     Args:
         filter_gain: run the policies on ``estimator.TcpFilter`` estimates with this gain;
             None (the paper's protocol) feeds them the raw noisy observation.
+        executor: where the episodes run (default: a local pool of ``workers``).
 
     Returns:
         ``{"noise": [...], "episodes": N, "filter_gain": g, "rows": [{"skill",
         "rates": [...], "scripted": rate}]}``.
     """
     names = list(skills or SKILLS_BY_NAME)
-    executor = LocalExecutor(workers)
+    executor = executor or LocalExecutor(workers)
     tasks = [
         SkillEpisode(name, str(policy_dir), float(noise), seed, cell, index, filter_gain)
         for cell, (name, noise) in enumerate((n, s) for n in names for s in noise_levels)
@@ -228,15 +231,20 @@ def reach_table(
     seed: int = 0,
     workers: int = 2,
     noise: float = 0.0,
+    executor: TaskExecutor | None = None,
 ) -> dict[str, Any]:
-    """Table III: entry-skill success from random starts around the 8 start regions."""
+    """Table III: entry-skill success from random starts around the 8 start regions.
+
+    ``executor``: where the episodes run (default: a local pool of ``workers``).
+    """
     regions = start_regions()
     tasks = [
         StartEpisode(models, r, noise, seed, r, i)
         for r in range(len(regions))
         for i in range(episodes)
     ]
-    results = np.array(list(LocalExecutor(workers).map(run_reach_episode, tasks)), dtype=float)
+    executor = executor or LocalExecutor(workers)
+    results = np.array(list(executor.map(run_reach_episode, tasks)), dtype=float)
     results = results.reshape(len(regions), episodes, 3).mean(axis=1)
     rows = [
         {"start": name, "success": r[0], "outside_initiation": r[1], "nearest_node_success": r[2]}
@@ -297,10 +305,12 @@ def task_table(
     tasks: Sequence[str] = tuple(TASKS_BY_NAME),
     replans: Sequence[int] = (0, 2),
     filter_gain: float | None = None,
+    executor: TaskExecutor | None = None,
 ) -> dict[str, Any]:
     """Tables IV and V: task success per start region, without and with replanning.
 
-    ``filter_gain``: the executor's ``TcpFilter`` gain (None: raw observations).
+    ``filter_gain``: the executor's ``TcpFilter`` gain (None: raw observations);
+    ``executor``: where the episodes run (default: a local pool of ``workers``).
     """
     regions = start_regions()
     cells = [(t, r, k) for k in replans for t in tasks for r in range(len(regions))]
@@ -310,7 +320,8 @@ def task_table(
         for ti in [list(tasks).index(t)]
         for i in range(episodes)
     ]
-    outcomes = np.array(list(LocalExecutor(workers).map(run_task_episode, jobs)), dtype=float)
+    executor = executor or LocalExecutor(workers)
+    outcomes = np.array(list(executor.map(run_task_episode, jobs)), dtype=float)
     rates = outcomes.reshape(len(replans), len(tasks), len(regions), episodes).mean(axis=3)
     return {
         "episodes": episodes,
