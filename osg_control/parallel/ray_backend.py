@@ -71,11 +71,11 @@ class RayExecutor:
         """
         ray = import_ray()
         self._ray = ray
+        if address is not None:
+            check_reachable(address)
         self._owned = not ray.is_initialized()
         if not self._owned:
             return
-        if address is not None:
-            check_reachable(address)
         try:
             ray.init(
                 address=address,
