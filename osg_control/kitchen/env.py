@@ -43,6 +43,11 @@ __all__ = ["ACTION_BOUNDS", "EnvConfig", "KitchenEnv", "world_facts"]
 OBS_DIM = 10
 ACTION_BOUNDS = np.array([0.02, 0.02, 0.02, 0.1, 0.1, 0.1, 1.0])
 """Per-step bound of each action component: 2 cm, 0.1 rad, and the gripper's [-1, 1]."""
+OBS_LOW = np.array([-2.0, -2.0, -2.0, -1.0, -1.0, -1.0, -1.0, -1.0, 0.0, -0.01])
+OBS_HIGH = np.array([2.0, 2.0, 2.0, 1.0, 1.0, 1.0, 1.0, 1.0, 70.0, 0.1])
+"""Observation bounds: TCP position within 2 m of the base (reach 0.86 m, plus noise), a
+unit quaternion, the gripper command, its force (the actuator's 70 N force range) and the
+finger distance (0 to 8 cm, with slack for contact penetration)."""
 CONTROL_HZ = 20.0
 GRIPPER_OPEN_CMD = 1.0
 GRIPPER_CLOSED_CMD = -1.0
@@ -130,7 +135,7 @@ class KitchenEnv(gym.Env):
         self._robot_bodies = {
             b for b in range(self.model.nbody) if self.model.body(b).name.startswith("panda_")
         }
-        self.observation_space = gym.spaces.Box(-np.inf, np.inf, (OBS_DIM,), np.float64)
+        self.observation_space = gym.spaces.Box(OBS_LOW, OBS_HIGH, (OBS_DIM,), np.float64)
         self.action_space = gym.spaces.Box(-ACTION_BOUNDS, ACTION_BOUNDS, (7,), np.float64)
         self._gripper_cmd = GRIPPER_OPEN_CMD
         self._steps = 0
