@@ -1,4 +1,4 @@
-"""``osg collect`` and ``osg datasets info``: scripted data collection and data set summaries."""
+"""``osg collect`` and ``osg datasets``: scripted data collection, summaries, Minari in/out."""
 
 from __future__ import annotations
 
@@ -8,6 +8,7 @@ import time
 from pathlib import Path
 
 from osg_control.commands import add_backend_arguments
+from osg_control.commands.minari import add_verbs as add_minari_verbs
 from osg_control.data.collect import DEFAULT_EPISODES, collect_skill
 from osg_control.data.datasets import dataset_summary, load_dataset
 from osg_control.errors import DatasetError
@@ -36,6 +37,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     info.add_argument("path", type=Path)
     info.add_argument("--json", action="store_true")
     info.set_defaults(func=run_info)
+    add_minari_verbs(verbs)
 
 
 def run_collect(args: argparse.Namespace) -> int:

@@ -100,6 +100,21 @@ def sample_start_pose(
     return position, rot.as_matrix()
 
 
+def success_holds(
+    skill: SkillSpec, position: np.ndarray, gripper_cmd: float, world: WorldState
+) -> bool:
+    """A skill's success predicate: TCP ``position`` within tolerance of beta, the gripper
+    command of its end node, its effects in the ``world`` (also over recorded states)."""
+    end = skill.end_node
+    if np.linalg.norm(np.asarray(position) - np.asarray(end.position)) > skill.success_tolerance:
+        return False
+    wanted = GRIPPER_OPEN_CMD if end.gripper == "open" else GRIPPER_CLOSED_CMD
+    if gripper_cmd != wanted:
+        return False
+    facts = world_facts(world)
+    return skill.add_effects <= facts and not (skill.del_effects & facts)
+
+
 class KitchenEnv(gym.Env):
     """The kitchen with the Panda driven by relative TCP commands (see module docstring).
 
@@ -376,14 +391,7 @@ class KitchenEnv(gym.Env):
         if skill is None:
             return False
         pos, _ = self.tcp_pose()
-        end = skill.end_node
-        if np.linalg.norm(pos - np.asarray(end.position)) > skill.success_tolerance:
-            return False
-        wanted = GRIPPER_OPEN_CMD if end.gripper == "open" else GRIPPER_CLOSED_CMD
-        if self._gripper_cmd != wanted:
-            return False
-        facts = world_facts(world or self.world_state())
-        return skill.add_effects <= facts and not (skill.del_effects & facts)
+        return success_holds(skill, pos, self._gripper_cmd, world or self.world_state())
 
     def _info(self, world: WorldState | None = None) -> dict[str, Any]:
         world = world or self.world_state()
