@@ -3,6 +3,9 @@
 MuJoCo kitchen with the example-robot-data Franka Panda, a differential-IK controller
 (mink or Pinocchio/Pink), TD3+BC skills learned from offline data, a skill graph exported
 as PDDL, a symbolic planner, a state-to-skill classifier and an executor.
+
+Importing the package registers its Gymnasium environments (``osg/Kitchen-v0``; see
+``osg_control.registration``).
 """
 
 from importlib.metadata import PackageNotFoundError, version
@@ -11,5 +14,9 @@ try:
     __version__ = version("osg-control")
 except PackageNotFoundError:  # pragma: no cover - running from a source tree
     __version__ = "0.0.0+unknown"
+
+from osg_control.registration import register_envs
+
+register_envs()
 
 __all__ = ["__version__"]

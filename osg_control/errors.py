@@ -42,6 +42,10 @@ class PlanningError(OSGError):
     """The planner cannot solve the task (e.g. unknown goal facts)."""
 
 
+class BackendError(OSGError):
+    """An executor backend is unknown, not installed or cannot reach its cluster."""
+
+
 def lookup(table: Mapping[str, T], name: str, what: str, error: Callable[[str], Exception]) -> T:
     """``table[name]``; for an unknown name raise ``error`` naming it and the known ones
     (``unknown <what> 'x'; known <what>s: a, b``)."""

@@ -48,3 +48,22 @@ def add_filter_argument(parser: argparse.ArgumentParser) -> None:
         help=f"feed the policies a filtered TCP position (gain in (0, 1], default "
         f"{DEFAULT_GAIN} when the flag is given without a value); off by default",
     )
+
+
+def add_backend_arguments(parser: argparse.ArgumentParser) -> None:
+    """Add ``--backend {local,ray}`` and ``--address ADDR`` (see ``osg_control.parallel``)."""
+    from osg_control.parallel import BACKENDS
+
+    parser.add_argument(
+        "--backend",
+        choices=list(BACKENDS),
+        default="local",
+        help="where the episodes run: " + "; ".join(f"{k}: {v}" for k, v in BACKENDS.items()),
+    )
+    parser.add_argument(
+        "--address",
+        default=None,
+        metavar="ADDR",
+        help="Ray cluster address (host:port from 'ray start --head', ray://host:port or "
+        "'auto'); without it --backend ray starts a local Ray instance of --workers CPUs",
+    )

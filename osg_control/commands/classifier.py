@@ -17,7 +17,7 @@ from osg_control.classifier.data import class_starts, load_classifier_data, move
 from osg_control.classifier.metrics import format_report
 from osg_control.classifier.model import StateClassifier, evaluate, reload_split
 from osg_control.classifier.train import TrainConfig, train_classifier
-from osg_control.commands import domain_of
+from osg_control.commands import add_backend_arguments, domain_of
 from osg_control.domain.base import Domain
 from osg_control.execution.defaults import defaults_root
 from osg_control.paths import cache_dir
@@ -179,9 +179,13 @@ def add_eval(verbs: Verbs) -> None:
 def run_reach(args: argparse.Namespace) -> int:
     """Print Table III: classify random starts, run the chosen movement skill."""
     from osg_control.evaluation.evaluate import format_reach_table, reach_table
+    from osg_control.parallel import open_executor
 
     models = str(args.models) if args.models else None
-    table = reach_table(domain_of(args), models, args.episodes, args.seed, args.workers, args.noise)
+    with open_executor(args.backend, args.workers, args.address) as executor:
+        table = reach_table(
+            domain_of(args), models, args.episodes, args.seed, args.workers, args.noise, executor
+        )
     _emit(args, table, format_reach_table(table))
     return 0
 
@@ -199,6 +203,7 @@ def add_reach(verbs: Verbs) -> None:
     parser.add_argument("--episodes", type=_int_at_least(1), default=200, help="per start region")
     parser.add_argument("--seed", type=int, default=0)
     parser.add_argument("--workers", type=_int_at_least(1), default=2)
+    add_backend_arguments(parser)
     parser.add_argument("--noise", type=float, default=0.0, help="TCP observation noise [m]")
     parser.add_argument("--models", type=Path, help="defaults folder (default: shipped)")
     parser.add_argument("--json", action="store_true", help="print JSON instead of a table")

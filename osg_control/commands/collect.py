@@ -1,4 +1,4 @@
-"""``osg collect`` and ``osg datasets info``: scripted data collection and data set summaries."""
+"""``osg collect`` and ``osg datasets``: scripted data collection, summaries, Minari in/out."""
 
 from __future__ import annotations
 
@@ -7,10 +7,12 @@ import json
 import time
 from pathlib import Path
 
-from osg_control.commands import domain_of
-from osg_control.data.collect import DEFAULT_EPISODES, LocalExecutor, collect_skill
+from osg_control.commands import add_backend_arguments, domain_of
+from osg_control.commands.minari import add_verbs as add_minari_verbs
+from osg_control.data.collect import DEFAULT_EPISODES, collect_skill
 from osg_control.data.datasets import dataset_summary, load_dataset
 from osg_control.errors import DatasetError
+from osg_control.parallel import open_executor
 from osg_control.paths import cache_dir
 
 
@@ -22,6 +24,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     collect.add_argument("--skill", default="all", help="a skill name, or 'all' (default)")
     collect.add_argument("--episodes", type=int, default=DEFAULT_EPISODES)
     collect.add_argument("--workers", type=int, default=2)
+    add_backend_arguments(collect)
     collect.add_argument("--seed", type=int, default=0)
     collect.add_argument("--out", type=Path, default=None, help="default: <cache>/<domain>/data")
     collect.add_argument("--json", action="store_true", help="print a JSON summary")
@@ -33,6 +36,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     info.add_argument("path", type=Path)
     info.add_argument("--json", action="store_true")
     info.set_defaults(func=run_info)
+    add_minari_verbs(verbs)
 
 
 def run_collect(args: argparse.Namespace) -> int:
@@ -40,16 +44,16 @@ def run_collect(args: argparse.Namespace) -> int:
     domain = domain_of(args)
     skills = list(domain.skills) if args.skill == "all" else [domain.skill(args.skill)]
     out = args.out or cache_dir() / domain.name / "data"
-    executor = LocalExecutor(args.workers)
     rows = []
-    for skill in skills:
-        started = time.perf_counter()
-        dataset = collect_skill(
-            domain, skill, args.episodes, args.seed, out, executor, not args.json
-        )
-        summary = dataset_summary(dataset)
-        summary["seconds"] = round(time.perf_counter() - started, 2)
-        rows.append(summary)
+    with open_executor(args.backend, args.workers, args.address) as executor:
+        for skill in skills:
+            started = time.perf_counter()
+            dataset = collect_skill(
+                domain, skill, args.episodes, args.seed, out, executor, not args.json
+            )
+            summary = dataset_summary(dataset)
+            summary["seconds"] = round(time.perf_counter() - started, 2)
+            rows.append(summary)
     if args.json:
         print(json.dumps(rows, indent=2))
     else:

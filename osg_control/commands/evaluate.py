@@ -6,8 +6,9 @@ import argparse
 import json
 from pathlib import Path
 
-from osg_control.commands import add_filter_argument, domain_of
+from osg_control.commands import add_backend_arguments, add_filter_argument, domain_of
 from osg_control.evaluation.evaluate import format_task_table, task_table
+from osg_control.parallel import open_executor
 
 
 def register(subparsers: argparse._SubParsersAction) -> None:
@@ -21,6 +22,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     tasks.add_argument("--noise", type=float, default=0.02, help="TCP observation noise [m]")
     tasks.add_argument("--seed", type=int, default=0)
     tasks.add_argument("--workers", type=int, default=2)
+    add_backend_arguments(tasks)
     tasks.add_argument("--task", nargs="*", default=None, help="task names (default: all)")
     tasks.add_argument(
         "--replans",
@@ -37,16 +39,18 @@ def register(subparsers: argparse._SubParsersAction) -> None:
 
 def run_tasks(args: argparse.Namespace) -> int:
     """Print Tables IV and V."""
-    table = task_table(
-        domain_of(args),
-        str(args.models) if args.models else None,
-        args.episodes,
-        args.seed,
-        args.workers,
-        args.noise,
-        args.task,
-        args.replans,
-        args.filter,
-    )
+    with open_executor(args.backend, args.workers, args.address) as executor:
+        table = task_table(
+            domain_of(args),
+            str(args.models) if args.models else None,
+            args.episodes,
+            args.seed,
+            args.workers,
+            args.noise,
+            args.task,
+            args.replans,
+            args.filter,
+            executor,
+        )
     print(json.dumps(table, indent=2) if args.json else format_task_table(table))
     return 0

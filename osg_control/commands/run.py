@@ -9,12 +9,13 @@ from typing import Any
 
 import numpy as np
 
-from osg_control.commands import add_filter_argument, domain_of
+from osg_control.commands import add_backend_arguments, add_filter_argument, domain_of
 from osg_control.domain.base import Domain
 from osg_control.environment.arm_env import EnvConfig
 from osg_control.evaluation.evaluate import format_skill_table, skill_table
 from osg_control.execution.defaults import defaults_root
 from osg_control.execution.executor import load_executor
+from osg_control.parallel import open_executor
 
 
 def register(subparsers: argparse._SubParsersAction) -> None:
@@ -46,6 +47,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     skills.add_argument("--noise", type=float, nargs="+", default=[0.0, 0.01, 0.02])
     skills.add_argument("--seed", type=int, default=0)
     skills.add_argument("--workers", type=int, default=2)
+    add_backend_arguments(skills)
     skills.add_argument("--skill", nargs="*", default=None, help="default: all")
     skills.add_argument(
         "--models",
@@ -123,15 +125,17 @@ def run_eval_skills(args: argparse.Namespace) -> int:
     """Print Table I."""
     domain = domain_of(args)
     models = args.models or defaults_root(domain) / "skills"
-    table = skill_table(
-        domain,
-        models,
-        args.noise,
-        args.episodes,
-        args.seed,
-        args.workers,
-        args.skill,
-        filter_gain=args.filter,
-    )
+    with open_executor(args.backend, args.workers, args.address) as executor:
+        table = skill_table(
+            domain,
+            models,
+            args.noise,
+            args.episodes,
+            args.seed,
+            args.workers,
+            args.skill,
+            filter_gain=args.filter,
+            executor=executor,
+        )
     print(json.dumps(table, indent=2) if args.json else format_skill_table(table))
     return 0

@@ -1,21 +1,20 @@
 """Scripted noisy data collection (Algorithm 1): parallel, deterministic, resumable.
 
 Episode ``i`` of a skill draws everything from ``SeedSequence([skill_seed(seed, name), i])``
-(``osg_control.seeding``), so the data set is the same whatever the number of workers, and
-adding a skill to a domain changes no other skill's data. Episodes are written in chunks, each
-atomically, under ``<out>/.parts/<skill>/``; an interrupted run keeps every finished chunk
-and the same command continues where it stopped. When all chunks exist they are merged
+(``osg_control.seeding``), so the data set is the same whatever the number of workers or the
+backend, and adding a skill to a domain changes no other skill's data. Workers return each
+chunk's episodes and this process writes the chunk, atomically, under
+``<out>/.parts/<skill>/``; an interrupted run keeps every finished chunk and the same
+command continues where it stopped. When all chunks exist they are merged
 into ``<out>/<skill>.h5`` (atomically) and the parts are removed.
 """
 
 from __future__ import annotations
 
 import shutil
-from collections.abc import Callable, Iterable, Iterator
-from concurrent.futures import ProcessPoolExecutor
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any, Protocol, TypeVar
+from typing import Any
 
 import numpy as np
 from tqdm import tqdm
@@ -27,6 +26,7 @@ from osg_control.domain.base import Domain
 from osg_control.domain.registry import get_domain
 from osg_control.domain.spec import SkillSpec
 from osg_control.environment.arm_env import ArmEnv, EnvConfig
+from osg_control.parallel import LocalExecutor, TaskExecutor
 from osg_control.seeding import skill_seed
 
 DEFAULT_EPISODES = 300
@@ -36,33 +36,6 @@ HOLD_STEPS = 10
 (Algorithm 1 acting on it past its budget). Without them the data ends where beta is first
 reached, and learned policies that missed the goal by a little under observation noise
 carried on past it (see docs/learning.md)."""
-T = TypeVar("T")
-R = TypeVar("R")
-
-
-class TaskExecutor(Protocol):
-    """Maps a function over items, yielding results in order (local pool, Ray, ...)."""
-
-    def map(self, fn: Callable[[T], R], items: Iterable[T]) -> Iterator[R]:
-        """Apply ``fn`` to every item; results come back in the items' order."""
-        ...
-
-
-class LocalExecutor:
-    """Runs tasks in this process (``workers=1``) or a local process pool."""
-
-    def __init__(self, workers: int = 1) -> None:
-        if workers < 1:
-            raise ValueError(f"workers must be >= 1, got {workers}")
-        self.workers = workers
-
-    def map(self, fn: Callable[[T], R], items: Iterable[T]) -> Iterator[R]:
-        if self.workers == 1:
-            yield from map(fn, items)
-            return
-        with ProcessPoolExecutor(max_workers=self.workers) as pool:
-            yield from pool.map(fn, items)
-
 
 _ENVS: dict[tuple[str, str], ArmEnv] = {}
 
@@ -136,13 +109,12 @@ class ChunkTask:
     path: Path
 
 
-def _run_chunk(task: ChunkTask) -> tuple[int, int]:
+def _run_chunk(task: ChunkTask) -> list[Episode]:
+    """A chunk's episodes; the caller writes them, so workers need no shared file system."""
     domain = get_domain(task.domain)
-    episodes = [
+    return [
         run_scripted_episode(domain, task.skill, task.seed, i) for i in range(task.start, task.stop)
     ]
-    write_episodes(task.path, episodes, _attrs(domain, task.skill, task.seed))
-    return len(episodes), sum(e.success for e in episodes)
 
 
 def _attrs(domain: Domain, skill: SkillSpec, seed: int) -> dict[str, Any]:
@@ -197,10 +169,12 @@ def collect_skill(
         int(load_dataset(t.path).episode_successes.sum()) for t in tasks if t.path.exists()
     )
     bar = tqdm(total=episodes, initial=done_eps, desc=skill.name, unit="ep", disable=not progress)
-    for count, wins in (executor or LocalExecutor()).map(_run_chunk, todo):
-        done_eps += count
-        successes += wins
-        bar.update(count)
+    chunks = (executor or LocalExecutor()).map(_run_chunk, todo)
+    for task, chunk in zip(todo, chunks, strict=True):
+        write_episodes(task.path, chunk, _attrs(domain, skill, seed))
+        done_eps += len(chunk)
+        successes += sum(e.success for e in chunk)
+        bar.update(len(chunk))
         bar.set_postfix(success=f"{successes / max(done_eps, 1):.2f}")
     bar.close()
     merged = [load_dataset(t.path) for t in tasks]

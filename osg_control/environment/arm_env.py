@@ -41,6 +41,11 @@ __all__ = ["ACTION_BOUNDS", "ArmEnv", "EnvConfig"]
 OBS_DIM = 10
 ACTION_BOUNDS = np.array([0.02, 0.02, 0.02, 0.1, 0.1, 0.1, 1.0])
 """Per-step bound of each action component: 2 cm, 0.1 rad, and the gripper's [-1, 1]."""
+OBS_LOW = np.array([-2.0, -2.0, -2.0, -1.0, -1.0, -1.0, -1.0, -1.0, 0.0, -0.01])
+OBS_HIGH = np.array([2.0, 2.0, 2.0, 1.0, 1.0, 1.0, 1.0, 1.0, 70.0, 0.1])
+"""Observation bounds: TCP position within 2 m of the base (reach 0.86 m, plus noise), a
+unit quaternion, the gripper command, its force (the actuator's 70 N force range) and the
+finger distance (0 to 8 cm, with slack for contact penetration)."""
 CONTROL_HZ = 20.0
 GRIPPER_OPEN_CMD = 1.0
 GRIPPER_CLOSED_CMD = -1.0
@@ -75,6 +80,20 @@ class EnvConfig:
 def canonical_quat(quat_wxyz: np.ndarray) -> np.ndarray:
     """Flip a quaternion's sign into the hemisphere of ``TOP_DOWN_QUAT``."""
     return -quat_wxyz if float(np.dot(quat_wxyz, _TOP_DOWN)) < 0 else quat_wxyz
+
+
+def success_holds(
+    skill: SkillSpec, end: Node, position: np.ndarray, gripper_cmd: float, facts: frozenset[str]
+) -> bool:
+    """A skill's success predicate (beta): TCP ``position`` within tolerance of its ``end``
+    node, the gripper command of that node, its effects among ``facts``. Pure, so it also
+    runs over recorded states."""
+    if np.linalg.norm(np.asarray(position) - np.asarray(end.position)) > skill.success_tolerance:
+        return False
+    wanted = GRIPPER_OPEN_CMD if end.gripper == "open" else GRIPPER_CLOSED_CMD
+    if gripper_cmd != wanted:
+        return False
+    return skill.add_effects <= facts and not (skill.del_effects & facts)
 
 
 def _quat_rotation(quat_wxyz: tuple[float, float, float, float]) -> Rotation:
@@ -144,7 +163,7 @@ class ArmEnv(gym.Env):
         self._robot_bodies = {
             b for b in range(self.model.nbody) if self.model.body(b).name.startswith("panda_")
         }
-        self.observation_space = gym.spaces.Box(-np.inf, np.inf, (OBS_DIM,), np.float64)
+        self.observation_space = gym.spaces.Box(OBS_LOW, OBS_HIGH, (OBS_DIM,), np.float64)
         self.action_space = gym.spaces.Box(-ACTION_BOUNDS, ACTION_BOUNDS, (7,), np.float64)
         self._gripper_cmd = GRIPPER_OPEN_CMD
         self._steps = 0
@@ -390,15 +409,10 @@ class ArmEnv(gym.Env):
         skill = skill or self.skill
         if skill is None:
             return False
-        pos, _ = self.tcp_pose()
-        end = self.nodes[skill.end]
-        if np.linalg.norm(pos - np.asarray(end.position)) > skill.success_tolerance:
-            return False
-        wanted = GRIPPER_OPEN_CMD if end.gripper == "open" else GRIPPER_CLOSED_CMD
-        if self._gripper_cmd != wanted:
-            return False
         facts = self.facts_of(self.read_world() if world is None else world)
-        return skill.add_effects <= facts and not (skill.del_effects & facts)
+        return success_holds(
+            skill, self.nodes[skill.end], self.tcp_pose()[0], self._gripper_cmd, facts
+        )
 
     def _info(self, world: np.ndarray | None = None) -> dict[str, Any]:
         world = self.read_world() if world is None else world

@@ -19,11 +19,12 @@ from typing import Any
 import numpy as np
 
 from osg_control.control.estimator import FilteredPolicy
-from osg_control.data.collect import LocalExecutor, run_scripted_episode
+from osg_control.data.collect import run_scripted_episode
 from osg_control.domain.base import Domain
 from osg_control.domain.registry import get_domain
 from osg_control.domain.spec import nearest_start
 from osg_control.environment.arm_env import ArmEnv, EnvConfig
+from osg_control.parallel import LocalExecutor, TaskExecutor
 from osg_control.seeding import skill_seed
 
 
@@ -93,12 +94,14 @@ def skill_table(
     skills: Sequence[str] | None = None,
     scripted_episodes: int = 100,
     filter_gain: float | None = None,
+    executor: TaskExecutor | None = None,
 ) -> dict[str, Any]:
     """Table I: success rate of every learned skill at each observation-noise level.
 
     Args:
         filter_gain: run the policies on ``estimator.TcpFilter`` estimates with this gain;
             None (the paper's protocol) feeds them the raw noisy observation.
+        executor: where the episodes run (default: a local pool of ``workers``).
 
     Returns:
         ``{"noise": [...], "episodes": N, "filter_gain": g, "rows": [{"skill",
@@ -107,7 +110,7 @@ def skill_table(
     names = list(skills or domain.skills_by_name)
     for name in names:
         domain.skill(name)
-    executor = LocalExecutor(workers)
+    executor = executor or LocalExecutor(workers)
     tasks = [
         SkillEpisode(domain.name, name, str(policy_dir), float(noise), seed, k, i, filter_gain)
         for name in names
@@ -239,15 +242,20 @@ def reach_table(
     seed: int = 0,
     workers: int = 2,
     noise: float = 0.0,
+    executor: TaskExecutor | None = None,
 ) -> dict[str, Any]:
-    """Table III: entry-skill success from random starts around the domain's start regions."""
+    """Table III: entry-skill success from random starts around the domain's start regions.
+
+    ``executor``: where the episodes run (default: a local pool of ``workers``).
+    """
     regions = domain.start_regions
     tasks = [
         StartEpisode(domain.name, "reach", models, r, noise, seed, r, i)
         for r in range(len(regions))
         for i in range(episodes)
     ]
-    results = np.array(list(LocalExecutor(workers).map(run_reach_episode, tasks)), dtype=float)
+    executor = executor or LocalExecutor(workers)
+    results = np.array(list(executor.map(run_reach_episode, tasks)), dtype=float)
     results = results.reshape(len(regions), episodes, 3).mean(axis=1)
     rows = [
         {
@@ -316,11 +324,13 @@ def task_table(
     tasks: Sequence[str] | None = None,
     replans: Sequence[int] = (0, 2),
     filter_gain: float | None = None,
+    executor: TaskExecutor | None = None,
 ) -> dict[str, Any]:
     """Tables IV and V: task success per start region, without and with replanning.
 
     ``tasks``: task names (default: all the domain's); ``filter_gain``: the executor's
-    ``TcpFilter`` gain (None: raw observations).
+    ``TcpFilter`` gain (None: raw observations); ``executor``: where the episodes run
+    (default: a local pool of ``workers``).
     """
     regions = domain.start_regions
     tasks = [domain.task(t).name for t in (tasks or [t.name for t in domain.tasks])]
@@ -330,7 +340,8 @@ def task_table(
         for (t, r, k) in cells
         for i in range(episodes)
     ]
-    outcomes = np.array(list(LocalExecutor(workers).map(run_task_episode, jobs)), dtype=float)
+    executor = executor or LocalExecutor(workers)
+    outcomes = np.array(list(executor.map(run_task_episode, jobs)), dtype=float)
     rates = outcomes.reshape(len(replans), len(tasks), len(regions), episodes).mean(axis=3)
     return {
         "episodes": episodes,

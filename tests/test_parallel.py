@@ -1,0 +1,100 @@
+"""Executor backends without Ray: backend names, and local pool workers dying with osg."""
+
+from __future__ import annotations
+
+import os
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import pytest
+
+from osg_control.cli import main
+from osg_control.errors import BackendError
+from osg_control.parallel import LocalExecutor, open_executor
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+def _square(x: int) -> int:
+    return x * x
+
+
+def _children(pid: int) -> list[int]:
+    """Every live descendant of ``pid`` (read from /proc)."""
+    parents: dict[int, int] = {}
+    for entry in Path("/proc").iterdir():
+        if entry.name.isdigit():
+            try:
+                stat = (entry / "stat").read_text()
+            except OSError:
+                continue
+            fields = stat.rsplit(")", 1)[1].split()
+            if fields[0] != "Z":
+                parents[int(entry.name)] = int(fields[1])
+    found, frontier = [], [pid]
+    while frontier:
+        parent = frontier.pop()
+        kids = [p for p, pp in parents.items() if pp == parent]
+        found += kids
+        frontier += kids
+    return found
+
+
+def _alive(pid: int) -> bool:
+    try:
+        state = Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()[0]
+    except OSError:
+        return False
+    return state != "Z"
+
+
+def test_local_pool_returns_results_in_order() -> None:
+    assert list(LocalExecutor(2).map(_square, range(7))) == [x * x for x in range(7)]
+
+
+def test_unknown_backend_lists_the_known_ones() -> None:
+    with pytest.raises(BackendError, match="unknown backend 'dask'; known backends: local, ray"):
+        with open_executor("dask", 1):
+            pass
+
+
+def test_address_without_ray_backend_is_refused() -> None:
+    with pytest.raises(BackendError, match="--address needs --backend ray"):
+        with open_executor("local", 1, "127.0.0.1:6379"):
+            pass
+
+
+def test_cli_rejects_an_unknown_backend(capsys: pytest.CaptureFixture[str]) -> None:
+    with pytest.raises(SystemExit):
+        main(["collect", "--backend", "dask"])
+    assert "choose from 'local', 'ray'" in capsys.readouterr().err
+
+
+@pytest.mark.skipif(not sys.platform.startswith("linux"), reason="reads /proc")
+@pytest.mark.parametrize("sig", [signal.SIGKILL, signal.SIGTERM])
+def test_pool_workers_exit_when_osg_collect_is_killed(tmp_path: Path, sig: int) -> None:
+    env = {**os.environ, "PYTHONPATH": str(ROOT), "OSG_CACHE_DIR": str(tmp_path)}
+    command = [sys.executable, "-m", "osg_control.cli", "collect", "--skill", "move-home-to-door"]
+    command += ["--episodes", "400", "--workers", "2", "--out", str(tmp_path), "--json"]
+    parent = subprocess.Popen(command, env=env, stdout=subprocess.DEVNULL)
+    workers: list[int] = []
+    try:
+        deadline = time.monotonic() + 60
+        while len(workers) < 2 and time.monotonic() < deadline:
+            time.sleep(0.2)
+            workers = _children(parent.pid)
+        assert len(workers) >= 2, "the pool never started"
+        parent.send_signal(sig)
+        parent.wait(timeout=10)
+        deadline = time.monotonic() + 10
+        while any(map(_alive, workers)) and time.monotonic() < deadline:
+            time.sleep(0.1)
+        assert not [w for w in workers if _alive(w)], "pool workers outlived osg collect"
+    finally:
+        parent.kill()
+        for pid in workers:
+            if _alive(pid):
+                os.kill(pid, signal.SIGKILL)

@@ -1,0 +1,132 @@
+"""The Ray backend on a local Ray instance (2 CPUs): same bytes and tables as the local
+pool, a killed worker's chunk rerun, clear errors when Ray is missing or unreachable."""
+
+from __future__ import annotations
+
+import hashlib
+import os
+import signal
+import socket
+import sys
+import threading
+import time
+from collections.abc import Iterator
+from pathlib import Path
+
+import pytest
+
+from osg_control.cli import main
+from osg_control.data.collect import collect_skill
+from osg_control.domain.registry import get_domain
+from osg_control.errors import BackendError
+from osg_control.evaluation.evaluate import task_table
+from osg_control.parallel import LocalExecutor, open_executor
+from osg_control.parallel.ray_backend import RayExecutor
+
+KITCHEN = get_domain("kitchen")
+
+ray = pytest.importorskip("ray")
+SKILL = "move-home-to-door"
+
+
+@pytest.fixture(scope="module")
+def ray_executor() -> Iterator[RayExecutor]:
+    """One small local Ray instance for the module, shut down after it."""
+    ray.init(num_cpus=2, include_dashboard=False, log_to_driver=False)
+    try:
+        yield RayExecutor()
+    finally:
+        ray.shutdown()
+
+
+def _sha256(path: Path) -> str:
+    return hashlib.sha256(path.read_bytes()).hexdigest()
+
+
+def _closed_port() -> int:
+    with socket.socket() as sock:
+        sock.bind(("127.0.0.1", 0))
+        return int(sock.getsockname()[1])
+
+
+def _ray_workers_running(function: str) -> list[int]:
+    """Processes of this test's Ray instance now running ``function`` (their title)."""
+    pids = []
+    for entry in Path("/proc").iterdir():
+        if entry.name.isdigit():
+            try:
+                title = (entry / "cmdline").read_bytes().split(b"\0")[0].decode()
+            except OSError:
+                continue
+            if title == f"ray::{function}":
+                pids.append(int(entry.name))
+    return pids
+
+
+def test_ray_collection_has_the_same_bytes_as_the_local_pool(
+    tmp_path: Path, ray_executor: RayExecutor
+) -> None:
+    local = collect_skill(KITCHEN, SKILL, 6, 3, tmp_path / "local", LocalExecutor(2), False, 2)
+    remote = collect_skill(KITCHEN, SKILL, 6, 3, tmp_path / "ray", ray_executor, False, 2)
+    assert _sha256(local.path) == _sha256(remote.path)
+
+
+def test_ray_task_table_equals_the_local_one(ray_executor: RayExecutor) -> None:
+    args = (None, 1, 0, 2, 0.02, ["open-door"], [0])
+    local = task_table(KITCHEN, *args, executor=LocalExecutor(2))
+    remote = task_table(KITCHEN, *args, executor=ray_executor)
+    assert remote == local
+    assert len(local["rates"][0][0]) == 8
+
+
+@pytest.mark.skipif(not sys.platform.startswith("linux"), reason="reads /proc")
+def test_a_killed_ray_worker_has_its_chunk_rerun(tmp_path: Path, ray_executor: RayExecutor) -> None:
+    reference = collect_skill(KITCHEN, SKILL, 12, 4, tmp_path / "ref", LocalExecutor(1), False, 4)
+    killed: list[int] = []
+
+    def kill_one_worker() -> None:
+        deadline = time.monotonic() + 60
+        while not killed and time.monotonic() < deadline:
+            running = _ray_workers_running("_run_chunk")
+            if running:
+                os.kill(running[0], signal.SIGKILL)
+                killed.append(running[0])
+            time.sleep(0.05)
+
+    killer = threading.Thread(target=kill_one_worker)
+    killer.start()
+    result = collect_skill(KITCHEN, SKILL, 12, 4, tmp_path / "ray", ray_executor, False, 4)
+    killer.join()
+    assert killed, "no Ray worker was seen running a chunk"
+    assert result.num_episodes == 12
+    assert _sha256(result.path) == _sha256(reference.path)
+
+
+def test_unreachable_ray_address_fails_fast_with_the_address() -> None:
+    address = f"127.0.0.1:{_closed_port()}"
+    started = time.monotonic()
+    with pytest.raises(BackendError, match=f"Ray cluster at '{address}' is unreachable"):
+        with open_executor("ray", 1, address):
+            pass
+    assert time.monotonic() - started < 10
+
+
+def test_cli_reports_an_unreachable_cluster(capsys: pytest.CaptureFixture[str]) -> None:
+    address = f"127.0.0.1:{_closed_port()}"
+    code = main(["collect", "--skill", SKILL, "--episodes", "1", "--backend", "ray",
+                 "--address", address])  # fmt: skip
+    assert code == 1
+    assert "unreachable" in capsys.readouterr().err
+
+
+def test_malformed_ray_address_is_named() -> None:
+    with pytest.raises(BackendError, match="'nowhere' is not HOST:PORT"):
+        with open_executor("ray", 1, "nowhere"):
+            pass
+
+
+def test_missing_ray_says_how_to_install(monkeypatch: pytest.MonkeyPatch) -> None:
+    monkeypatch.setitem(sys.modules, "ray", None)
+    with pytest.raises(BackendError, match=r"pip install 'osg-control\[ray\]'"):
+        with open_executor("ray", 1):
+            pass
