@@ -67,6 +67,7 @@ class Checker:
     def __init__(self, path: str) -> None:
         """Remember the file name for messages."""
         self.path = path
+        self.spelling: dict[str, str] = {}  # type names as first spelled in the file
 
     def fail(self, where: SExpr, message: str) -> PDDLError:
         """A ``PDDLError`` for ``path:line: message``."""
@@ -97,9 +98,12 @@ class Checker:
             if isinstance(item, Atom) and item.text == "-":
                 kind = items[i + 1] if i + 1 < len(items) else None
                 if isinstance(kind, List) and kind.head() == "either":
-                    names = tuple(self.atom(t, "a type", kind).text for t in kind.items[1:])
+                    kinds = [self.atom(t, "a type", kind) for t in kind.items[1:]]
                 else:
-                    names = (self.atom(kind, "a type after '-'", item).text,)
+                    kinds = [self.atom(kind, "a type after '-'", item)]
+                for atom in kinds:
+                    self.spelling.setdefault(atom.text, atom.spelled)
+                names = tuple(atom.text for atom in kinds)
                 result += [(name, names) for name in pending]
                 pending = []
                 i += 2
@@ -112,7 +116,8 @@ class Checker:
         """Every type in ``kinds`` declared (``object`` always is)."""
         for kind in kinds:
             if kind != OBJECT and kind not in decl.types:
-                raise self.fail(where, f"undeclared type '{kind}' (of '{where.spelled}')")
+                spelled = self.spelling.get(kind, kind)
+                raise self.fail(where, f"undeclared type '{spelled}' (of '{where.spelled}')")
 
 
 def sections(tree: List, checker: Checker, kind: str) -> tuple[Atom, list[List]]:

@@ -185,17 +185,22 @@ class PlanResult:
         return {**asdict(self), "solved": self.solved, "status": self.status, "cost": self.cost}
 
 
+def goal_literals(task: Task) -> tuple[str, ...]:
+    """The goal as literals: its facts, then ``(not fact)`` for each negative goal."""
+    return (*sorted(task.goal), *(f"(not {f})" for f in sorted(task.goal_neg)))
+
+
 def no_plan(planner: str, task: Task, stats: SearchStats) -> PlanResult:
     """The "no plan" answer, naming the goal facts that stay unreached."""
     unreached = task.goal - task.reachable or task.goal - task.init
     return PlanResult(
-        planner, task.name, tuple(sorted(task.goal)), None, stats, tuple(sorted(unreached))
+        planner, task.name, goal_literals(task), None, stats, tuple(sorted(unreached))
     )
 
 
 def unknown(planner: str, task: Task, stats: SearchStats, limit: str) -> PlanResult:
     """The "unknown" answer of a search stopped by ``limit`` (e.g. ``time limit 10 s``)."""
-    return PlanResult(planner, task.name, tuple(sorted(task.goal)), None, stats, limit=limit)
+    return PlanResult(planner, task.name, goal_literals(task), None, stats, limit=limit)
 
 
 def plan_result(planner: str, task: Task, names: Sequence[str], stats: SearchStats) -> PlanResult:
@@ -211,4 +216,4 @@ def plan_result(planner: str, task: Task, names: Sequence[str], stats: SearchSta
         )
         raise PlanningError(f"{planner}: plan for {task.name!r} does not reach {missing}")
     steps = tuple(PlanStep(name, task.operator(name).cost) for name in names)
-    return PlanResult(planner, task.name, tuple(sorted(task.goal)), steps, stats)
+    return PlanResult(planner, task.name, goal_literals(task), steps, stats)
