@@ -11,17 +11,15 @@ import json
 from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import asdict, dataclass, field, replace
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
-from matplotlib.figure import Figure
-from matplotlib.patches import FancyArrowPatch
-from scipy.cluster.hierarchy import fcluster, linkage
 
-from osg_control.datasets import Dataset
 from osg_control.errors import DatasetError, SkillSpecError
-from osg_control.scene import world_facts, world_state_from_array
 from osg_control.skills import NODES, SKILLS, WORLD_FACTS, SkillSpec, get_skill
+
+if TYPE_CHECKING:  # the data-set and scene modules (h5py, MuJoCo) load only with data
+    from osg_control.datasets import Dataset
 
 GRAPH_FORMAT = "osg-skill-graph"
 GRAPH_VERSION = 1
@@ -194,6 +192,8 @@ def _cluster(
     sets: Sequence[_PointSet], cluster_distance: float
 ) -> tuple[np.ndarray, list[np.ndarray]]:
     """Average-linkage clusters of all points; returns cluster centres and per-set labels."""
+    from scipy.cluster.hierarchy import fcluster, linkage  # here: planning never needs scipy
+
     points = np.concatenate([s.points for s in sets])
     if len(points) == 1:
         labels = np.zeros(1, dtype=int)
@@ -268,6 +268,8 @@ def _match_regions(
 def _observed_effects(dataset: Dataset) -> Observed:
     """Majority-vote add/delete effects over the successful episodes (first step vs the step
     that first reached beta)."""
+    from osg_control.scene import world_facts, world_state_from_array  # MuJoCo: with data only
+
     worlds = dataset.arrays["world_states"]
     firsts = dataset.episode_starts[dataset.episode_successes]
     lasts = dataset.first_success_steps
@@ -495,6 +497,9 @@ def draw_graph(graph: SkillGraph, path: str | Path, projection: str = "yz") -> N
         raise ValueError(f"unknown projection {projection!r}; known: {', '.join(PROJECTIONS)}")
     a, b = PROJECTIONS[projection]
     where = {n.name: (n.position[a], n.position[b]) for n in graph.nodes}
+    from matplotlib.figure import Figure  # here: only drawing needs matplotlib
+    from matplotlib.patches import FancyArrowPatch
+
     fig = Figure(figsize=(10, 8))  # Agg canvas, no pyplot: never touches the global backend
     ax = fig.subplots()
     bend = 0.2
