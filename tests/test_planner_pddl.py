@@ -15,8 +15,14 @@ import pytest
 from osg_control.cli import main
 from osg_control.commands.plan import NO_PLAN_EXIT, PDDL_ERROR_EXIT, UNKNOWN_EXIT
 from osg_control.errors import PDDLError
+from osg_control.planning import api
 from osg_control.planning.api import plan_files
+from osg_control.planning.classic import write_classic
 from osg_control.planning.fast_downward import find_fast_downward
+from osg_control.planning.grounding import ground
+from osg_control.planning.heuristics import HMax
+from osg_control.planning.lmcut import LMCut
+from osg_control.planning.reader import read_pair
 from osg_control.planning.task import SearchLimits
 
 FIXTURES = Path(__file__).resolve().parent / "fixtures" / "pddl"
@@ -162,3 +168,27 @@ def test_unbroken_inline_pair_plans(tmp_path: Path) -> None:
     (tmp_path / "domain.pddl").write_text(DOMAIN)
     (tmp_path / "problem.pddl").write_text(PROBLEM)
     assert plan_files(tmp_path / "domain.pddl", tmp_path / "problem.pddl").actions == ("move a b",)
+
+
+@pytest.mark.parametrize(("name", "size"), [("gripper", 3), ("blocks", 5), ("logistics", 3)])
+def test_lmcut_is_admissible_and_dominates_hmax(name: str, size: int, tmp_path: Path) -> None:
+    pair = read_pair(*write_classic(name, size, tmp_path))
+    task = ground(pair.domain, pair.problem)
+    result = plan_files(*write_classic(name, size, tmp_path), planner="ucs")
+    assert result.cost is not None
+    lmcut, hmax = LMCut(task), HMax(task)
+    state, cost_to_go = task.init, result.cost
+    for step in result.steps or ():
+        assert hmax(state) <= lmcut(state) <= cost_to_go
+        state = task.operator(step.action).apply(state)
+        cost_to_go -= step.cost
+    assert lmcut(state) == 0
+
+
+@needs_fd
+def test_auto_hands_a_task_past_its_budget_to_fast_downward(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    monkeypatch.setattr(api, "AUTO_BUDGET", SearchLimits(max_states=2))
+    result = plan_files(*_pair("costs"), planner="auto")
+    assert result.planner == "fast-downward" and result.cost == OPTIMAL["costs"]
