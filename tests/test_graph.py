@@ -18,9 +18,8 @@ from osg_control.graph import (
     graph_from_specs,
     load_graph,
     save_graph,
-    world_facts,
 )
-from osg_control.scene import WorldState, world_state_from_array
+from osg_control.scene import WorldState, world_facts, world_state_from_array
 from osg_control.skills import NODES, SKILLS, SkillSpec
 
 STEPS = 6

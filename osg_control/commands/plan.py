@@ -146,8 +146,8 @@ def register(subparsers: Verbs) -> None:
         "--planner",
         choices=PLANNER_NAMES,
         default="auto",
-        help="search (default: auto: the built-in A* with LM-cut on small tasks, Fast "
-        "Downward when that runs past a small budget)",
+        help="search (default: auto: the built-in A* with h_max within 1 s, then Fast "
+        "Downward; astar: A* with LM-cut)",
     )
     parser.add_argument(
         "--time-limit",
