@@ -216,7 +216,7 @@ def _parser_text(text: str, tree: List, decl: Declarations, dropped: list[Atom])
     if old:
         edits += [(s.start, s.end, "") for s in old[1:]]
         edits.append((old[0].start, old[0].end, listing))
-    elif tree.items[1].end and isinstance(tree.items[1], List) and tree.items[1].head() == "domain":
+    elif isinstance(tree.items[1], List) and tree.items[1].head() == "domain":
         edits.append((tree.items[1].end, tree.items[1].end, " " + listing))
     lowered = lower_ascii(text)
     for start, end, new in sorted(edits, reverse=True):
