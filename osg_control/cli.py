@@ -1,20 +1,47 @@
-"""The ``osg`` command: one sub-command per verb, each in ``osg_control.commands``."""
+"""The ``osg`` command: one sub-command per verb, each in ``osg_control.commands``.
+
+Only the module of the verb being run is imported (the others are listed by name and help
+from ``VERBS``), so ``osg --help`` and ``osg plan`` start without torch, MuJoCo or the
+collector; ``tools/bench_startup.py`` measures it.
+"""
 
 from __future__ import annotations
 
 import argparse
 import importlib
 import sys
-from collections.abc import Sequence
+from collections.abc import Collection, Sequence
 
 from osg_control import __version__
 from osg_control.commands import COMMAND_MODULES
 from osg_control.domain.registry import DEFAULT_DOMAIN
 from osg_control.errors import OSGError
 
+VERBS: tuple[tuple[str, str, str], ...] = (
+    ("collect", "collect", "record scripted noisy episodes (Algorithm 1), one HDF5 file per skill"),
+    ("datasets", "collect", "inspect data set files"),
+    ("run", "run", "execute a task: classify, plan, run skills"),
+    ("eval-skills", "run", "Table I: learned skills under noise"),
+    ("evaluate", "evaluate", "full-pipeline evaluations"),
+    ("classifier", "classifier", "state->skill classifier: train, eval, reach"),
+    ("train", "train", "learn skills from their offline data sets (TD3+BC)"),
+    ("graph", "graph", "build the skill graph, check it against data, save or draw it"),
+    ("pddl", "pddl", "export the skill graph as PDDL"),
+    ("plan", "plan", "plan a skill sequence for a goal"),
+    ("reproduce", "reproduce", "run the whole pipeline and write a report"),
+    ("domains", "domains", "list the registered domains (skills, facts, tasks, start regions)"),
+)
+"""Every verb: its name, the ``osg_control.commands`` module that registers it, its help
+(a test checks these against the modules), in ``COMMAND_MODULES`` order."""
 
-def build_parser() -> argparse.ArgumentParser:
-    """Assemble the parser from every registered command module."""
+
+def build_parser(modules: Collection[str] | None = None) -> argparse.ArgumentParser:
+    """Assemble the parser.
+
+    Args:
+        modules: the command modules to import and register in full; the verbs of the
+            others get a bare parser with their help (enough to list them). None: all.
+    """
     parser = argparse.ArgumentParser(
         prog="osg",
         description="Offline Skill Graph robot control: collect, train, plan, run.",
@@ -27,13 +54,37 @@ def build_parser() -> argparse.ArgumentParser:
     )
     subparsers = parser.add_subparsers(dest="command", metavar="COMMAND")
     for module_name in COMMAND_MODULES:
-        importlib.import_module(f"osg_control.commands.{module_name}").register(subparsers)
+        if modules is None or module_name in modules:
+            importlib.import_module(f"osg_control.commands.{module_name}").register(subparsers)
+        else:
+            for verb, module, help_text in VERBS:
+                if module == module_name:
+                    subparsers.add_parser(verb, help=help_text)
     return parser
+
+
+GLOBAL_OPTIONS_WITH_VALUE = ("--domain",)
+"""Options before the verb that take a value (the value is not the verb)."""
+
+
+def _modules_for(argv: Sequence[str]) -> list[str]:
+    """The command module of the verb in ``argv`` (the first word that is neither an option
+    nor an option's value), if any."""
+    verb = None
+    words = iter(argv)
+    for word in words:
+        if word in GLOBAL_OPTIONS_WITH_VALUE:
+            next(words, None)
+        elif not word.startswith("-"):
+            verb = word
+            break
+    return [module for name, module, _ in VERBS if name == verb]
 
 
 def main(argv: Sequence[str] | None = None) -> int:
     """Entry point; returns the process exit code (2 for usage, 1 for an osg-control error)."""
-    parser = build_parser()
+    argv = sys.argv[1:] if argv is None else list(argv)
+    parser = build_parser(_modules_for(argv))
     args = parser.parse_args(argv)
     if not getattr(args, "func", None):
         parser.print_help()

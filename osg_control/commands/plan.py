@@ -4,18 +4,32 @@ from __future__ import annotations
 
 import argparse
 import json
+import sys
 from pathlib import Path
-from typing import TypeAlias
+from typing import TYPE_CHECKING, TypeAlias
 
 from osg_control.commands import domain_of
-from osg_control.errors import PlanningError
-from osg_control.planning.api import PLANNERS, plan_files, plan_for_goal
-from osg_control.planning.graph import load_graph
-from osg_control.planning.task import PlanResult
+from osg_control.errors import PDDLError, PlanningError
+
+if TYPE_CHECKING:
+    from osg_control.planning.task import PlanResult
 
 Verbs: TypeAlias = "argparse._SubParsersAction[argparse.ArgumentParser]"
 NO_PLAN_EXIT = 3
 """Exit status when the planner proves there is no plan."""
+UNKNOWN_EXIT = 4
+"""Exit status when the search stopped at a limit (time, states) without an answer."""
+PDDL_ERROR_EXIT = 5
+"""Exit status for a PDDL file that is malformed, undeclared names, or unsupported."""
+EXIT_STATUS = {"solved": 0, "unsolvable": NO_PLAN_EXIT, "unknown": UNKNOWN_EXIT}
+PLANNER_NAMES = ("astar", "astar-hmax", "auto", "fast-downward", "ucs")
+"""``planning.api.PLANNERS``' names, here so that building the parser imports no planner."""
+EPILOG = (
+    f"Exit status: 0 with a plan; {NO_PLAN_EXIT} when there is none (proved: a complete "
+    f"search ran out); {UNKNOWN_EXIT} when a limit stopped the search first (unknown); "
+    f"{PDDL_ERROR_EXIT} for a PDDL file that is malformed, names something undeclared or "
+    "uses an unsupported construct; 1 on other errors; 2 on usage errors."
+)
 
 
 def format_plan(result: PlanResult) -> str:
@@ -33,6 +47,8 @@ def format_plan(result: PlanResult) -> str:
         f"{stats.expanded} expanded, {stats.generated} generated states in "
         f"{stats.time_s * 1000:.1f} ms"
     )
+    if result.status == "unknown":
+        return f"unknown for {goal} [{result.planner}]: stopped at the {result.limit}\n{effort}"
     if result.steps is None:
         return (
             f"no plan for {goal} [{result.planner}]; goal facts unreached: "
@@ -54,31 +70,53 @@ def run_plan(args: argparse.Namespace) -> int:
         args: parsed ``osg plan`` arguments.
 
     Returns:
-        0 with a plan, ``NO_PLAN_EXIT`` without one.
+        0 with a plan, ``NO_PLAN_EXIT`` without one, ``UNKNOWN_EXIT`` at a limit,
+        ``PDDL_ERROR_EXIT`` for a bad PDDL file (the error printed).
 
     Raises:
         PlanningError: neither or both of ``--goal`` and DOMAIN PROBLEM given, or not two
             files.
     """
+    try:
+        result = _plan(args)
+    except PDDLError as err:
+        print(f"osg: error: {err}", file=sys.stderr)
+        return PDDL_ERROR_EXIT
+    print(json.dumps(result.to_dict(), indent=2) if args.json else format_plan(result))
+    return EXIT_STATUS[result.status]
+
+
+def _plan(args: argparse.Namespace) -> PlanResult:
+    """Plan for the files or the goal of ``args``, within its limits."""
+    from osg_control.planning.api import plan_files, plan_for_goal
+    from osg_control.planning.task import SearchLimits
+
+    limits = SearchLimits(args.time_limit, args.max_states)
     if args.files:
         if args.goal is not None:
             raise PlanningError("give either DOMAIN PROBLEM or --goal, not both")
         if len(args.files) != 2:
             raise PlanningError(f"give a DOMAIN and a PROBLEM file, got {len(args.files)} file(s)")
-        result = plan_files(args.files[0], args.files[1], args.planner)
-    else:
-        if args.goal is None:
-            raise PlanningError(
-                'give a goal (--goal "door-open cube-in-cabinet") or DOMAIN PROBLEM files'
-            )
-        from osg_control.planning.costs import measured_graph
+        return plan_files(
+            args.files[0],
+            args.files[1],
+            args.planner,
+            limits,
+            warn=lambda message: print(f"osg: warning: {message}", file=sys.stderr),
+        )
+    if args.goal is None:
+        raise PlanningError(
+            'give a goal (--goal "door-open cube-in-cabinet") or DOMAIN PROBLEM files'
+        )
+    from osg_control.planning.costs import measured_graph
+    from osg_control.planning.graph import load_graph
 
-        domain = domain_of(args)
-        graph = load_graph(args.graph) if args.graph else measured_graph(domain)
-        facts = None if args.facts is None else args.facts.split()
-        result = plan_for_goal(domain, args.goal, args.from_node, facts, args.planner, graph)
-    print(json.dumps(result.to_dict(), indent=2) if args.json else format_plan(result))
-    return 0 if result.solved else NO_PLAN_EXIT
+    domain = domain_of(args)
+    graph = load_graph(args.graph) if args.graph else measured_graph(domain)
+    facts = None if args.facts is None else args.facts.split()
+    return plan_for_goal(
+        domain, args.goal, args.from_node, facts, args.planner, graph, limits=limits
+    )
 
 
 def register(subparsers: Verbs) -> None:
@@ -87,8 +125,9 @@ def register(subparsers: Verbs) -> None:
         "plan",
         help="plan a skill sequence for a goal",
         description="Find the cheapest skill sequence (operator costs from success rates) "
-        "for a goal of the domain, or solve any STRIPS/typing/action-costs PDDL pair.",
-        epilog=f"Exit status: 0 with a plan, {NO_PLAN_EXIT} when there is none, 1 on errors.",
+        "for a goal of the domain, or solve a PDDL pair (STRIPS, typing, negative "
+        "preconditions, equality, action costs; names case-insensitive).",
+        epilog=EPILOG,
     )
     parser.add_argument(
         "files",
@@ -113,7 +152,26 @@ def register(subparsers: Verbs) -> None:
         "shipped defaults' measured success rates)",
     )
     parser.add_argument(
-        "--planner", choices=sorted(PLANNERS), default="astar", help="search (default: astar)"
+        "--planner",
+        choices=PLANNER_NAMES,
+        default="auto",
+        help="search (default: auto: the built-in A* with h_max within 1 s, then Fast "
+        "Downward; astar: A* with LM-cut)",
+    )
+    parser.add_argument(
+        "--time-limit",
+        type=float,
+        default=300.0,
+        metavar="S",
+        help="stop the search after S seconds with the answer unknown (default: 300)",
+    )
+    parser.add_argument(
+        "--max-states",
+        type=int,
+        default=5_000_000,
+        metavar="N",
+        help="stop the built-in search once it holds N states (memory), answer unknown "
+        "(default: 5000000)",
     )
     parser.add_argument("--json", action="store_true", help="print the result as JSON")
     parser.set_defaults(func=run_plan)

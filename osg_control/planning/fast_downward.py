@@ -8,6 +8,7 @@ script is located on disk and run in a subprocess with an optimal configuration
 from __future__ import annotations
 
 import importlib.util
+import math
 import re
 import subprocess
 import sys
@@ -16,11 +17,29 @@ import time
 from pathlib import Path
 
 from osg_control.errors import PlanningError
-from osg_control.planning.task import PlanResult, SearchStats, Task, no_plan, plan_result
+from osg_control.planning.task import (
+    NO_LIMITS,
+    PlanResult,
+    SearchLimits,
+    SearchStats,
+    Task,
+    no_plan,
+    plan_result,
+    unknown,
+)
 
 ALIAS = "seq-opt-lmcut"
 UNSOLVABLE_EXIT_CODES = frozenset({10, 11})
 """The driver's exit codes for "proved unsolvable" by the translator or the search."""
+LIMIT_EXIT_CODES = {
+    12: "search incomplete",
+    22: "memory limit",
+    23: "time limit",
+    24: "time and memory limits",
+}
+"""The driver's exit codes for "stopped without an answer", and what stopped it."""
+_GRACE_S = 30.0
+"""Seconds the subprocess gets beyond the driver's own time limit before it is killed."""
 _EXPANDED = re.compile(r"\] Expanded (\d+) state", re.MULTILINE)
 _GENERATED = re.compile(r"\] Generated (\d+) state", re.MULTILINE)
 
@@ -47,7 +66,7 @@ def _read_plan(path: Path) -> list[str]:
 
 
 def run_fast_downward(
-    task: Task, domain_file: Path, problem_file: Path, timeout_s: float = 120.0
+    task: Task, domain_file: Path, problem_file: Path, limits: SearchLimits = NO_LIMITS
 ) -> PlanResult:
     """Plan with Fast Downward on PDDL files; report the plan in terms of ``task``.
 
@@ -58,15 +77,17 @@ def run_fast_downward(
         task: the ground task of the files.
         domain_file: the PDDL domain.
         problem_file: the PDDL problem.
-        timeout_s: wall-clock limit for the subprocess [s].
+        limits: ``time_s`` becomes the driver's ``--overall-time-limit`` (``max_states``
+            concerns the built-in search only).
 
     Returns:
         The plan (stats: states Fast Downward expanded and generated, wall time including
-        its translator and process start), or a "no plan" result.
+        its translator and process start), a "no plan" result when Fast Downward proves
+        there is none, or "unknown" when it stopped at a limit.
 
     Raises:
-        PlanningError: the driver is missing, times out, fails, or returns a plan that does
-            not solve ``task``.
+        PlanningError: the driver is missing, fails, or returns a plan that does not solve
+            ``task``.
     """
     driver = find_fast_downward()
     if driver is None:
@@ -81,18 +102,21 @@ def run_fast_downward(
             str(driver),
             "--plan-file",
             str(plan_file),
+            *(["--overall-time-limit", f"{math.ceil(limits.time_s)}s"] if limits.time_s else []),
             "--alias",
             ALIAS,
             str(Path(domain_file).resolve()),
             str(Path(problem_file).resolve()),
         ]
         start = time.perf_counter()
+        timeout = limits.time_s + _GRACE_S if limits.time_s else None
         try:
             done = subprocess.run(
-                command, cwd=tmp, capture_output=True, text=True, timeout=timeout_s, check=False
+                command, cwd=tmp, capture_output=True, text=True, timeout=timeout, check=False
             )
         except subprocess.TimeoutExpired:
-            raise PlanningError(f"Fast Downward timed out after {timeout_s} s") from None
+            stats = SearchStats(0, 0, time.perf_counter() - start)
+            return unknown("fast-downward", task, stats, f"time limit {limits.time_s:g} s")
         stats = SearchStats(
             expanded=_first_int(_EXPANDED, done.stdout),
             generated=_first_int(_GENERATED, done.stdout),
@@ -100,6 +124,8 @@ def run_fast_downward(
         )
         if done.returncode in UNSOLVABLE_EXIT_CODES:
             return no_plan("fast-downward", task, stats)
+        if done.returncode in LIMIT_EXIT_CODES:
+            return unknown("fast-downward", task, stats, LIMIT_EXIT_CODES[done.returncode])
         if done.returncode != 0 or not plan_file.is_file():
             tail = "\n".join((done.stdout + done.stderr).strip().splitlines()[-8:])
             raise PlanningError(f"Fast Downward failed (exit code {done.returncode}):\n{tail}")

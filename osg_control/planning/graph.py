@@ -11,15 +11,16 @@ import json
 from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import asdict, dataclass, field, replace
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
-from scipy.cluster.hierarchy import fcluster, linkage
 
-from osg_control.data.datasets import Dataset
 from osg_control.domain.base import Domain
 from osg_control.domain.spec import Node, SkillSpec, skill_from_json
 from osg_control.errors import DatasetError, SkillSpecError
+
+if TYPE_CHECKING:  # the data-set module (h5py) loads only with data
+    from osg_control.data.datasets import Dataset
 
 GRAPH_FORMAT = "osg-skill-graph"
 GRAPH_VERSION = 1
@@ -196,6 +197,8 @@ def _cluster(
     sets: Sequence[_PointSet], cluster_distance: float
 ) -> tuple[np.ndarray, list[np.ndarray]]:
     """Average-linkage clusters of all points; returns cluster centres and per-set labels."""
+    from scipy.cluster.hierarchy import fcluster, linkage  # here: planning never needs scipy
+
     points = np.concatenate([s.points for s in sets])
     if len(points) == 1:
         labels = np.zeros(1, dtype=int)

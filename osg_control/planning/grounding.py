@@ -1,15 +1,17 @@
-"""Ground a parsed STRIPS + typing + action-costs domain/problem into a ``Task``.
+"""Ground a parsed domain/problem pair into a ``Task``.
 
-Anything beyond those three requirements (negative or disjunctive preconditions, equality,
-conditional or quantified effects, derived predicates, numeric fluents) is rejected with a
-``PDDLError`` that names the requirement, so no task is ever silently mis-read.
+Supported: STRIPS, typing, negative preconditions and goals, equality, and action costs
+(constants or static numeric functions). Anything else (disjunctive or quantified
+preconditions, conditional effects, derived predicates, numeric fluents) is rejected with a
+``PDDLError`` that names the requirement, so no task is ever silently mis-read. Files are
+checked with lines before (``planning.reader``); this covers domains built in code too.
 """
 
 from __future__ import annotations
 
 from collections import deque
 from collections.abc import Iterator, Mapping, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 from pddl.action import Action
 from pddl.core import Domain, Problem
@@ -27,23 +29,17 @@ from pddl.logic.functions import (
     ScaleUp,
 )
 from pddl.logic.predicates import EqualTo as EqualityAtom
-from pddl.requirements import Requirements
 
 from osg_control.errors import PDDLError
 from osg_control.planning.task import Fact, Operator, Task
 
-SUPPORTED_REQUIREMENTS = frozenset(
-    {Requirements.STRIPS, Requirements.TYPING, Requirements.ACTION_COSTS}
-)
-SUPPORTED = ":strips :typing :action-costs"
+SUPPORTED = ":strips :typing :negative-preconditions :equality :action-costs"
 TOTAL_COST = "total-cost"
 OBJECT = "object"
 
 _NEEDS: dict[type, str] = {
-    Not: ":negative-preconditions",
     Or: ":disjunctive-preconditions",
     Imply: ":disjunctive-preconditions",
-    EqualityAtom: ":equality",
     ForallCondition: ":universal-preconditions",
     ExistsCondition: ":existential-preconditions",
     When: ":conditional-effects",
@@ -59,6 +55,11 @@ _NEEDS: dict[type, str] = {
 def fact(name: str, args: Sequence[str] = ()) -> Fact:
     """A ground atom in PDDL syntax: ``fact("at", ["home"]) == "(at home)"``."""
     return "(" + " ".join([name, *args]) + ")"
+
+
+def norm(name: object) -> str:
+    """A PDDL name in its normal form (lower case): names are case-insensitive."""
+    return str(name).lower()
 
 
 def _unsupported(where: str, formula: object) -> PDDLError:
@@ -78,25 +79,47 @@ def _conjuncts(formula: Formula | None) -> list[Formula]:
 
 
 def _term_names(terms: Sequence[Variable | Constant]) -> tuple[str, ...]:
-    """Variables as ``?name``, objects by name."""
-    return tuple(f"?{t.name}" if isinstance(t, Variable) else str(t.name) for t in terms)
+    """Variables as ``?name``, objects by name (normal form)."""
+    return tuple(f"?{norm(t.name)}" if isinstance(t, Variable) else norm(t.name) for t in terms)
 
 
 @dataclass(frozen=True)
 class _Atom:
-    """A lifted atom: predicate name and terms (``?var`` or object names)."""
+    """A lifted atom: predicate (or function) name and terms (``?var`` or object names)."""
 
     name: str
     terms: tuple[str, ...]
 
+    def args(self, binding: Mapping[str, str]) -> tuple[str, ...]:
+        """The terms with the variables replaced by their objects."""
+        return tuple(binding.get(t, t) for t in self.terms)
+
     def ground(self, binding: Mapping[str, str]) -> Fact:
-        return fact(self.name, [binding.get(t, t) for t in self.terms])
+        """The ground fact under ``binding``."""
+        return fact(self.name, self.args(binding))
 
 
 def _atom(formula: object, where: str) -> _Atom:
-    if not isinstance(formula, Predicate):
-        raise _unsupported(where, formula)
-    return _Atom(formula.name, _term_names(formula.terms))
+    if isinstance(formula, Predicate):
+        return _Atom(norm(formula.name), _term_names(formula.terms))
+    if isinstance(formula, EqualityAtom):
+        return _Atom("=", _term_names([formula.left, formula.right]))
+    raise _unsupported(where, formula)
+
+
+def _literals(formula: Formula | None, where: str) -> tuple[list[_Atom], list[_Atom]]:
+    """A conjunction of literals as its positive and its negative atoms."""
+    positive, negative = [], []
+    for part in _conjuncts(formula):
+        if isinstance(part, Not):
+            negative.append(_atom(part.argument, where))
+        else:
+            positive.append(_atom(part, where))
+    return positive, negative
+
+
+Cost = int | _Atom
+"""An action's cost: a constant, or a static numeric function term looked up in the init."""
 
 
 @dataclass(frozen=True)
@@ -106,15 +129,18 @@ class _Schema:
     name: str
     parameters: tuple[tuple[str, frozenset[str]], ...]  # ("?x", type tags)
     pre: tuple[_Atom, ...]
+    pre_neg: tuple[_Atom, ...]
     add: tuple[_Atom, ...]
     delete: tuple[_Atom, ...]
-    cost: int
+    cost: Cost
 
 
-def _cost(effect: Increase, where: str) -> int:
+def _cost(effect: Increase, where: str) -> Cost:
     target, amount = effect.operands
-    if not isinstance(target, NumericFunction) or target.name != TOTAL_COST:
+    if not isinstance(target, NumericFunction) or norm(target.name) != TOTAL_COST:
         raise PDDLError(f"{where}: only (increase (total-cost) n) is supported, got {effect}")
+    if isinstance(amount, NumericFunction):
+        return _Atom(norm(amount.name), _term_names(amount.terms))
     value = amount.value if isinstance(amount, NumericValue) else -1
     if value < 0 or value != int(value):
         raise PDDLError(f"{where}: action cost {amount} is not a non-negative integer")
@@ -124,20 +150,24 @@ def _cost(effect: Increase, where: str) -> int:
 def _schema(action: Action) -> _Schema:
     where = f"action {action.name!r}"
     add, delete = [], []
-    cost = 0  # Fast Downward: an action without (increase (total-cost) n) costs 0
+    cost: Cost = 0  # Fast Downward: an action without (increase (total-cost) n) costs 0
     for effect in _conjuncts(action.effect):
         if isinstance(effect, Increase):
             cost = _cost(effect, where)
         elif isinstance(effect, Not):
             delete.append(_atom(effect.argument, f"{where} effect"))
-        else:
+        elif isinstance(effect, Predicate):
             add.append(_atom(effect, f"{where} effect"))
+        else:
+            raise _unsupported(f"{where} effect", effect)
+    pre, pre_neg = _literals(action.precondition, f"{where} precondition")
     return _Schema(
-        name=action.name,
+        name=norm(action.name),
         parameters=tuple(
-            (f"?{p.name}", frozenset(map(str, p.type_tags))) for p in action.parameters
+            (f"?{norm(p.name)}", frozenset(map(norm, p.type_tags))) for p in action.parameters
         ),
-        pre=tuple(_atom(f, f"{where} precondition") for f in _conjuncts(action.precondition)),
+        pre=tuple(pre),
+        pre_neg=tuple(pre_neg),
         add=tuple(add),
         delete=tuple(delete),
         cost=cost,
@@ -145,22 +175,18 @@ def _schema(action: Action) -> _Schema:
 
 
 def _check_support(domain: Domain, problem: Problem) -> None:
-    requirements = set(domain.requirements) | set(problem.requirements or ())
-    unsupported = sorted(str(r) for r in requirements - SUPPORTED_REQUIREMENTS)
-    if unsupported:
-        raise PDDLError(
-            f"domain {domain.name!r}: requirement(s) {' '.join(unsupported)} not supported "
-            f"by the planner (supported: {SUPPORTED})"
-        )
     if domain.derived_predicates:
-        raise PDDLError(f"domain {domain.name!r}: derived predicates are not supported")
-    if problem.domain_name != domain.name:
+        raise PDDLError(
+            f"domain {domain.name!r}: derived predicates need :derived-predicates, which the "
+            f"planner does not support (supported: {SUPPORTED})"
+        )
+    if norm(problem.domain_name) != norm(domain.name):
         raise PDDLError(
             f"problem {problem.name!r} is for domain {problem.domain_name!r}, not {domain.name!r}"
         )
     metric = problem.metric
     if metric is not None and (
-        metric.optimization != "minimize" or str(metric.expression) != f"({TOTAL_COST})"
+        metric.optimization != "minimize" or norm(metric.expression) != f"({TOTAL_COST})"
     ):
         raise PDDLError(
             f"problem {problem.name!r}: only (:metric minimize (total-cost)) is supported, "
@@ -170,29 +196,35 @@ def _check_support(domain: Domain, problem: Problem) -> None:
 
 def _objects_by_type(domain: Domain, problem: Problem) -> dict[str, set[str]]:
     """Every type's objects, subtypes' objects included (``object`` holds all)."""
-    parents = {str(k): (str(v) if v is not None else OBJECT) for k, v in domain.types.items()}
+    parents = {norm(k): (norm(v) if v is not None else OBJECT) for k, v in domain.types.items()}
     by_type: dict[str, set[str]] = {OBJECT: set(), **{t: set() for t in parents}}
     objects: set[Constant] = {*domain.constants, *problem.objects}
     for obj in objects:
-        kind = str(obj.type_tag) if obj.type_tag is not None else OBJECT
+        kind = norm(obj.type_tag) if obj.type_tag is not None else OBJECT
         if kind not in by_type:
             raise PDDLError(f"object {obj.name!r} has undeclared type {kind!r}")
         seen = set()
         while kind not in seen:  # up to `object`; `seen` guards against type cycles
             seen.add(kind)
-            by_type[kind].add(str(obj.name))
+            by_type[kind].add(norm(obj.name))
             kind = parents.get(kind, OBJECT)
     return by_type
 
 
-def _initial_state(problem: Problem) -> frozenset[Fact]:
-    """The init's facts (a ``(= (total-cost) 0)`` is allowed and ignored)."""
-    facts = set()
+def _initial_state(problem: Problem) -> tuple[frozenset[Fact], dict[Fact, float]]:
+    """The init's facts, and the values of its numeric functions by ground term."""
+    facts, values = set(), {}
     for item in problem.init:
-        if isinstance(item, EqualTo) and str(item.operands[0]) == f"({TOTAL_COST})":
-            continue
-        facts.add(_atom(item, "init").ground({}))
-    return frozenset(facts)
+        if isinstance(item, EqualTo):
+            term, value = item.operands
+            if not isinstance(term, NumericFunction) or not isinstance(value, NumericValue):
+                raise PDDLError(
+                    f"init: only (= (function objects) number) is supported, got {item}"
+                )
+            values[fact(norm(term.name), _term_names(term.terms))] = value.value
+        else:
+            facts.add(_atom(item, "init").ground({}))
+    return frozenset(facts), values
 
 
 def _unify(
@@ -233,7 +265,7 @@ def _bindings(
 
     Static atoms (predicates no action changes) are matched against the init first, so
     only their consistent bindings are enumerated; the remaining parameters range over
-    their types' objects.
+    their types' objects. Equalities and negated static atoms then filter the bindings.
     """
     candidates = {
         var: set().union(*(objects_by_type.get(t, set()) for t in tags))
@@ -242,11 +274,22 @@ def _bindings(
         for var, tags in schema.parameters
     }
     static_atoms = [atom for atom in schema.pre if atom.name in static]
+    equal = [atom for atom in schema.pre if atom.name == "="]
+    unequal = [atom for atom in schema.pre_neg if atom.name == "="]
+    absent = [atom for atom in schema.pre_neg if atom.name in static]
+    init_sets = {name: set(args) for name, args in init_args.items()}
+
+    def admissible(binding: dict[str, str]) -> bool:
+        return (
+            all(len(set(a.args(binding))) == 1 for a in equal)
+            and all(len(set(a.args(binding))) == 2 for a in unequal)
+            and not any(a.args(binding) in init_sets.get(a.name, ()) for a in absent)
+        )
 
     def match(i: int, binding: dict[str, str]) -> Iterator[dict[str, str]]:
         if i == len(static_atoms):
             free = [var for var, _ in schema.parameters if var not in binding]
-            yield from _product(free, candidates, binding)
+            yield from (b for b in _product(free, candidates, binding) if admissible(b))
             return
         for args in init_args.get(static_atoms[i].name, ()):
             extended = _unify(static_atoms[i].terms, args, binding, candidates)
@@ -285,13 +328,33 @@ def _relaxed_reachable(
     return usable, frozenset(reached)
 
 
+def _operator_cost(
+    schema: _Schema, binding: Mapping[str, str], values: Mapping[Fact, float]
+) -> int:
+    """The cost of a ground action: its constant, or its function term's init value."""
+    if isinstance(schema.cost, int):
+        return schema.cost
+    term = schema.cost.ground(binding)
+    value = values.get(term)
+    if value is None or value < 0 or value != int(value):
+        got = "no value in :init" if value is None else f"value {value}"
+        raise PDDLError(
+            f"action {schema.name!r}: cost {term} has {got}; an action cost must be a "
+            "non-negative integer"
+        )
+    return int(value)
+
+
 def ground(domain: Domain, problem: Problem) -> Task:
     """Ground every action over the typed objects and keep the relaxed-reachable operators.
 
-    Costs follow Fast Downward: with ``(:metric minimize (total-cost))`` an operator costs its
-    ``(increase (total-cost) n)`` (0 without one); without a metric every operator costs 1.
-    (The ``pddl`` parser only accepts constant costs here: function-valued costs need
-    ``:numeric-fluents``.)
+    Names are compared in normal form (lower case). Costs follow Fast Downward: with
+    ``(:metric minimize (total-cost))`` an operator costs its ``(increase (total-cost) c)``
+    (0 without one), ``c`` a constant or a static function term whose value the problem's
+    init gives; without a metric every operator costs 1. Static preconditions (positive,
+    negative, equalities) are decided here; the remaining negative preconditions and goals
+    stay on the operators and the task. The relaxed reachability ignores negative
+    preconditions, so it over-approximates: an operator it drops can never be applied.
     Ground operators are named ``action arg1 arg2`` (just ``action`` without parameters).
 
     Args:
@@ -302,31 +365,53 @@ def ground(domain: Domain, problem: Problem) -> Task:
         The ground task.
 
     Raises:
-        PDDLError: an unsupported requirement or construct (the requirement named), an
-            undeclared type, a problem for another domain, a metric other than minimising
-            total-cost, or a cost that is not a non-negative integer constant.
+        PDDLError: an unsupported construct (the requirement named), an undeclared type, a
+            problem for another domain, a metric other than minimising total-cost, or a
+            reachable action whose cost is not a non-negative integer.
     """
     _check_support(domain, problem)
     objects_by_type = _objects_by_type(domain, problem)
-    init = _initial_state(problem)
-    goal = frozenset(_atom(f, "goal").ground({}) for f in _conjuncts(problem.goal))
-    schemas = [_schema(action) for action in sorted(domain.actions, key=lambda a: a.name)]
+    init, values = _initial_state(problem)
+    goal, goal_neg = _literals(problem.goal, "goal")
+    schemas = [_schema(action) for action in sorted(domain.actions, key=lambda a: norm(a.name))]
     changed = {atom.name for s in schemas for atom in (*s.add, *s.delete)}
-    static = frozenset(p.name for p in domain.predicates) - changed
+    static = frozenset(norm(p.name) for p in domain.predicates) - changed
     init_args: dict[str, list[tuple[str, ...]]] = {}
     for f in sorted(init):
         name, *args = f[1:-1].split(" ")
         init_args.setdefault(name, []).append(tuple(args))
-    operators = [
-        Operator(
-            name=" ".join([schema.name, *(binding[var] for var, _ in schema.parameters)]),
-            pre=frozenset(a.ground(binding) for a in schema.pre),
-            add=frozenset(a.ground(binding) for a in schema.add),
-            delete=frozenset(a.ground(binding) for a in schema.delete),
-            cost=schema.cost if problem.metric is not None else 1,
+    ground_ops = [
+        (
+            schema,
+            binding,
+            Operator(
+                name=" ".join([schema.name, *(binding[var] for var, _ in schema.parameters)]),
+                pre=frozenset(a.ground(binding) for a in schema.pre if a.name != "="),
+                add=frozenset(a.ground(binding) for a in schema.add),
+                delete=frozenset(a.ground(binding) for a in schema.delete),
+                cost=0,
+                pre_neg=frozenset(
+                    a.ground(binding)
+                    for a in schema.pre_neg
+                    if a.name != "=" and a.name not in static
+                ),
+            ),
         )
         for schema in schemas
         for binding in _bindings(schema, static, init_args, objects_by_type)
     ]
-    usable, reachable = _relaxed_reachable(init, operators)
-    return Task(problem.name, init, goal, tuple(usable), reachable)
+    usable, reachable = _relaxed_reachable(init, [op for _, _, op in ground_ops])
+    kept = {id(op) for op in usable}
+    operators = tuple(
+        replace(op, cost=_operator_cost(schema, binding, values) if problem.metric else 1)
+        for schema, binding, op in ground_ops
+        if id(op) in kept
+    )
+    return Task(
+        problem.name,
+        init,
+        frozenset(a.ground({}) for a in goal),
+        operators,
+        reachable,
+        frozenset(a.ground({}) for a in goal_neg),
+    )

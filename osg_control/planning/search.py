@@ -1,4 +1,6 @@
-"""Best-first search over ground tasks: A* with h_max, and uniform-cost search (blind A*)."""
+"""Best-first search over ground tasks: A* with an admissible heuristic, and uniform-cost
+search (blind A*). Complete: a search that runs out of states proves the task unsolvable; one
+stopped by a ``SearchLimits`` bound answers "unknown"."""
 
 from __future__ import annotations
 
@@ -9,14 +11,17 @@ import time
 
 from osg_control.planning.heuristics import Heuristic
 from osg_control.planning.task import (
+    NO_LIMITS,
     Fact,
     Operator,
     PlanResult,
+    SearchLimits,
     SearchStats,
     State,
     Task,
     no_plan,
     plan_result,
+    unknown,
 )
 
 
@@ -38,7 +43,7 @@ class SuccessorGenerator:
         for op in operators:
             for f in op.pre:
                 share[f] = share.get(f, 0) + 1
-        self._always: list[Operator] = []
+        self._always: list[Operator] = []  # no positive precondition: tested every time
         self._by_fact: dict[Fact, list[Operator]] = {}
         for op in operators:
             if op.pre:
@@ -49,27 +54,34 @@ class SuccessorGenerator:
 
     def __call__(self, state: State) -> list[Operator]:
         """The operators applicable in ``state``."""
-        found = list(self._always)
+        found = [op for op in self._always if op.applicable(state)]
         for f in state:
-            found += (op for op in self._by_fact.get(f, ()) if op.pre <= state)
+            found += (op for op in self._by_fact.get(f, ()) if op.applicable(state))
         return found
 
 
-def best_first_search(task: Task, heuristic: Heuristic, planner: str) -> PlanResult:
+def best_first_search(
+    task: Task, heuristic: Heuristic, planner: str, limits: SearchLimits = NO_LIMITS
+) -> PlanResult:
     """A* (f = g + h, ties to the lower h, then first in); optimal for an admissible h.
 
     States are re-opened when reached more cheaply, so optimality holds even for an
-    inconsistent heuristic. Dead ends (h = inf) are pruned.
+    inconsistent heuristic. Dead ends (h = inf) are pruned, which is safe for a heuristic
+    that is infinite only on states from which the goal is unreachable.
 
     Args:
         task: the ground task.
         heuristic: the estimate of the cost to the goal.
         planner: the name recorded in the result.
+        limits: time and stored-state bounds.
 
     Returns:
-        The cheapest plan, or a "no plan" result naming the unreached goal facts.
+        The cheapest plan; "no plan" (naming the unreached goal facts) when the search ran
+        out of states; "unknown" when it reached a limit first.
     """
     start = time.perf_counter()
+    deadline = start + limits.time_s if limits.time_s is not None else math.inf
+    max_states = limits.max_states if limits.max_states is not None else math.inf
     successors = SuccessorGenerator(task.operators)
     best_g: dict[State, int] = {task.init: 0}
     parent: dict[State, tuple[State, Operator]] = {}
@@ -81,7 +93,7 @@ def best_first_search(task: Task, heuristic: Heuristic, planner: str) -> PlanRes
         _, _, _, g, state = heapq.heappop(open_list)
         if g > best_g[state]:
             continue  # a stale entry: the state was reached more cheaply since
-        if task.goal <= state:
+        if task.is_goal(state):
             names = []
             while state in parent:
                 state, op = parent[state]
@@ -89,6 +101,12 @@ def best_first_search(task: Task, heuristic: Heuristic, planner: str) -> PlanRes
             stats = SearchStats(expanded, generated, time.perf_counter() - start)
             return plan_result(planner, task, names[::-1], stats)
         expanded += 1
+        if time.perf_counter() > deadline:
+            stats = SearchStats(expanded, generated, time.perf_counter() - start)
+            return unknown(planner, task, stats, f"time limit {limits.time_s:g} s")
+        if len(best_g) > max_states:
+            stats = SearchStats(expanded, generated, time.perf_counter() - start)
+            return unknown(planner, task, stats, f"state limit {limits.max_states}")
         for op in successors(state):
             succ = op.apply(state)
             generated += 1

@@ -16,17 +16,19 @@ State = frozenset[Fact]
 
 @dataclass(frozen=True)
 class Operator:
-    """A ground action: applicable when ``pre <= state``; leads to ``(state - delete) | add``."""
+    """A ground action: applicable when ``pre <= state`` and no ``pre_neg`` fact holds;
+    leads to ``(state - delete) | add``."""
 
     name: str
     pre: frozenset[Fact]
     add: frozenset[Fact]
     delete: frozenset[Fact]
     cost: int
+    pre_neg: frozenset[Fact] = frozenset()
 
     def applicable(self, state: State) -> bool:
-        """Whether every precondition holds in ``state``."""
-        return self.pre <= state
+        """Whether every precondition holds in ``state`` (and no negated one)."""
+        return self.pre <= state and self.pre_neg.isdisjoint(state)
 
     def apply(self, state: State) -> State:
         """The successor state (delete first, then add, as in PDDL)."""
@@ -44,6 +46,7 @@ class Task:
         operators: the ground operators reachable in the delete relaxation.
         reachable: every fact reachable in the delete relaxation (a superset of what any
             plan can reach).
+        goal_neg: the facts that must be false at the end.
     """
 
     name: str
@@ -51,6 +54,11 @@ class Task:
     goal: frozenset[Fact]
     operators: tuple[Operator, ...]
     reachable: frozenset[Fact]
+    goal_neg: frozenset[Fact] = frozenset()
+
+    def is_goal(self, state: State) -> bool:
+        """Whether ``state`` satisfies the goal."""
+        return self.goal <= state and self.goal_neg.isdisjoint(state)
 
     @cached_property
     def _by_name(self) -> dict[str, Operator]:
@@ -85,7 +93,9 @@ class Task:
         for step, name in enumerate(names, start=1):
             op = self.operator(name)
             if not op.applicable(state):
-                missing = " ".join(sorted(op.pre - state))
+                missing = " ".join(
+                    sorted(op.pre - state) + [f"(not {f})" for f in sorted(op.pre_neg & state)]
+                )
                 raise PlanningError(f"step {step} ({name}): preconditions {missing} do not hold")
             state = op.apply(state)
         return state
@@ -97,6 +107,23 @@ class PlanStep:
 
     action: str
     cost: int
+
+
+@dataclass(frozen=True)
+class SearchLimits:
+    """Bounds on a search; reaching one gives the answer "unknown", never "no plan".
+
+    Attributes:
+        time_s: wall-clock seconds, or None for no bound.
+        max_states: states kept in memory (the built-in search), or None for no bound.
+    """
+
+    time_s: float | None = None
+    max_states: int | None = None
+
+
+NO_LIMITS = SearchLimits()
+"""An unbounded search."""
 
 
 @dataclass(frozen=True)
@@ -120,6 +147,7 @@ class PlanResult:
         stats: search effort.
         unreached: when there is no plan: the goal facts unreachable even in the delete
             relaxation, or, if all of them are reachable there, every goal fact unmet initially.
+        limit: when the search stopped at a limit (the answer is then "unknown"): which.
     """
 
     planner: str
@@ -128,11 +156,19 @@ class PlanResult:
     steps: tuple[PlanStep, ...] | None
     stats: SearchStats
     unreached: tuple[Fact, ...] = ()
+    limit: str | None = None
 
     @property
     def solved(self) -> bool:
         """Whether a plan was found."""
         return self.steps is not None
+
+    @property
+    def status(self) -> str:
+        """``solved``, ``unsolvable`` (proved: a complete search ran out) or ``unknown``."""
+        if self.steps is not None:
+            return "solved"
+        return "unknown" if self.limit is not None else "unsolvable"
 
     @property
     def cost(self) -> int | None:
@@ -146,15 +182,25 @@ class PlanResult:
 
     def to_dict(self) -> dict[str, Any]:
         """A JSON-ready dictionary, with ``solved`` and ``cost`` spelled out."""
-        return {**asdict(self), "solved": self.solved, "cost": self.cost}
+        return {**asdict(self), "solved": self.solved, "status": self.status, "cost": self.cost}
+
+
+def goal_literals(task: Task) -> tuple[str, ...]:
+    """The goal as literals: its facts, then ``(not fact)`` for each negative goal."""
+    return (*sorted(task.goal), *(f"(not {f})" for f in sorted(task.goal_neg)))
 
 
 def no_plan(planner: str, task: Task, stats: SearchStats) -> PlanResult:
     """The "no plan" answer, naming the goal facts that stay unreached."""
     unreached = task.goal - task.reachable or task.goal - task.init
     return PlanResult(
-        planner, task.name, tuple(sorted(task.goal)), None, stats, tuple(sorted(unreached))
+        planner, task.name, goal_literals(task), None, stats, tuple(sorted(unreached))
     )
+
+
+def unknown(planner: str, task: Task, stats: SearchStats, limit: str) -> PlanResult:
+    """The "unknown" answer of a search stopped by ``limit`` (e.g. ``time limit 10 s``)."""
+    return PlanResult(planner, task.name, goal_literals(task), None, stats, limit=limit)
 
 
 def plan_result(planner: str, task: Task, names: Sequence[str], stats: SearchStats) -> PlanResult:
@@ -164,8 +210,10 @@ def plan_result(planner: str, task: Task, names: Sequence[str], stats: SearchSta
         PlanningError: the plan is not executable or misses goal facts (a backend bug).
     """
     final = task.simulate(names)
-    if not task.goal <= final:
-        missing = " ".join(sorted(task.goal - final))
+    if not task.is_goal(final):
+        missing = " ".join(
+            sorted(task.goal - final) + [f"(not {f})" for f in sorted(task.goal_neg & final)]
+        )
         raise PlanningError(f"{planner}: plan for {task.name!r} does not reach {missing}")
     steps = tuple(PlanStep(name, task.operator(name).cost) for name in names)
-    return PlanResult(planner, task.name, tuple(sorted(task.goal)), steps, stats)
+    return PlanResult(planner, task.name, goal_literals(task), steps, stats)
