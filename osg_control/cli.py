@@ -13,8 +13,7 @@ import sys
 from collections.abc import Collection, Sequence
 
 from osg_control import __version__
-from osg_control.commands import COMMAND_MODULES
-from osg_control.domain.registry import DEFAULT_DOMAIN
+from osg_control.commands import COMMAND_MODULES, DEFAULT_DOMAIN
 from osg_control.errors import OSGError
 
 VERBS: tuple[tuple[str, str, str], ...] = (

@@ -38,7 +38,6 @@ from osg_control.cli import main
 from osg_control.data.datasets import ACTION_DIM, OBS_DIM, Episode, write_episodes
 from osg_control.domain.registry import get_domain
 from osg_control.errors import CheckpointError, DatasetError
-from osg_control.kitchen.scene import WORLD_FIELDS
 from osg_control.kitchen.skills import (
     MOVEMENT_SKILLS,
     NODES,
@@ -47,6 +46,7 @@ from osg_control.kitchen.skills import (
     SkillSpec,
     get_skill,
 )
+from osg_control.kitchen.world import WORLD_FIELDS
 
 WORLD = ",".join(WORLD_FIELDS)
 KITCHEN = get_domain("kitchen")

@@ -18,8 +18,8 @@ from osg_control.control.robot import HOME_Q
 from osg_control.environment.arm_env import ACTION_BOUNDS, OBS_DIM, EnvConfig
 from osg_control.errors import OSGError
 from osg_control.kitchen.env import KitchenEnv
-from osg_control.kitchen.scene import CUBE_HALF_SIZE, world_facts, world_state_from_array
 from osg_control.kitchen.skills import NODES, TOP_DOWN_QUAT
+from osg_control.kitchen.world import CUBE_HALF_SIZE, world_facts, world_state_from_array
 
 ZERO_ACTION = np.zeros(7)
 

@@ -13,8 +13,8 @@ from osg_control.cli import main
 from osg_control.data.datasets import Dataset, Episode, load_dataset, write_episodes
 from osg_control.domain.registry import get_domain
 from osg_control.errors import DatasetError, SkillSpecError
-from osg_control.kitchen.scene import WORLD_FIELDS, WorldState, world_facts, world_state_from_array
 from osg_control.kitchen.skills import NODES, SKILLS, SkillSpec
+from osg_control.kitchen.world import WORLD_FIELDS, WorldState, world_facts, world_state_from_array
 from osg_control.planning.graph import (
     graph_from_datasets,
     graph_from_specs,

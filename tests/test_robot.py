@@ -113,7 +113,7 @@ def test_kitchen_arm_matches_ik_model(tmp_path: Path, monkeypatch: pytest.Monkey
 
 def test_home_keyframe_is_home_q() -> None:
     model = robot.panda_spec(with_fingers=True).compile()
-    key = model.key("home")
+    key = model.key(robot.HOME_KEY)
     np.testing.assert_allclose(key.qpos[:7], HOME_Q)
     np.testing.assert_allclose(key.ctrl[:7], HOME_Q)
     assert model.nu == 8  # seven arm servos and the gripper

@@ -11,7 +11,6 @@ import pytest
 from osg_control.data.scripted import ScriptedPolicy
 from osg_control.domain.spec import skill_from_json
 from osg_control.errors import SkillSpecError
-from osg_control.kitchen.scene import WorldState, world_facts
 from osg_control.kitchen.skills import (
     RELEASE_STEPS,
     SKILLS,
@@ -19,6 +18,7 @@ from osg_control.kitchen.skills import (
     get_skill,
     validate_skill,
 )
+from osg_control.kitchen.world import WorldState, world_facts
 
 
 @pytest.mark.parametrize("skill", SKILLS, ids=lambda s: s.name)

@@ -14,8 +14,8 @@ import torch
 from osg_control.cli import main
 from osg_control.data.datasets import Episode, load_dataset, write_episodes
 from osg_control.errors import DatasetError
-from osg_control.kitchen.scene import WORLD_FIELDS
 from osg_control.kitchen.skills import get_skill
+from osg_control.kitchen.world import WORLD_FIELDS
 from osg_control.learning.checkpoints import Checkpoint, normalise_observations
 from osg_control.learning.policy import SkillPolicy, load_policies
 from osg_control.learning.td3bc import (

@@ -12,6 +12,9 @@ from typing import TYPE_CHECKING
 if TYPE_CHECKING:
     from osg_control.domain.base import Domain
 
+DEFAULT_DOMAIN = "kitchen"
+"""The domain ``osg`` uses without ``--domain``: the first one this package ships."""
+
 COMMAND_MODULES: tuple[str, ...] = (
     "collect",
     "run",

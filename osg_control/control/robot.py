@@ -29,6 +29,8 @@ HOME_Q = np.array([0.0, -0.785398, 0.0, -2.35619, 0.0, 1.5707, 0.785398])
 """Home arm configuration [rad] (the SRDF's ``default`` group state)."""
 FINGER_OPEN = 0.04
 """Finger joint travel when open [m] (each finger; distance between fingers is twice this)."""
+HOME_KEY = "arm-home"
+"""The MuJoCo keyframe of ``HOME_Q`` (fingers open) in every model built here."""
 
 # The TCP in the frame of panda_link7: link7 -> link8 (+0.107 z) -> hand (yaw -pi/4) -> tcp
 # (+0.1034 z), all read from the URDF's fixed joints. MuJoCo fuses those static links into
@@ -145,7 +147,7 @@ def panda_spec(with_fingers: bool = True) -> mujoco.MjSpec:
             spec.joint(name).damping = [20.0, 0.0, 0.0]
         qpos_home += [FINGER_OPEN, FINGER_OPEN]
     ctrl_home = list(HOME_Q) + ([FINGER_OPEN] if with_fingers else [])
-    spec.add_key(name="home", qpos=qpos_home, ctrl=ctrl_home)
+    spec.add_key(name=HOME_KEY, qpos=qpos_home, ctrl=ctrl_home)
     return spec
 
 

@@ -55,7 +55,7 @@ def check_dataset_id(dataset_id: str) -> str:
     """Return ``dataset_id`` if it is ``(namespace/)name-vN``; else raise ``DatasetError``."""
     if not DATASET_ID.fullmatch(dataset_id):
         raise DatasetError(
-            f"Minari data set id {dataset_id!r} is not NAMESPACE/NAME-vN (e.g. osg/grab-cube-v0)"
+            f"Minari data set id {dataset_id!r} is not NAMESPACE/NAME-vN (e.g. lab/my-skill-v0)"
         )
     return dataset_id
 

@@ -15,8 +15,6 @@ from osg_control.domain.base import Domain
 from osg_control.errors import DomainError
 
 ENTRY_POINT_GROUP = "osg_control.domains"
-DEFAULT_DOMAIN = "kitchen"
-"""The domain ``osg`` uses without ``--domain``."""
 
 _FACTORIES: dict[str, Callable[[], Domain]] = {}
 _BUILT: dict[str, Domain] = {}
@@ -38,7 +36,7 @@ def domain_names() -> list[str]:
     return sorted(set(_FACTORIES) | set(_installed()))
 
 
-def get_domain(name: str = DEFAULT_DOMAIN) -> Domain:
+def get_domain(name: str) -> Domain:
     """The domain registered under ``name``.
 
     Raises:

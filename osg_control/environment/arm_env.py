@@ -32,7 +32,14 @@ import numpy as np
 from scipy.spatial.transform import Rotation
 
 from osg_control.control.ik import DiffIKController, IKConfig, joint_reset_controller, solve_ik
-from osg_control.control.robot import ARM_JOINTS, FINGER_JOINTS, FINGER_OPEN, HOME_Q, TCP_SITE
+from osg_control.control.robot import (
+    ARM_JOINTS,
+    FINGER_JOINTS,
+    FINGER_OPEN,
+    HOME_KEY,
+    HOME_Q,
+    TCP_SITE,
+)
 from osg_control.domain.spec import TOP_DOWN_QUAT, Node, SkillSpec
 from osg_control.errors import SimulationError
 
@@ -298,7 +305,7 @@ class ArmEnv(gym.Env):
         facts: frozenset[str],
     ) -> bool:
         """Teleport the arm (IK) and the world; return False if the start is in collision."""
-        mujoco.mj_resetDataKeyframe(self.model, self.data, self.model.key("home").id)
+        mujoco.mj_resetDataKeyframe(self.model, self.data, self.model.key(HOME_KEY).id)
         q, converged = solve_ik(self.ik, HOME_Q, pos, rot, iterations=300)
         if not converged:
             return False

@@ -2,14 +2,15 @@
 
 from __future__ import annotations
 
+from typing import Any
+
 import numpy as np
 
 from osg_control.domain.base import Domain, StartRegion
-from osg_control.kitchen.env import KitchenEnv
 from osg_control.kitchen.paper import PUBLISHED
-from osg_control.kitchen.scene import WORLD_FIELDS, world_facts, world_state_from_array
 from osg_control.kitchen.skills import NODES, SKILLS, WORLD_FACTS
 from osg_control.kitchen.tasks import DEFAULT_WORLD, KITCHEN_TASKS
+from osg_control.kitchen.world import WORLD_FIELDS, world_facts, world_state_from_array
 from osg_control.paths import PACKAGE_DIR
 
 MEETING_NODES: tuple[str, ...] = ("home", "above-cube", "door-front", "cabinet-front")
@@ -41,8 +42,15 @@ def start_regions() -> tuple[StartRegion, ...]:
 
 
 def facts_of(world: np.ndarray) -> frozenset[str]:
-    """The kitchen's facts of a world-state vector (``scene.WORLD_FIELDS``)."""
+    """The kitchen's facts of a world-state vector (``world.WORLD_FIELDS``)."""
     return world_facts(world_state_from_array(world))
+
+
+def make_kitchen_env(**kwargs: Any) -> Any:
+    """A ``KitchenEnv`` (imported here: MuJoCo loads only when an env is made)."""
+    from osg_control.kitchen.env import KitchenEnv
+
+    return KitchenEnv(**kwargs)
 
 
 def kitchen_domain() -> Domain:
@@ -59,7 +67,7 @@ def kitchen_domain() -> Domain:
         home="home",
         world_fields=WORLD_FIELDS,
         facts_of=facts_of,
-        make_env=KitchenEnv,
+        make_env=make_kitchen_env,
         hand_empty="hand-empty",
         watched_facts=WATCHED_FACTS,
         defaults_dir=PACKAGE_DIR / "kitchen" / "defaults",

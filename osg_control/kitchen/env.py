@@ -1,7 +1,7 @@
 """``KitchenEnv``: the kitchen scene around the Panda (``ArmEnv`` with the kitchen's world).
 
-The world-state vector is ``scene.WORLD_FIELDS`` (door travel, valve angle, cube pose, which
-objects both fingers touch); its facts are ``scene.world_facts``. A start world is given by
+The world-state vector is ``world.WORLD_FIELDS`` (door travel, valve angle, cube pose, which
+objects both fingers touch); its facts are ``world.world_facts``. A start world is given by
 facts (``door-open`` slides the door to ``skills.DOOR_OPENED``) or explicitly with the
 ``world`` reset option (``door_opening`` [m], ``cube_pos``); ``holding`` is ``"cube"`` or
 ``"handle"``.
@@ -17,15 +17,14 @@ import numpy as np
 from osg_control.domain.spec import SkillSpec
 from osg_control.environment.arm_env import ArmEnv, EnvConfig
 from osg_control.errors import SkillSpecError, lookup
-from osg_control.kitchen.scene import (
+from osg_control.kitchen.scene import SceneIndex, build_kitchen_model
+from osg_control.kitchen.skills import DOOR_OPENED, NODES, SKILLS_BY_NAME
+from osg_control.kitchen.world import (
     CUBE_HALF_SIZE,
-    SceneIndex,
     WorldState,
-    build_kitchen_model,
     world_facts,
     world_state_from_array,
 )
-from osg_control.kitchen.skills import DOOR_OPENED, NODES, SKILLS_BY_NAME
 
 HANDLE_GRASP_SLACK = 0.015
 """How far along the handle fin [m] (x) a handle-holding start may grasp it: about the
@@ -66,11 +65,11 @@ class KitchenEnv(ArmEnv):
         return self.scene.read(self.model, self.data)
 
     def read_world(self) -> np.ndarray:
-        """``scene.WORLD_FIELDS`` of the current state."""
+        """``world.WORLD_FIELDS`` of the current state."""
         return self.scene.read(self.model, self.data).as_array()
 
     def facts_of(self, world: np.ndarray) -> frozenset[str]:
-        """``scene.world_facts`` of a world-state vector."""
+        """``world.world_facts`` of a world-state vector."""
         return world_facts(world_state_from_array(world))
 
     def place_world(

@@ -1,30 +1,29 @@
 """The kitchen scene: ``robots/kitchen.xml`` furniture with the URDF Panda attached at the origin.
 
-Also names the world's movable parts and reads their state (door opening, valve angle, cube
-pose, whether the cube is held) for skill effects and evaluation. Policies never see it.
+Also finds the world's movable parts in the compiled model and reads their state
+(``world.WorldState``) for skill effects and evaluation. Policies never see it.
 """
 
 from __future__ import annotations
 
 import os
 import warnings
-from dataclasses import dataclass
 from pathlib import Path
 
 import mujoco
 import numpy as np
 
-from osg_control.control.robot import ARM_JOINTS, FINGER_JOINTS, FINGER_OPEN, HOME_Q, panda_spec
+from osg_control.control.robot import (
+    ARM_JOINTS,
+    FINGER_JOINTS,
+    FINGER_OPEN,
+    HOME_KEY,
+    HOME_Q,
+    panda_spec,
+)
 from osg_control.errors import ModelNotFoundError
+from osg_control.kitchen.world import WorldState
 from osg_control.paths import PACKAGE_DIR
-
-CUBE_HALF_SIZE = 0.0225
-"""Half the cube's edge [m]."""
-CABINET_INTERIOR_LOW = np.array([0.52, 0.10, 0.10])
-CABINET_INTERIOR_HIGH = np.array([0.84, 0.56, 0.70])
-"""Axis-aligned bounds of the cabinet's interior [m], world frame."""
-DOOR_OPEN_MIN = 0.30
-"""Door travel [m] from which the door counts as open (the opening then clears the cube)."""
 
 
 def kitchen_xml_path() -> Path:
@@ -72,7 +71,7 @@ def build_kitchen_model() -> mujoco.MjModel:
     for name in FINGER_JOINTS:
         qpos[model.joint(name).qposadr[0]] = FINGER_OPEN
     ctrl[model.actuator("gripper").id] = FINGER_OPEN
-    spec.add_key(name="home", qpos=qpos, ctrl=ctrl)
+    spec.add_key(name=HOME_KEY, qpos=qpos, ctrl=ctrl)
     return _compile(spec)
 
 
@@ -80,111 +79,6 @@ def _compile(spec: mujoco.MjSpec) -> mujoco.MjModel:
     with warnings.catch_warnings():
         warnings.filterwarnings("ignore", message="Attaching a spec with an empty prefix")
         return spec.compile()
-
-
-@dataclass(frozen=True)
-class WorldState:
-    """What the simulator knows beyond the robot's 10-D state (never fed to policies).
-
-    Attributes:
-        door_opening: door travel along its slide [m] (0 = shut).
-        valve_angle: valve knob angle [rad].
-        cube_pos: cube centre [m], world = robot base frame.
-        cube_quat: cube orientation, ``w, x, y, z``.
-        cube_grasped: both fingers touch the cube.
-        handle_grasped: both fingers touch the door handle.
-    """
-
-    door_opening: float
-    valve_angle: float
-    cube_pos: tuple[float, float, float]
-    cube_quat: tuple[float, float, float, float]
-    cube_grasped: bool
-    handle_grasped: bool
-
-    @property
-    def door_open(self) -> bool:
-        """The door has slid far enough to clear the cabinet's opening."""
-        return self.door_opening >= DOOR_OPEN_MIN
-
-    @property
-    def cube_in_cabinet(self) -> bool:
-        """The cube rests in the cabinet: its centre inside the interior box, not grasped."""
-        pos = np.asarray(self.cube_pos)
-        inside = np.all(pos > CABINET_INTERIOR_LOW) and np.all(pos < CABINET_INTERIOR_HIGH)
-        return bool(inside and not self.cube_grasped)
-
-    @property
-    def cube_on_counter(self) -> bool:
-        """The cube rests on the counter (not lifted, not in the cabinet)."""
-        return self.cube_pos[2] < CUBE_HALF_SIZE + 0.01 and not self.cube_in_cabinet
-
-    @property
-    def cube_lifted(self) -> bool:
-        """The cube is held clear of every surface (5 cm above the counter or more)."""
-        return self.cube_grasped and self.cube_pos[2] > CUBE_HALF_SIZE + 0.05
-
-    def as_array(self) -> np.ndarray:
-        """Flat float vector (see ``WORLD_FIELDS``) for storage in data sets."""
-        return np.array(
-            [
-                self.door_opening,
-                self.valve_angle,
-                *self.cube_pos,
-                *self.cube_quat,
-                float(self.cube_grasped),
-                float(self.handle_grasped),
-            ]
-        )
-
-
-def world_facts(world: WorldState) -> frozenset[str]:
-    """Abstract a world state into the kitchen's PDDL facts (``skills.WORLD_FACTS``).
-
-    Args:
-        world: the simulator's world state.
-
-    Returns:
-        The facts that hold; hand-empty means neither the cube nor the handle is grasped.
-    """
-    facts = {"door-open" if world.door_open else "door-closed"}
-    named = {
-        "cube-in-cabinet": world.cube_in_cabinet,
-        "cube-on-counter": world.cube_on_counter,
-        "cube-lifted": world.cube_lifted,
-        "holding-cube": world.cube_grasped,
-        "holding-handle": world.handle_grasped,
-        "hand-empty": not (world.cube_grasped or world.handle_grasped),
-    }
-    return frozenset(facts | {name for name, holds in named.items() if holds})
-
-
-WORLD_FIELDS: tuple[str, ...] = (
-    "door_opening",
-    "valve_angle",
-    "cube_x",
-    "cube_y",
-    "cube_z",
-    "cube_qw",
-    "cube_qx",
-    "cube_qy",
-    "cube_qz",
-    "cube_grasped",
-    "handle_grasped",
-)
-
-
-def world_state_from_array(values: np.ndarray) -> WorldState:
-    """Inverse of ``WorldState.as_array``."""
-    v = np.asarray(values, dtype=float)
-    return WorldState(
-        door_opening=float(v[0]),
-        valve_angle=float(v[1]),
-        cube_pos=(float(v[2]), float(v[3]), float(v[4])),
-        cube_quat=(float(v[5]), float(v[6]), float(v[7]), float(v[8])),
-        cube_grasped=bool(v[9] > 0.5),
-        handle_grasped=bool(v[10] > 0.5),
-    )
 
 
 class SceneIndex:

@@ -1,0 +1,125 @@
+"""The kitchen's world state beyond the robot and its PDDL facts (numpy only, no MuJoCo).
+
+``WorldState`` is what the scene reads (door travel, valve angle, cube pose, which objects
+both fingers touch); ``world_facts`` abstracts it into the kitchen's facts; the flat vector
+``WORLD_FIELDS`` is how data sets store it.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+CUBE_HALF_SIZE = 0.0225
+"""Half the cube's edge [m]."""
+CABINET_INTERIOR_LOW = np.array([0.52, 0.10, 0.10])
+CABINET_INTERIOR_HIGH = np.array([0.84, 0.56, 0.70])
+"""Axis-aligned bounds of the cabinet's interior [m], world frame."""
+DOOR_OPEN_MIN = 0.30
+"""Door travel [m] from which the door counts as open (the opening then clears the cube)."""
+
+
+@dataclass(frozen=True)
+class WorldState:
+    """What the simulator knows beyond the robot's 10-D state (never fed to policies).
+
+    Attributes:
+        door_opening: door travel along its slide [m] (0 = shut).
+        valve_angle: valve knob angle [rad].
+        cube_pos: cube centre [m], world = robot base frame.
+        cube_quat: cube orientation, ``w, x, y, z``.
+        cube_grasped: both fingers touch the cube.
+        handle_grasped: both fingers touch the door handle.
+    """
+
+    door_opening: float
+    valve_angle: float
+    cube_pos: tuple[float, float, float]
+    cube_quat: tuple[float, float, float, float]
+    cube_grasped: bool
+    handle_grasped: bool
+
+    @property
+    def door_open(self) -> bool:
+        """The door has slid far enough to clear the cabinet's opening."""
+        return self.door_opening >= DOOR_OPEN_MIN
+
+    @property
+    def cube_in_cabinet(self) -> bool:
+        """The cube rests in the cabinet: its centre inside the interior box, not grasped."""
+        pos = np.asarray(self.cube_pos)
+        inside = np.all(pos > CABINET_INTERIOR_LOW) and np.all(pos < CABINET_INTERIOR_HIGH)
+        return bool(inside and not self.cube_grasped)
+
+    @property
+    def cube_on_counter(self) -> bool:
+        """The cube rests on the counter (not lifted, not in the cabinet)."""
+        return self.cube_pos[2] < CUBE_HALF_SIZE + 0.01 and not self.cube_in_cabinet
+
+    @property
+    def cube_lifted(self) -> bool:
+        """The cube is held clear of every surface (5 cm above the counter or more)."""
+        return self.cube_grasped and self.cube_pos[2] > CUBE_HALF_SIZE + 0.05
+
+    def as_array(self) -> np.ndarray:
+        """Flat float vector (see ``WORLD_FIELDS``) for storage in data sets."""
+        return np.array(
+            [
+                self.door_opening,
+                self.valve_angle,
+                *self.cube_pos,
+                *self.cube_quat,
+                float(self.cube_grasped),
+                float(self.handle_grasped),
+            ]
+        )
+
+
+def world_facts(world: WorldState) -> frozenset[str]:
+    """Abstract a world state into the kitchen's PDDL facts (``skills.WORLD_FACTS``).
+
+    Args:
+        world: the simulator's world state.
+
+    Returns:
+        The facts that hold; hand-empty means neither the cube nor the handle is grasped.
+    """
+    facts = {"door-open" if world.door_open else "door-closed"}
+    named = {
+        "cube-in-cabinet": world.cube_in_cabinet,
+        "cube-on-counter": world.cube_on_counter,
+        "cube-lifted": world.cube_lifted,
+        "holding-cube": world.cube_grasped,
+        "holding-handle": world.handle_grasped,
+        "hand-empty": not (world.cube_grasped or world.handle_grasped),
+    }
+    return frozenset(facts | {name for name, holds in named.items() if holds})
+
+
+WORLD_FIELDS: tuple[str, ...] = (
+    "door_opening",
+    "valve_angle",
+    "cube_x",
+    "cube_y",
+    "cube_z",
+    "cube_qw",
+    "cube_qx",
+    "cube_qy",
+    "cube_qz",
+    "cube_grasped",
+    "handle_grasped",
+)
+
+
+def world_state_from_array(values: np.ndarray) -> WorldState:
+    """Inverse of ``WorldState.as_array``."""
+    v = np.asarray(values, dtype=float)
+    return WorldState(
+        door_opening=float(v[0]),
+        valve_angle=float(v[1]),
+        cube_pos=(float(v[2]), float(v[3]), float(v[4])),
+        cube_quat=(float(v[5]), float(v[6]), float(v[7]), float(v[8])),
+        cube_grasped=bool(v[9] > 0.5),
+        handle_grasped=bool(v[10] > 0.5),
+    )

@@ -1,0 +1,113 @@
+"""The package's layering: the generic core imports no domain and names none of its things,
+and no layer imports one above it."""
+
+from __future__ import annotations
+
+import ast
+from pathlib import Path
+
+import pytest
+
+from osg_control.domain.registry import get_domain
+
+PACKAGE = Path(__file__).resolve().parents[1] / "osg_control"
+DOMAIN_PACKAGES = ("kitchen",)
+"""Sub-packages that are domains (the only places that may name their things)."""
+LAYERS: dict[str, int] = {
+    "errors": 0, "paths": 0, "seeding": 0, "registration": 0, "__init__": 0,
+    "control": 1, "domain": 1, "parallel": 1,
+    "environment": 2,
+    "data": 3,
+    "learning": 4, "planning": 4,
+    "classifier": 5,
+    "execution": 6,
+    "evaluation": 7,
+    "commands": 8, "cli": 8,
+}  # fmt: skip
+"""Each top-level module or sub-package's layer: a module may import its own layer or lower."""
+KITCHEN_WORDS = ("cube", "door", "handle", "valve", "cabinet", "counter", "kitchen")
+
+
+def _layer(module: str) -> str:
+    return module.split(".")[1] if module.count(".") else "__init__"
+
+
+def _modules() -> list[tuple[str, Path]]:
+    found = []
+    for path in sorted(PACKAGE.rglob("*.py")):
+        parts = path.relative_to(PACKAGE.parent).with_suffix("").parts
+        found.append((".".join(parts), path))
+    return found
+
+
+def _imports(tree: ast.AST) -> list[str]:
+    names = []
+    for node in ast.walk(tree):
+        if isinstance(node, ast.ImportFrom) and node.module and node.level == 0:
+            names.append(node.module)
+            names += [f"{node.module}.{alias.name}" for alias in node.names]
+        elif isinstance(node, ast.Import):
+            names += [alias.name for alias in node.names]
+    return [n for n in names if n.startswith("osg_control.")]
+
+
+def _strings(tree: ast.AST) -> list[tuple[int, str]]:
+    """Every string constant but documentation (docstrings of modules, classes, functions
+    and attributes: a string standing alone as a statement), with its line."""
+    docstrings = {
+        id(node.value)
+        for node in ast.walk(tree)
+        if isinstance(node, ast.Expr) and isinstance(node.value, ast.Constant)
+    }
+    return [
+        (node.lineno, node.value)
+        for node in ast.walk(tree)
+        if isinstance(node, ast.Constant)
+        and isinstance(node.value, str)
+        and id(node) not in docstrings
+    ]
+
+
+def _core() -> list[tuple[str, Path]]:
+    return [(m, p) for m, p in _modules() if _layer(m) not in DOMAIN_PACKAGES]
+
+
+@pytest.mark.parametrize("module,path", _core(), ids=[m for m, _ in _core()])
+def test_core_module_imports_no_domain(module: str, path: Path) -> None:
+    tree = ast.parse(path.read_text())
+    for name in _imports(tree):
+        assert _layer(name) not in DOMAIN_PACKAGES, f"{module} imports {name}"
+
+
+def test_no_layer_imports_one_above_it() -> None:
+    upward = []
+    for module, path in _modules():
+        if _layer(module) in DOMAIN_PACKAGES:
+            continue
+        own = LAYERS[_layer(module)]
+        for name in _imports(ast.parse(path.read_text())):
+            other = _layer(name)
+            if other in LAYERS and LAYERS[other] > own:
+                upward.append(f"{module} -> {name}")
+    assert not upward, upward
+
+
+def test_core_strings_name_no_kitchen_thing() -> None:
+    kitchen = get_domain("kitchen")
+    names = {s.name for s in kitchen.skills} | set(kitchen.facts) | set(kitchen.nodes)
+    names |= {t.name for t in kitchen.tasks}
+    offending = []
+    for module, path in _core():
+        if _layer(module) in ("commands", "cli"):
+            continue  # CLI help and examples may show the default domain's things as text
+        for line, text in _strings(ast.parse(path.read_text())):
+            lowered = text.lower()
+            words = [w for w in KITCHEN_WORDS if w in lowered]
+            if words or lowered in names:
+                offending.append(f"{path.relative_to(PACKAGE)}:{line}: {text!r}")
+    assert not offending, "\n".join(offending)
+
+
+def test_every_layer_is_classified() -> None:
+    unknown = {_layer(m) for m, _ in _modules()} - set(LAYERS) - set(DOMAIN_PACKAGES)
+    assert not unknown, f"add {sorted(unknown)} to LAYERS"
