@@ -50,3 +50,27 @@ def lookup(table: Mapping[str, T], name: str, what: str, error: Callable[[str], 
     except KeyError:
         known = ", ".join(table)
         raise error(f"unknown {what} {name!r}; known {what}s: {known}") from None
+
+
+class UsageError(OSGError):
+    """A command-line value is out of its domain; the message names the option."""
+
+
+class OutputError(OSGError):
+    """A file or folder cannot be written (or read); the message names the path."""
+
+
+class TrainingError(OSGError):
+    """Training cannot go on (e.g. a non-finite loss); nothing is saved."""
+
+
+EXIT_CODES: dict[str, int] = {
+    "success": 0,
+    "failure": 1,
+    "usage": 2,
+    "no plan": 3,
+    "interrupted": 130,
+}
+"""The ``osg`` exit codes: 0 success; 1 an osg-control error (bad file, diverged physics, a
+failed episode); 2 a bad command-line value; 3 the planner proved the goal unreachable;
+130 interrupted (Ctrl-C or SIGTERM)."""

@@ -25,8 +25,6 @@ Per-episode arrays (``E`` episodes): ``episode_starts`` (offset of the first ste
 from __future__ import annotations
 
 import json
-import os
-import tempfile
 from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
@@ -36,6 +34,7 @@ import h5py
 import numpy as np
 
 from osg_control.errors import DatasetError
+from osg_control.io_safety import atomic_write
 
 FORMAT_VERSION = 1
 OBS_DIM = 10
@@ -135,22 +134,15 @@ class Dataset:
         )
 
 
-def _atomic_h5(path: Path) -> tuple[Path, int]:
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
-    return Path(tmp), fd
-
-
 def write_episodes(path: Path, episodes: Sequence[Episode], attrs: dict[str, Any]) -> None:
     """Write episodes to ``path`` atomically (a temp file renamed over the target).
 
     An interrupted write leaves the old file (or none), never a truncated one.
     """
-    tmp, fd = _atomic_h5(Path(path))
-    os.close(fd)
-    try:
-        lengths = np.array([len(e) for e in episodes], dtype=np.int64)
-        starts = np.concatenate([[0], np.cumsum(lengths)[:-1]]).astype(np.int64)
+    lengths = np.array([len(e) for e in episodes], dtype=np.int64)
+    starts = np.concatenate([[0], np.cumsum(lengths)[:-1]]).astype(np.int64)
+
+    def write(tmp: Path) -> None:
         with h5py.File(tmp, "w") as f:
             for key, (shape, dtype) in STEP_FIELDS.items():
                 if key == "episode_ids":
@@ -168,10 +160,8 @@ def write_episodes(path: Path, episodes: Sequence[Episode], attrs: dict[str, Any
             f.attrs["format_version"] = FORMAT_VERSION
             for key, value in attrs.items():
                 f.attrs[key] = value
-        os.replace(tmp, path)
-    finally:
-        if tmp.exists():
-            tmp.unlink()
+
+    atomic_write(path, write)
 
 
 def load_dataset(path: str | Path) -> Dataset:

@@ -20,8 +20,6 @@ from __future__ import annotations
 
 import hashlib
 import json
-import os
-import tempfile
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -34,6 +32,7 @@ from safetensors.numpy import save as save_safetensors
 from osg_control import __version__
 from osg_control.data.datasets import ACTION_DIM, OBS_DIM
 from osg_control.errors import CheckpointError, SkillSpecError
+from osg_control.io_safety import atomic_write
 from osg_control.kitchen.skills import SkillSpec, skill_from_json
 
 FORMAT_VERSION = 1
@@ -121,18 +120,6 @@ def sha256_file(path: str | Path) -> str:
     return digest.hexdigest()
 
 
-def _atomic_write(path: Path, data: bytes) -> None:
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
-    try:
-        with os.fdopen(fd, "wb") as f:
-            f.write(data)
-        os.replace(tmp, path)
-    finally:
-        if os.path.exists(tmp):
-            os.unlink(tmp)
-
-
 def save_checkpoint(directory: str | Path, checkpoint: Checkpoint) -> tuple[Path, Path]:
     """Write ``<skill>.safetensors`` and ``<skill>.json`` into ``directory``, atomically.
 
@@ -165,8 +152,9 @@ def save_checkpoint(directory: str | Path, checkpoint: Checkpoint) -> tuple[Path
         "weights_sha256": hashlib.sha256(weights).hexdigest(),
         "package_version": checkpoint.package_version,
     }
-    _atomic_write(weights_path, weights)
-    _atomic_write(sidecar_path, (json.dumps(sidecar, indent=2) + "\n").encode())
+    atomic_write(weights_path, lambda tmp: tmp.write_bytes(weights))
+    sidecar_text = json.dumps(sidecar, indent=2) + "\n"
+    atomic_write(sidecar_path, lambda tmp: tmp.write_text(sidecar_text))
     return weights_path, sidecar_path
 
 
