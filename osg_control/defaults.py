@@ -40,3 +40,20 @@ def read_manifest(directory: str | Path | None = None) -> dict[str, Any]:
         return dict(json.loads(path.read_text()))
     except (OSError, ValueError) as err:
         raise CheckpointError(f"{path}: unreadable manifest ({err})") from err
+
+
+def models_in_use(directory: str | Path | None = None) -> dict[str, str]:
+    """Which skill and classifier checkpoints a command loads (for its output and --json)."""
+    root = Path(directory) if directory is not None else DEFAULTS_DIR
+    shipped = root.resolve() == DEFAULTS_DIR.resolve()
+    return {
+        "directory": str(root),
+        "source": "shipped defaults" if shipped else "given --models",
+        "skills": str(root / "skills"),
+        "classifier": str(root / "classifier"),
+    }
+
+
+def describe_models(models: dict[str, str]) -> str:
+    """One line naming the models of ``models_in_use``."""
+    return f"models: {models['directory']} ({models['source']})"

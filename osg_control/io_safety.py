@@ -16,8 +16,9 @@ from collections.abc import Callable, Iterator
 from pathlib import Path
 
 from osg_control.errors import OutputError
+from osg_control.paths import PACKAGE_DIR
 
-__all__ = ["atomic_write", "check_output_dir", "file_mode", "output_errors"]
+__all__ = ["atomic_write", "check_output_dir", "file_mode", "output_errors", "refuse_package"]
 
 
 def file_mode() -> int:
@@ -37,6 +38,20 @@ def output_errors(path: Path, action: str = "cannot write") -> Iterator[None]:
         raise OutputError(f"{path}: {action} ({reason})") from err
 
 
+def refuse_package(path: Path) -> None:
+    """Refuse a destination inside the installed package (its shipped defaults stay intact).
+
+    Raises:
+        OutputError: ``path`` lies under ``PACKAGE_DIR``.
+    """
+    resolved = Path(path).expanduser().resolve()
+    if resolved == PACKAGE_DIR or PACKAGE_DIR in resolved.parents:
+        raise OutputError(
+            f"{path}: inside the installed package {PACKAGE_DIR}; write trained artifacts to "
+            "the cache ($OSG_CACHE_DIR) or an --out folder outside it"
+        )
+
+
 def atomic_write(path: str | Path, write: Callable[[Path], object]) -> Path:
     """Create ``path`` by calling ``write(tmp)`` on a temporary sibling, then renaming it.
 
@@ -44,9 +59,11 @@ def atomic_write(path: str | Path, write: Callable[[Path], object]) -> Path:
     created if missing.
 
     Raises:
-        OutputError: the folder or file cannot be written, naming the path.
+        OutputError: the folder or file cannot be written, or lies inside the package
+            (``refuse_package``); names the path.
     """
     path = Path(path)
+    refuse_package(path)
     with output_errors(path):
         path.parent.mkdir(parents=True, exist_ok=True)
         fd, name = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
@@ -69,6 +86,7 @@ def check_output_dir(path: str | Path, what: str = "output folder") -> Path:
         OutputError: the folder cannot be created or written, or is a file; names the path.
     """
     path = Path(path).expanduser()
+    refuse_package(path)
     if path.exists() and not path.is_dir():
         raise OutputError(f"{path}: {what} is not a folder")
     with output_errors(path, f"cannot write the {what}"):

@@ -17,6 +17,8 @@ from osg_control.classifier.data import load_classifier_data, movement_classes
 from osg_control.classifier.metrics import format_report
 from osg_control.classifier.model import StateClassifier, evaluate, reload_split
 from osg_control.classifier.train import TrainConfig, train_classifier
+from osg_control.defaults import describe_models, models_in_use
+from osg_control.io_safety import check_output_dir
 from osg_control.paths import DEFAULTS_DIR, cache_dir
 
 Verbs: TypeAlias = "argparse._SubParsersAction[argparse.ArgumentParser]"
@@ -68,9 +70,9 @@ def run_train(args: argparse.Namespace) -> int:
     config = TrainConfig(
         epochs=args.epochs, batch_size=args.batch_size, seed=args.seed, threads=args.threads
     )
+    out = check_output_dir(args.out or cache_dir() / "classifier", "classifier folder")
     data = load_classifier_data(_data_dir(args.data), movement_classes(), args.seed)
     model = train_classifier(data, config, progress=True)
-    out = _model_dir(args.out)
     sidecar = model.save(out)
     report = evaluate(model, data.test)
     losses = model.info["training"]["epoch_losses"]
@@ -170,7 +172,8 @@ def run_reach(args: argparse.Namespace) -> int:
 
     models = str(args.models) if args.models else None
     table = reach_table(models, args.episodes, args.seed, args.workers, args.noise)
-    _emit(args, table, format_reach_table(table))
+    table["models"] = models_in_use(models)
+    _emit(args, table, f"{format_reach_table(table)}\n{describe_models(table['models'])}")
     return 0
 
 

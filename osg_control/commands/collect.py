@@ -10,6 +10,7 @@ from pathlib import Path
 from osg_control.data.collect import DEFAULT_EPISODES, LocalExecutor, collect_skill
 from osg_control.data.datasets import dataset_summary, load_dataset
 from osg_control.errors import DatasetError
+from osg_control.io_safety import check_output_dir
 from osg_control.kitchen.skills import SKILLS, get_skill
 from osg_control.paths import cache_dir
 
@@ -38,7 +39,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
 def run_collect(args: argparse.Namespace) -> int:
     """Collect the requested skills and print their scripted success rates."""
     skills = list(SKILLS) if args.skill == "all" else [get_skill(args.skill)]
-    out = args.out or cache_dir() / "data"
+    out = check_output_dir(args.out or cache_dir() / "data", "data folder")
     executor = LocalExecutor(args.workers)
     rows = []
     for skill in skills:

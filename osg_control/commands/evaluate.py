@@ -7,6 +7,7 @@ import json
 from pathlib import Path
 
 from osg_control.commands import add_filter_argument
+from osg_control.defaults import describe_models, models_in_use
 from osg_control.evaluation.evaluate import format_task_table, task_table
 from osg_control.kitchen.tasks import TASKS_BY_NAME
 
@@ -48,5 +49,8 @@ def run_tasks(args: argparse.Namespace) -> int:
         args.replans,
         args.filter,
     )
+    table["models"] = models_in_use(args.models)
     print(json.dumps(table, indent=2) if args.json else format_task_table(table))
+    if not args.json:
+        print(describe_models(table["models"]))
     return 0

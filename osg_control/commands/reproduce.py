@@ -22,6 +22,7 @@ from typing import Any
 from osg_control import __version__
 from osg_control.commands import add_filter_argument
 from osg_control.defaults import MANIFEST
+from osg_control.io_safety import atomic_write, check_output_dir
 from osg_control.learning.checkpoints import sha256_file
 from osg_control.paths import PACKAGE_DIR
 
@@ -75,7 +76,7 @@ def run(args: argparse.Namespace) -> int:
     from osg_control.cli import main as osg
 
     scale = QUICK if args.quick else FULL
-    out: Path = args.out
+    out: Path = check_output_dir(args.out, "reproduction folder")
     data, defaults = out / "data", out / "defaults"
     seed, workers = str(args.seed), str(args.workers)
     stage_seconds: dict[str, float] = {}
@@ -193,7 +194,8 @@ def _write_manifest(defaults: Path, data: Path, args: argparse.Namespace, scale:
         "git_commit": _git_commit(),
         "datasets_sha256": {p.name: sha256_file(p) for p in sorted(data.glob("*.h5"))},
     }
-    (defaults / MANIFEST).write_text(json.dumps(manifest, indent=2))
+    text = json.dumps(manifest, indent=2)
+    atomic_write(defaults / MANIFEST, lambda tmp: tmp.write_text(text))
 
 
 def _table_i(defaults: Path, scale: Scale, args: argparse.Namespace) -> dict[str, Any]:

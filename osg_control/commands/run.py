@@ -10,6 +10,7 @@ from typing import Any
 import numpy as np
 
 from osg_control.commands import add_filter_argument
+from osg_control.defaults import describe_models, models_in_use
 from osg_control.evaluation.evaluate import format_skill_table, skill_table, start_regions
 from osg_control.execution.executor import load_executor
 from osg_control.kitchen.env import EnvConfig, KitchenEnv
@@ -68,6 +69,9 @@ def run_task(args: argparse.Namespace) -> int:
     """Run ``--episodes`` executions of the goal and report each (exit 1 if any failed)."""
     goal = args.goal.split()
     executor = load_executor(args.models, max_replans=args.max_replans, filter_gain=args.filter)
+    models = models_in_use(args.models)
+    if not args.json:
+        print(describe_models(models))
     env = KitchenEnv(
         config=EnvConfig(obs_noise_std=args.noise),
         render_mode="rgb_array" if args.video else None,
@@ -96,7 +100,8 @@ def run_task(args: argparse.Namespace) -> int:
         _write_video(args.video, frames)
     successes = sum(r["success"] for r in results)
     if args.json:
-        print(json.dumps({"episodes": results, "success_rate": successes / len(results)}, indent=2))
+        payload = {"models": models, "episodes": results, "success_rate": successes / len(results)}
+        print(json.dumps(payload, indent=2))
     else:
         print(f"success rate {successes}/{len(results)}")
     return 0 if successes == len(results) else 1
@@ -121,5 +126,8 @@ def run_eval_skills(args: argparse.Namespace) -> int:
         args.skill,
         filter_gain=args.filter,
     )
+    table["models"] = {"skills": str(args.models)}
     print(json.dumps(table, indent=2) if args.json else format_skill_table(table))
+    if not args.json:
+        print(f"models: {args.models}")
     return 0

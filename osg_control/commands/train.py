@@ -14,6 +14,7 @@ from tqdm import tqdm
 
 from osg_control.data.datasets import load_dataset
 from osg_control.errors import DatasetError, OSGError, SkillSpecError
+from osg_control.io_safety import check_output_dir
 from osg_control.kitchen.skills import SKILLS, SkillSpec, get_skill, skill_from_json
 from osg_control.learning.checkpoints import Checkpoint, save_checkpoint, sha256_file
 from osg_control.learning.td3bc import (
@@ -194,6 +195,7 @@ def run(args: argparse.Namespace) -> int:
     if args.threads:
         torch.set_num_threads(args.threads)
     config = TD3BCConfig()
+    out_dir = check_output_dir(args.out or cache_dir() / "skills", "checkpoint folder")
     inputs = [load_skill_input(args.data or cache_dir() / "data", n, config) for n in names]
     seeds = [skill_seed(args.seed, name) for name in names]
     replay = BatchedReplay([i.data for i in inputs], config.batch_size, seeds, args.device)
@@ -201,7 +203,6 @@ def run(args: argparse.Namespace) -> int:
     start = time.perf_counter()
     logs = train_with_progress(trainer, replay, args.steps)
     seconds = time.perf_counter() - start
-    out_dir = args.out or cache_dir() / "skills"
     print_summary(
         {
             "device": args.device,

@@ -6,6 +6,8 @@ import json
 from pathlib import Path
 from typing import Any
 
+from osg_control.io_safety import atomic_write
+
 PAPER_TABLE_I = dict(
     zip(
         (
@@ -147,7 +149,7 @@ def bar_plots(figures: dict[str, Any], out_dir: Path) -> list[Path]:
 
 def write_report(figures: dict[str, Any], out_dir: Path) -> list[Path]:
     """Write ``report.md``, ``figures.json`` and the plots into ``out_dir``."""
-    out_dir.mkdir(parents=True, exist_ok=True)
-    (out_dir / "figures.json").write_text(json.dumps(figures, indent=2))
-    (out_dir / "report.md").write_text(markdown(figures))
+    figures_text, report_text = json.dumps(figures, indent=2), markdown(figures)
+    atomic_write(out_dir / "figures.json", lambda tmp: tmp.write_text(figures_text))
+    atomic_write(out_dir / "report.md", lambda tmp: tmp.write_text(report_text))
     return [out_dir / "report.md", out_dir / "figures.json", *bar_plots(figures, out_dir)]
