@@ -29,7 +29,7 @@ from osg_control.classifier.metrics import EvaluationReport, evaluate_prediction
 from osg_control.data.datasets import OBS_DIM
 from osg_control.errors import CheckpointError
 from osg_control.io_safety import atomic_write
-from osg_control.learning.checkpoints import sha256_file
+from osg_control.learning.checkpoints import check_finite, sha256_file
 
 WEIGHTS_FILE = "classifier.safetensors"
 SIDECAR_FILE = "classifier.json"
@@ -250,6 +250,7 @@ class StateClassifier:
             )
         except (SafetensorError, OSError, KeyError) as err:
             raise CheckpointError(f"{weights_path}: corrupt classifier weights ({err})") from err
+        check_finite(weights_path, tensors)
         try:
             return cls(
                 classes=tuple(sidecar["classes"]),

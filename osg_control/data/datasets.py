@@ -33,6 +33,7 @@ from typing import Any
 import h5py
 import numpy as np
 
+from osg_control.data.validation import check_attrs, check_episode_index, check_step_fields
 from osg_control.errors import DatasetError
 from osg_control.io_safety import atomic_write
 
@@ -140,7 +141,7 @@ def write_episodes(path: Path, episodes: Sequence[Episode], attrs: dict[str, Any
     An interrupted write leaves the old file (or none), never a truncated one.
     """
     lengths = np.array([len(e) for e in episodes], dtype=np.int64)
-    starts = np.concatenate([[0], np.cumsum(lengths)[:-1]]).astype(np.int64)
+    starts = (np.cumsum(lengths) - lengths).astype(np.int64)
 
     def write(tmp: Path) -> None:
         with h5py.File(tmp, "w") as f:
@@ -169,7 +170,8 @@ def load_dataset(path: str | Path) -> Dataset:
 
     Raises:
         DatasetError: naming the file and what is wrong (missing, not HDF5, missing field,
-            wrong shape, inconsistent episode bounds).
+            wrong shape or dtype, non-finite values, an inconsistent episode index; see
+            ``osg_control.data.validation``).
     """
     path = Path(path)
     if not path.is_file():
@@ -177,38 +179,24 @@ def load_dataset(path: str | Path) -> Dataset:
     try:
         with h5py.File(path, "r") as f:
             arrays: dict[str, np.ndarray] = {}
-            for key, (shape, _dtype) in STEP_FIELDS.items():
+            for key in STEP_FIELDS:
                 if key not in f:
                     raise DatasetError(f"{path}: missing field {key!r}")
-                arrays[key] = f[key][()]
-                if arrays[key].shape[1:] != shape:
-                    raise DatasetError(
-                        f"{path}: field {key!r} has shape {arrays[key].shape}, expected "
-                        f"(N, {', '.join(map(str, shape))})"
-                    )
+                arrays[key] = np.asarray(f[key][()])
             per_episode = {}
             for key in ("episode_starts", "episode_lengths", "episode_successes"):
                 if key not in f:
                     raise DatasetError(f"{path}: missing field {key!r}")
-                per_episode[key] = f[key][()]
+                per_episode[key] = np.asarray(f[key][()])
             attrs = dict(f.attrs)
     except DatasetError:
         raise
-    except (OSError, KeyError, ValueError) as err:
+    except (OSError, KeyError, ValueError, TypeError) as err:
         raise DatasetError(f"{path}: not a readable HDF5 data set ({err})") from err
-    steps = {len(v) for v in arrays.values()}
-    if len(steps) != 1:
-        raise DatasetError(f"{path}: step fields disagree on length: {sorted(steps)}")
+    check_step_fields(path, arrays, STEP_FIELDS)
+    check_episode_index(path, arrays, per_episode)
+    check_attrs(path, attrs)
     lengths = per_episode["episode_lengths"]
-    if int(lengths.sum()) != steps.pop():
-        raise DatasetError(f"{path}: episode_lengths do not add up to the number of steps")
-    for key in ("skill", "seed"):
-        if key not in attrs:
-            raise DatasetError(f"{path}: missing attribute {key!r}")
-    if not np.all(np.isfinite(arrays["observations"])) or not np.all(
-        np.isfinite(arrays["actions"])
-    ):
-        raise DatasetError(f"{path}: non-finite values in observations or actions")
     return Dataset(
         path=path,
         arrays=arrays,

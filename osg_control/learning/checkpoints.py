@@ -120,6 +120,18 @@ def sha256_file(path: str | Path) -> str:
     return digest.hexdigest()
 
 
+def check_finite(path: Path, tensors: dict[str, np.ndarray]) -> None:
+    """Refuse weights with a NaN or infinity.
+
+    Raises:
+        CheckpointError: naming the file and the first non-finite tensor.
+    """
+    for key, value in tensors.items():
+        if not np.all(np.isfinite(value)):
+            bad = int(np.size(value) - np.count_nonzero(np.isfinite(value)))
+            raise CheckpointError(f"{path}: tensor {key!r} has {bad} non-finite value(s)")
+
+
 def save_checkpoint(directory: str | Path, checkpoint: Checkpoint) -> tuple[Path, Path]:
     """Write ``<skill>.safetensors`` and ``<skill>.json`` into ``directory``, atomically.
 
@@ -135,6 +147,7 @@ def save_checkpoint(directory: str | Path, checkpoint: Checkpoint) -> tuple[Path
     for i, (weight, bias) in enumerate(checkpoint.layers):
         tensors[f"layers.{i}.weight"] = np.ascontiguousarray(weight, dtype=np.float32)
         tensors[f"layers.{i}.bias"] = np.ascontiguousarray(bias, dtype=np.float32)
+    check_finite(weights_path, tensors)
     weights = save_safetensors(tensors, metadata={"skill": checkpoint.skill.name})
     sidecar = {
         "format_version": FORMAT_VERSION,
@@ -196,6 +209,7 @@ def _read_layers(path: Path, sidecar: dict[str, Any]) -> list[Layer]:
         tensors = load_safetensors(data)
     except SafetensorError as err:
         raise CheckpointError(f"{path}: corrupt safetensors file ({err})") from err
+    check_finite(path, tensors)
     sizes = [sidecar["obs_dim"], *sidecar["hidden_sizes"], sidecar["action_dim"]]
     layers = []
     for i, (fan_in, fan_out) in enumerate(zip(sizes[:-1], sizes[1:], strict=True)):
