@@ -74,3 +74,7 @@ EXIT_CODES: dict[str, int] = {
 """The ``osg`` exit codes: 0 success; 1 an osg-control error (bad file, diverged physics, a
 failed episode); 2 a bad command-line value; 3 the planner proved the goal unreachable;
 130 interrupted (Ctrl-C or SIGTERM)."""
+
+
+class EnvOptionError(OSGError, ValueError):
+    """An env reset option is non-finite or out of range; the message names it."""

@@ -13,9 +13,7 @@ from collections.abc import Callable
 from typing import Any
 
 from osg_control.errors import UsageError
-
-DOOR_TRAVEL = 0.45
-"""The door slide's range [m] (``robots/kitchen.xml``): ``--door-opening`` lies in [0, it]."""
+from osg_control.kitchen.options import DOOR_TRAVEL
 
 
 def _option(dest: str) -> str:

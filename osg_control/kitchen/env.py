@@ -26,9 +26,11 @@ import mujoco
 import numpy as np
 from scipy.spatial.transform import Rotation
 
+from osg_control.control.divergence import DivergenceWatch
 from osg_control.control.ik import DiffIKController, IKConfig, joint_reset_controller, solve_ik
 from osg_control.control.robot import ARM_JOINTS, FINGER_JOINTS, FINGER_OPEN, HOME_Q, TCP_SITE
 from osg_control.errors import SimulationError
+from osg_control.kitchen.options import check_start_options
 from osg_control.kitchen.scene import (
     CUBE_HALF_SIZE,
     SceneIndex,
@@ -51,11 +53,6 @@ HANDLE_GRASP_SLACK = 0.015
 offset a grab under 2 cm observation noise ends with, so the slide's data covers it."""
 _TOP_DOWN = np.array(TOP_DOWN_QUAT)
 _TOP_DOWN_ROT = Rotation.from_quat(np.roll(_TOP_DOWN, -1))
-_DIVERGENCE_WARNINGS = (
-    mujoco.mjtWarning.mjWARN_BADQPOS,
-    mujoco.mjtWarning.mjWARN_BADQVEL,
-    mujoco.mjtWarning.mjWARN_BADQACC,
-)
 
 
 @dataclass(frozen=True)
@@ -197,6 +194,7 @@ class KitchenEnv(gym.Env):
         world = dict(options.get("world", {}))
         if self.skill is not None:
             world.setdefault("door_opening", self.skill.start_door_opening)
+        check_start_options(centre, radius, angle, world)
         for _attempt in range(50):
             pos, rot = sample_start_pose(self.np_random, centre, radius, angle)
             if holding == "handle":
@@ -291,9 +289,17 @@ class KitchenEnv(gym.Env):
         return False
 
     def _settle(self, seconds: float) -> None:
-        """Let contacts settle with the arm servoed in place."""
+        """Let contacts settle with the arm servoed in place.
+
+        Raises:
+            SimulationError: the physics diverged (e.g. a start placed inside the furniture).
+        """
+        watch = DivergenceWatch(self.data)
         for _ in range(round(seconds / self.model.opt.timestep)):
             mujoco.mj_step(self.model, self.data)
+        diverged = watch.check()
+        if diverged is not None:
+            raise SimulationError(f"{diverged} while placing the start")
 
     # ----------------------------------------------------------------- step
     def check_action(self, action: np.ndarray) -> np.ndarray:
@@ -343,20 +349,10 @@ class KitchenEnv(gym.Env):
 
     def _simulate(self) -> str | None:
         """Run the physics substeps; return a failure reason if the simulation diverged."""
-        # MuJoCo resets the data (time back to 0) when it meets a bad qpos/qvel/qacc, so a
-        # divergence leaves a finite state behind: detect it by the warnings and the clock.
-        time_before = self.data.time
-        counts_before = [int(self.data.warning[w].number) for w in _DIVERGENCE_WARNINGS]
+        watch = DivergenceWatch(self.data)
         for _ in range(self.n_substeps):
             mujoco.mj_step(self.model, self.data)
-        for warning, count in zip(_DIVERGENCE_WARNINGS, counts_before, strict=True):
-            if int(self.data.warning[warning].number) > count:
-                return f"physics diverged: MuJoCo reported {warning.name} and reset the state"
-        if self.data.time < time_before:
-            return "physics diverged: MuJoCo reset the state"
-        if not (np.all(np.isfinite(self.data.qpos)) and np.all(np.isfinite(self.data.qvel))):
-            return "physics diverged: non-finite joint state"
-        return None
+        return watch.check()
 
     def skill_success(
         self, skill: SkillSpec | None = None, world: WorldState | None = None
