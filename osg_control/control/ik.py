@@ -124,7 +124,7 @@ class Backend:
         self.config = config
         self.lower = np.array(lower, dtype=float)
         self.upper = np.array(upper, dtype=float)
-        self.velocity_limit = _urdf_velocity_limits() * config.velocity_scale
+        self.velocity_limit = urdf_velocity_limits() * config.velocity_scale
         # Constants of the QP, so that build_qp does the per-step arithmetic only.
         cost = np.array([config.position_cost] * 3 + [config.orientation_cost] * 3)
         self._cost_column = cost[:, None]
@@ -267,7 +267,7 @@ BACKENDS: dict[str, Callable[[IKConfig], Backend]] = {
 }
 
 
-def _urdf_velocity_limits() -> np.ndarray:
+def urdf_velocity_limits() -> np.ndarray:
     """Per-joint velocity limits [rad/s] read from the URDF (via Pinocchio's parser)."""
     return np.asarray(load_pinocchio_arm().velocityLimit, dtype=float).copy()
 

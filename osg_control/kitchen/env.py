@@ -27,8 +27,15 @@ import numpy as np
 from scipy.spatial.transform import Rotation
 
 from osg_control.control.divergence import DivergenceWatch
-from osg_control.control.ik import DiffIKController, IKConfig, joint_reset_controller, solve_ik
+from osg_control.control.ik import (
+    DiffIKController,
+    IKConfig,
+    joint_reset_controller,
+    solve_ik,
+    urdf_velocity_limits,
+)
 from osg_control.control.robot import ARM_JOINTS, FINGER_JOINTS, FINGER_OPEN, HOME_Q, TCP_SITE
+from osg_control.control.servo import substep_targets
 from osg_control.errors import SimulationError
 from osg_control.kitchen.options import check_start_options
 from osg_control.kitchen.scene import (
@@ -65,6 +72,9 @@ class EnvConfig:
         ik: the differential-IK controller's configuration.
         start_radius: default random-start radius around the start pose [m].
         start_angle: default random-start angle per axis [rad].
+        limit_joint_speed: spread each step's joint target over the substeps so that no
+            joint is commanded faster than its URDF velocity limit (``control.servo``);
+            off by default: the shipped data, scripts and policies were made without it.
     """
 
     obs_noise_std: float = 0.0
@@ -72,6 +82,7 @@ class EnvConfig:
     ik: IKConfig = field(default_factory=IKConfig)
     start_radius: float = 0.0
     start_angle: float = 0.0
+    limit_joint_speed: bool = False
 
 
 def canonical_quat(quat_wxyz: np.ndarray) -> np.ndarray:
@@ -118,6 +129,7 @@ class KitchenEnv(gym.Env):
         self.ik = DiffIKController(self.config.ik)
         self._reset_ik: DiffIKController | None = None
         self.n_substeps = round(1.0 / (CONTROL_HZ * self.model.opt.timestep))
+        self._max_increment = urdf_velocity_limits() * self.model.opt.timestep
         self._arm_qpos = np.array([self.model.joint(j).qposadr[0] for j in ARM_JOINTS])
         self._arm_dof = np.array([self.model.joint(j).dofadr[0] for j in ARM_JOINTS])
         self._arm_act = np.array([self.model.actuator(j).id for j in ARM_JOINTS])
@@ -323,11 +335,10 @@ class KitchenEnv(gym.Env):
         elif action[6] > 0.5:
             self._gripper_cmd = GRIPPER_OPEN_CMD
         q_target = self.ik.relative_step(self.arm_q, action[:6])
-        self.data.ctrl[self._arm_act] = q_target
         self.data.ctrl[self._gripper_act] = (
             FINGER_OPEN if self._gripper_cmd == GRIPPER_OPEN_CMD else 0.0
         )
-        failure = self._simulate()
+        failure = self._simulate(q_target)
         self._steps += 1
         world = self.world_state()
         reward = 0.0
@@ -347,10 +358,17 @@ class KitchenEnv(gym.Env):
             info["failure"] = failure
         return self.observe(), reward, terminated, truncated, info
 
-    def _simulate(self) -> str | None:
-        """Run the physics substeps; return a failure reason if the simulation diverged."""
+    def _simulate(self, arm_target: np.ndarray) -> str | None:
+        """Run the physics substeps toward ``arm_target`` (spread over them, see
+        ``control.servo``); return a failure reason if the simulation diverged."""
         watch = DivergenceWatch(self.data)
-        for _ in range(self.n_substeps):
+        previous = self.data.ctrl[self._arm_act].copy()
+        if self.config.limit_joint_speed:
+            targets = substep_targets(previous, arm_target, self.n_substeps, self._max_increment)
+        else:
+            targets = np.repeat(arm_target[None], self.n_substeps, axis=0)
+        for target in targets:
+            self.data.ctrl[self._arm_act] = target
             mujoco.mj_step(self.model, self.data)
         return watch.check()
 
@@ -407,8 +425,7 @@ class KitchenEnv(gym.Env):
             if error < tolerance or error > previous - 1e-4:
                 return step
             previous = error
-            self.data.ctrl[self._arm_act] = self._reset_ik.reset_step(self.arm_q, pos, rot)
-            if self._simulate() is not None:
+            if self._simulate(self._reset_ik.reset_step(self.arm_q, pos, rot)) is not None:
                 raise SimulationError("physics diverged during joint reset")
         return max_steps
 
