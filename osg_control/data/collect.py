@@ -20,6 +20,7 @@ import numpy as np
 from tqdm import tqdm
 
 from osg_control import __version__
+from osg_control.data.chunks import chunk_attrs, keep_chunk
 from osg_control.data.datasets import Dataset, Episode, load_dataset, write_episodes
 from osg_control.data.scripted import ScriptedPolicy
 from osg_control.kitchen.env import EnvConfig, KitchenEnv
@@ -137,8 +138,12 @@ def _run_chunk(task: ChunkTask) -> tuple[int, int]:
     episodes = [
         run_scripted_episode(task.skill, task.seed, i) for i in range(task.start, task.stop)
     ]
-    write_episodes(task.path, episodes, _attrs(task.skill, task.seed))
+    write_episodes(task.path, episodes, {**_attrs(task.skill, task.seed), **_identity(task)})
     return len(episodes), sum(e.success for e in episodes)
+
+
+def _identity(task: ChunkTask) -> dict[str, Any]:
+    return chunk_attrs(task.skill.to_json(), task.seed, task.start, task.stop)
 
 
 def _attrs(skill: SkillSpec, seed: int) -> dict[str, Any]:
@@ -177,7 +182,8 @@ def collect_skill(
     final = out / f"{skill.name}.h5"
     if final.exists():
         existing = load_dataset(final)
-        if existing.num_episodes == episodes and int(existing.attrs["seed"]) == seed:
+        same_skill = existing.attrs["skill"] == skill.to_json()
+        if existing.num_episodes == episodes and int(existing.attrs["seed"]) == seed and same_skill:
             return existing
     parts = parts_dir(out, skill)
     tasks = []
@@ -185,7 +191,8 @@ def collect_skill(
         stop = min(start + chunk_episodes, episodes)
         path = parts / f"seed{seed}_{start:06d}_{stop:06d}.h5"
         tasks.append(ChunkTask(skill, seed, start, stop, path))
-    todo = [t for t in tasks if not t.path.exists()]
+    kept = {t.path for t in tasks if keep_chunk(t.path, _identity(t))}
+    todo = [t for t in tasks if t.path not in kept]
     done_eps = sum(t.stop - t.start for t in tasks if t.path.exists())
     successes = sum(
         int(load_dataset(t.path).episode_successes.sum()) for t in tasks if t.path.exists()
