@@ -171,6 +171,24 @@ def save_checkpoint(directory: str | Path, checkpoint: Checkpoint) -> tuple[Path
     return weights_path, sidecar_path
 
 
+_SIDECAR_TYPES: dict[str, type | tuple[type, ...]] = {
+    "obs_dim": int,
+    "action_dim": int,
+    "hidden_sizes": list,
+    "skill_spec": dict,
+    "train_config": dict,
+    "steps": int,
+    "seed": int,
+    "weights_sha256": str,
+    "dataset_sha256": str,
+    "package_version": str,
+    "obs_mean": list,
+    "obs_std": list,
+    "action_scale": list,
+}
+"""The JSON type of each structural sidecar field (checked before use)."""
+
+
 def _read_sidecar(path: Path, name: str) -> dict[str, Any]:
     if not path.is_file():
         raise CheckpointError(f"{path}: checkpoint sidecar not found")
@@ -188,6 +206,13 @@ def _read_sidecar(path: Path, name: str) -> dict[str, Any]:
             f"{path}: checkpoint format {sidecar['format_version']}, this version reads "
             f"{FORMAT_VERSION}"
         )
+    for key, kind in _SIDECAR_TYPES.items():
+        value = sidecar[key]
+        if not isinstance(value, kind) or isinstance(value, bool):
+            raise CheckpointError(f"{path}: sidecar field {key!r} has the wrong type: {value!r}")
+    sizes = sidecar["hidden_sizes"]
+    if not all(isinstance(n, int) and not isinstance(n, bool) and n > 0 for n in sizes):
+        raise CheckpointError(f"{path}: hidden_sizes must be positive integers, got {sizes}")
     spec = sidecar["skill_spec"]
     recorded = spec.get("name") if isinstance(spec, dict) else None
     if recorded != name:
@@ -231,7 +256,10 @@ def _read_layers(path: Path, sidecar: dict[str, Any]) -> list[Layer]:
 def _vector(
     path: Path, sidecar: dict[str, Any], key: str, size: int, positive: bool = False
 ) -> np.ndarray:
-    value = np.asarray(sidecar[key], dtype=np.float32)
+    try:
+        value = np.asarray(sidecar[key], dtype=np.float32)
+    except (TypeError, ValueError) as err:
+        raise CheckpointError(f"{path}: {key} must be {size} numbers ({err})") from err
     valid = np.isfinite(value) & (value > 0) if positive else np.isfinite(value)
     if value.shape != (size,) or not np.all(valid):
         kind = "positive" if positive else "finite"
