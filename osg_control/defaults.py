@@ -7,6 +7,7 @@ them). ``osg reproduce`` writes a directory of the same layout.
 
 from __future__ import annotations
 
+import hashlib
 import json
 from pathlib import Path
 from typing import Any
@@ -57,3 +58,13 @@ def models_in_use(directory: str | Path | None = None) -> dict[str, str]:
 def describe_models(models: dict[str, str]) -> str:
     """One line naming the models of ``models_in_use``."""
     return f"models: {models['directory']} ({models['source']})"
+
+
+def models_fingerprint(directory: str | Path | None = None) -> str:
+    """A short hash of a defaults folder's sidecars (which record their weights' sha256):
+    results computed with other models never match it."""
+    root = Path(directory) if directory is not None else DEFAULTS_DIR
+    digest = hashlib.sha256()
+    for path in sorted(root.glob("*/*.json")):
+        digest.update(path.name.encode() + path.read_bytes())
+    return digest.hexdigest()[:16]

@@ -7,9 +7,10 @@ import json
 from pathlib import Path
 
 from osg_control.commands import add_filter_argument
-from osg_control.defaults import describe_models, models_in_use
+from osg_control.defaults import describe_models, models_fingerprint, models_in_use
 from osg_control.evaluation.evaluate import format_task_table, task_table
 from osg_control.kitchen.tasks import TASKS_BY_NAME
+from osg_control.paths import cache_dir
 
 
 def register(subparsers: argparse._SubParsersAction) -> None:
@@ -48,6 +49,7 @@ def run_tasks(args: argparse.Namespace) -> int:
         args.task,
         args.replans,
         args.filter,
+        resume_dir=cache_dir() / "evaluation" / f"tasks-{models_fingerprint(args.models)}",
     )
     table["models"] = models_in_use(args.models)
     print(json.dumps(table, indent=2) if args.json else format_task_table(table))

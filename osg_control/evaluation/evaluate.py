@@ -16,6 +16,7 @@ import numpy as np
 
 from osg_control.control.estimator import FilteredPolicy
 from osg_control.data.collect import LocalExecutor, run_scripted_episode
+from osg_control.evaluation.resume import resumable_map
 from osg_control.kitchen.env import EnvConfig, KitchenEnv
 from osg_control.kitchen.skills import NODES, SKILLS, SKILLS_BY_NAME, get_skill, nearest_start
 from osg_control.kitchen.tasks import TASKS_BY_NAME, get_task
@@ -297,10 +298,12 @@ def task_table(
     tasks: Sequence[str] = tuple(TASKS_BY_NAME),
     replans: Sequence[int] = (0, 2),
     filter_gain: float | None = None,
+    resume_dir: Path | None = None,
 ) -> dict[str, Any]:
     """Tables IV and V: task success per start region, without and with replanning.
 
     ``filter_gain``: the executor's ``TcpFilter`` gain (None: raw observations).
+    ``resume_dir``: keep finished episodes there and resume from them (``resume``).
     """
     regions = start_regions()
     cells = [(t, r, k) for k in replans for t in tasks for r in range(len(regions))]
@@ -310,7 +313,8 @@ def task_table(
         for ti in [list(tasks).index(t)]
         for i in range(episodes)
     ]
-    outcomes = np.array(list(LocalExecutor(workers).map(run_task_episode, jobs)), dtype=float)
+    results = resumable_map(LocalExecutor(workers), run_task_episode, jobs, resume_dir)
+    outcomes = np.array(results, dtype=float)
     rates = outcomes.reshape(len(replans), len(tasks), len(regions), episodes).mean(axis=3)
     return {
         "episodes": episodes,
