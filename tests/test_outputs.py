@@ -66,6 +66,7 @@ def test_classifier_train_into_package_is_refused(tmp_path, monkeypatch, capsys)
         ["collect", "--skill", "grab-cube", "--episodes", "1000"],
         ["classifier", "train"],
         ["reproduce", "--quick"],
+        ["evaluate", "tasks", "--episodes", "100"],
     ],
 )
 def test_unwritable_output_is_refused_before_the_work(argv, tmp_path, monkeypatch, capsys):
@@ -74,7 +75,11 @@ def test_unwritable_output_is_refused_before_the_work(argv, tmp_path, monkeypatc
     blocker.write_text("not a folder")
     out = blocker / "sub"  # cannot be created, even by root
     started = time.perf_counter()
-    assert main([*argv, "--out", str(out)]) == EXIT_CODES["failure"]
+    if argv[0] == "evaluate":  # its output is the resume cache under $OSG_CACHE_DIR
+        monkeypatch.setenv("OSG_CACHE_DIR", str(out))
+    else:
+        argv = [*argv, "--out", str(out)]
+    assert main(argv) == EXIT_CODES["failure"]
     err = capsys.readouterr().err
     assert str(out) in err and "Traceback" not in err
     assert time.perf_counter() - started < 10.0

@@ -9,6 +9,7 @@ from pathlib import Path
 from osg_control.commands import add_filter_argument
 from osg_control.defaults import describe_models, models_fingerprint, models_in_use
 from osg_control.evaluation.evaluate import format_task_table, task_table
+from osg_control.io_safety import check_output_dir
 from osg_control.kitchen.tasks import TASKS_BY_NAME
 from osg_control.paths import cache_dir
 
@@ -49,7 +50,10 @@ def run_tasks(args: argparse.Namespace) -> int:
         args.task,
         args.replans,
         args.filter,
-        resume_dir=cache_dir() / "evaluation" / f"tasks-{models_fingerprint(args.models)}",
+        resume_dir=check_output_dir(
+            cache_dir() / "evaluation" / f"tasks-{models_fingerprint(args.models)}",
+            "evaluation cache",
+        ),
     )
     table["models"] = models_in_use(args.models)
     print(json.dumps(table, indent=2) if args.json else format_task_table(table))

@@ -13,6 +13,7 @@ from osg_control.commands import add_filter_argument
 from osg_control.defaults import describe_models, models_in_use
 from osg_control.evaluation.evaluate import format_skill_table, skill_table, start_regions
 from osg_control.execution.executor import load_executor
+from osg_control.io_safety import check_output_dir
 from osg_control.kitchen.env import EnvConfig, KitchenEnv
 from osg_control.kitchen.skills import NODES
 from osg_control.paths import DEFAULTS_DIR
@@ -68,6 +69,8 @@ def _start_options(start: str, rng: np.random.Generator) -> dict[str, Any]:
 def run_task(args: argparse.Namespace) -> int:
     """Run ``--episodes`` executions of the goal and report each (exit 1 if any failed)."""
     goal = args.goal.split()
+    if args.video:
+        check_output_dir(args.video.parent, "video folder")
     executor = load_executor(args.models, max_replans=args.max_replans, filter_gain=args.filter)
     models = models_in_use(args.models)
     if not args.json:
