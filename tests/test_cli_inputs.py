@@ -27,6 +27,7 @@ BAD_VALUES = [
     (["run", "--goal", "door-open", "--filter", "1.5"], "--filter"),
     (["run", "--goal", "door-open", "--filter", "nan"], "--filter"),
     (["run", "--goal", "door-open", "--door-opening", "nan"], "--door-opening"),
+    (["run", "--goal", "door-open", "--start", "nowhere"], "--start"),
     (["evaluate", "tasks", "--replans", "0", "-1"], "--replans"),
     (["evaluate", "tasks", "--workers", "0"], "--workers"),
     (["eval-skills", "--noise", "0.01", "inf"], "--noise"),
@@ -118,3 +119,15 @@ def test_sigterm_is_handled_like_ctrl_c(tmp_path):
     assert proc.returncode == EXIT_CODES["interrupted"], err
     assert "osg: interrupted" in err and "Traceback" not in err
     assert list(parts.glob("*.h5"))  # the finished chunks are kept for a resume
+
+
+def test_run_names_the_models_it_uses(capsys, tmp_path, monkeypatch):
+    import json
+
+    monkeypatch.setenv("OSG_CACHE_DIR", str(tmp_path))
+    assert cli.main(["run", "--goal", "door-closed", "--json"]) == 0
+    payload = json.loads(capsys.readouterr().out)
+    assert payload["models"]["source"] == "shipped defaults"
+    assert payload["models"]["skills"].endswith("defaults/skills")
+    assert cli.main(["run", "--goal", "door-closed"]) == 0
+    assert capsys.readouterr().out.startswith("models: ")

@@ -66,8 +66,16 @@ def _video(dest: str, value: Any) -> None:
         ) from err
 
 
+def _start(dest: str, value: Any) -> None:
+    from osg_control.kitchen.skills import NODES
+
+    if value != "random" and value not in NODES:
+        raise UsageError(f"{_option(dest)}: unknown start {value!r}; use 'random' or a node")
+
+
 CHECKS: dict[str, Callable[[str, Any], None]] = {
     "goal": _goal,
+    "start": _start,
     "episodes": _at_least(1),
     "steps": _at_least(1),
     "epochs": _at_least(1),

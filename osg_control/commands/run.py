@@ -11,6 +11,7 @@ import numpy as np
 
 from osg_control.commands import add_filter_argument
 from osg_control.defaults import describe_models, models_in_use
+from osg_control.errors import UsageError
 from osg_control.evaluation.evaluate import format_skill_table, skill_table, start_regions
 from osg_control.execution.executor import load_executor
 from osg_control.io_safety import check_output_dir
@@ -62,7 +63,7 @@ def _start_options(start: str, rng: np.random.Generator) -> dict[str, Any]:
         _name, position = regions[int(rng.integers(len(regions)))]
         return {"position": position, "radius": 0.15, "angle": 0.2}
     if start not in NODES:
-        raise SystemExit(f"osg run: unknown start {start!r}; use 'random' or one of {list(NODES)}")
+        raise UsageError(f"--start: unknown start {start!r}; use 'random' or one of {list(NODES)}")
     return {"node": start, "radius": 0.0, "angle": 0.0}
 
 
