@@ -9,12 +9,14 @@ from __future__ import annotations
 
 import argparse
 import importlib
+import os
 import sys
 from collections.abc import Collection, Sequence
 
 from osg_control import __version__
 from osg_control.commands import COMMAND_MODULES, DEFAULT_DOMAIN
-from osg_control.errors import OSGError
+from osg_control.commands.checks import check_args
+from osg_control.commands.errors import handle_errors
 
 VERBS: tuple[tuple[str, str, str], ...] = (
     ("collect", "collect", "record scripted noisy episodes (Algorithm 1), one HDF5 file per skill"),
@@ -51,6 +53,7 @@ def build_parser(modules: Collection[str] | None = None) -> argparse.ArgumentPar
         default=DEFAULT_DOMAIN,
         help=f"the domain to work in (default: {DEFAULT_DOMAIN}; `osg domains` lists them)",
     )
+    parser.add_argument("--debug", action="store_true", help="show tracebacks of errors")
     subparsers = parser.add_subparsers(dest="command", metavar="COMMAND")
     for module_name in COMMAND_MODULES:
         if modules is None or module_name in modules:
@@ -81,21 +84,19 @@ def _modules_for(argv: Sequence[str]) -> list[str]:
 
 
 def main(argv: Sequence[str] | None = None) -> int:
-    """Entry point; returns the process exit code (2 for usage, 1 for an osg-control error)."""
+    """Entry point; returns the process exit code (``errors.EXIT_CODES``: 0 success, 1 an
+    osg-control error, 2 a bad command-line value, 3 no plan, 4 no answer within the
+    planner's limits, 5 malformed PDDL, 130 interrupted)."""
     argv = sys.argv[1:] if argv is None else list(argv)
     parser = build_parser(_modules_for(argv))
     args = parser.parse_args(argv)
     if not getattr(args, "func", None):
         parser.print_help()
         return 0
-    try:
-        return int(args.func(args) or 0)
-    except OSGError as err:
-        print(f"osg: error: {err}", file=sys.stderr)
-        return 1
-    except KeyboardInterrupt:
-        print("osg: interrupted", file=sys.stderr)
-        return 130
+    with handle_errors(debug=args.debug or bool(os.environ.get("OSG_DEBUG"))) as outcome:
+        check_args(args)
+        outcome.code = int(args.func(args) or 0)
+    return outcome.code
 
 
 if __name__ == "__main__":  # pragma: no cover

@@ -58,3 +58,34 @@ def lookup(table: Mapping[str, T], name: str, what: str, error: Callable[[str], 
 
 class DomainError(OSGError):
     """A domain is malformed or unknown; the message names the domain and the field."""
+
+
+class UsageError(OSGError):
+    """A command-line value is out of its domain; the message names the option."""
+
+
+class OutputError(OSGError):
+    """A file or folder cannot be written (or read); the message names the path."""
+
+
+class TrainingError(OSGError):
+    """Training cannot go on (e.g. a non-finite loss); nothing is saved."""
+
+
+EXIT_CODES: dict[str, int] = {
+    "success": 0,
+    "failure": 1,
+    "usage": 2,
+    "no plan": 3,
+    "plan unknown": 4,
+    "pddl input": 5,
+    "interrupted": 130,
+}
+"""The ``osg`` exit codes: 0 success; 1 an osg-control error (bad file, diverged physics, a
+failed episode); 2 a bad command-line value; 3 the planner proved the goal unreachable;
+4 ``osg plan`` hit a time or state limit (no answer); 5 ``osg plan`` was handed malformed
+or unsupported PDDL; 130 interrupted (Ctrl-C or SIGTERM)."""
+
+
+class EnvOptionError(OSGError, ValueError):
+    """An env reset option is non-finite or out of range; the message names it."""

@@ -236,7 +236,7 @@ def test_joint_reset_in_sim(env: KitchenEnv) -> None:
     steps = env.joint_reset()
 
     end_pos, end_rot = env.tcp_pose()
-    assert steps >= 1
+    assert 1 <= steps < 40  # moved, and stopped on convergence before its budget
     assert float(np.abs(env.arm_q - posture).max()) < start_distance - 0.15
     # The servos track the null-space motion with a small lag: a few mm at most.
     assert np.linalg.norm(end_pos - start_pos) < 4e-3

@@ -17,7 +17,7 @@ from osg_control.execution.executor import (
 )
 from osg_control.execution.executor import Executor as DomainExecutor
 from osg_control.kitchen.env import EnvConfig, KitchenEnv
-from osg_control.kitchen.skills import NODES, SKILLS
+from osg_control.kitchen.skills import NODES, SKILLS, SKILLS_BY_NAME
 
 KITCHEN = get_domain("kitchen")
 
@@ -91,7 +91,9 @@ def test_pick_up_from_a_random_start(defaults: tuple[dict, object]) -> None:
     env, result = _run(Executor(policies, classifier), ["cube-lifted"], seed=3)
     assert result["success"], result
     assert env.world().cube_lifted
-    assert result["entry_skill"] is not None
+    entry = SKILLS_BY_NAME[result["entry_skill"]]  # off the graph: a movement skill enters
+    assert entry.kind == "movement"
+    assert SKILLS_BY_NAME[result["plan"][0]].start == entry.end  # the plan starts where it ends
     assert result["plan"][-2:] == ["grab-cube", "pick-up-cube"]
     assert all(outcome["success"] for outcome in result["outcomes"])
 
@@ -243,4 +245,5 @@ def test_result_schema_is_stable(defaults: tuple[dict, object]) -> None:
         "schema_version", "goal", "success", "entry_skill", "plan", "outcomes", "replans",
         "failure", "final_facts", "timings",
     ]  # fmt: skip
-    json.dumps(result)
+    assert json.loads(json.dumps(result)) == result  # JSON-ready, nothing lost
+    assert result["success"] and result["plan"] == [] and result["outcomes"] == []

@@ -315,8 +315,8 @@ def test_cli_plan_json_and_exit_codes(capsys: pytest.CaptureFixture[str]) -> Non
     assert payload["cost"] == 1000 and payload["solved"]
     assert main(["plan", "--goal", "cube-lifted", "--facts", "door-closed hand-empty"]) == 3
     assert "goal facts unreached: (cube-lifted)" in capsys.readouterr().out
-    assert main(["plan", "--goal", "door-ajar"]) == 1
-    assert "known predicates" in capsys.readouterr().err
+    assert main(["plan", "--goal", "door-ajar"]) == 2  # refused before planning: a usage error
+    assert "unknown facts ['door-ajar']" in capsys.readouterr().err
     assert main(["plan", str(DOMAIN), str(PROBLEMS[0]), "--planner", "ucs"]) == 0
     assert "plan for" in capsys.readouterr().out
     assert main(["plan", str(DOMAIN)]) == 1

@@ -9,9 +9,7 @@ training configuration, seed, data-set digests, package version); nothing is pic
 from __future__ import annotations
 
 import json
-import os
-import tempfile
-from collections.abc import Callable, Sequence
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -29,7 +27,8 @@ from osg_control.classifier.data import (
 from osg_control.classifier.metrics import EvaluationReport, evaluate_predictions
 from osg_control.data.datasets import OBS_DIM
 from osg_control.errors import CheckpointError
-from osg_control.learning.checkpoints import sha256_file
+from osg_control.io_safety import atomic_write
+from osg_control.learning.checkpoints import check_finite, sha256_file
 
 WEIGHTS_FILE = "classifier.safetensors"
 SIDECAR_FILE = "classifier.json"
@@ -180,7 +179,7 @@ class StateClassifier:
             tensors[f"layers.{i}.weight"] = np.ascontiguousarray(weight, dtype=np.float32)
             tensors[f"layers.{i}.bias"] = np.ascontiguousarray(bias, dtype=np.float32)
         weights_path = directory / WEIGHTS_FILE
-        _write_atomic(weights_path, lambda tmp: save_file(tensors, str(tmp)))
+        atomic_write(weights_path, lambda tmp: save_file(tensors, str(tmp)))
         sidecar = {
             **self.info,
             "format": CHECKPOINT_FORMAT,
@@ -192,7 +191,7 @@ class StateClassifier:
         }
         sidecar_path = directory / SIDECAR_FILE
         text = json.dumps(sidecar, indent=2, sort_keys=True) + "\n"
-        _write_atomic(sidecar_path, lambda tmp: tmp.write_text(text, encoding="utf-8"))
+        atomic_write(sidecar_path, lambda tmp: tmp.write_text(text, encoding="utf-8"))
         return sidecar_path
 
     @classmethod
@@ -251,6 +250,7 @@ class StateClassifier:
             )
         except (SafetensorError, OSError, KeyError) as err:
             raise CheckpointError(f"{weights_path}: corrupt classifier weights ({err})") from err
+        check_finite(weights_path, tensors)
         try:
             return cls(
                 classes=tuple(sidecar["classes"]),
@@ -263,18 +263,6 @@ class StateClassifier:
             raise CheckpointError(
                 f"{directory}: weights and sidecar do not form a classifier ({err})"
             ) from err
-
-
-def _write_atomic(path: Path, write: Callable[[Path], object]) -> None:
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fd, name = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
-    os.close(fd)
-    tmp = Path(name)
-    try:
-        write(tmp)
-        os.replace(tmp, path)
-    finally:
-        tmp.unlink(missing_ok=True)
 
 
 def evaluate(

@@ -7,6 +7,7 @@ states' mean and standard deviation, which the returned ``StateClassifier`` keep
 
 from __future__ import annotations
 
+import math
 from dataclasses import asdict, dataclass
 
 import numpy as np
@@ -17,6 +18,7 @@ from tqdm import tqdm
 from osg_control.classifier.data import ClassifierData
 from osg_control.classifier.model import StateClassifier
 from osg_control.data.datasets import OBS_DIM
+from osg_control.errors import TrainingError
 
 MIN_STD = 1e-6
 """An input whose training std is below this (e.g. a constant gripper command) is not scaled."""
@@ -103,6 +105,11 @@ def _fit(
             optimizer.step()
             total += loss.item() * len(batch)
         epoch_losses.append(total / len(targets))
+        if not math.isfinite(epoch_losses[-1]):
+            raise TrainingError(
+                f"classifier loss became {epoch_losses[-1]} in epoch {len(epoch_losses)}; "
+                "nothing saved (check the data sets for extreme values)"
+            )
         bar.set_postfix(loss=f"{epoch_losses[-1]:.4f}")
     return net, epoch_losses
 

@@ -19,7 +19,8 @@ from osg_control.classifier.model import StateClassifier, evaluate, reload_split
 from osg_control.classifier.train import TrainConfig, train_classifier
 from osg_control.commands import add_backend_arguments, domain_of
 from osg_control.domain.base import Domain
-from osg_control.execution.defaults import defaults_root
+from osg_control.execution.defaults import defaults_root, describe_models, models_in_use
+from osg_control.io_safety import check_output_dir
 from osg_control.paths import cache_dir
 
 Verbs: TypeAlias = "argparse._SubParsersAction[argparse.ArgumentParser]"
@@ -78,10 +79,10 @@ def run_train(args: argparse.Namespace) -> int:
         epochs=args.epochs, batch_size=args.batch_size, seed=args.seed, threads=args.threads
     )
     domain = domain_of(args)
+    out = check_output_dir(_trained_dir(domain, args.out), "classifier folder")
     classes = movement_classes(domain)
     data = load_classifier_data(_data_dir(domain, args.data), classes, args.seed)
     model = train_classifier(data, config, progress=True)
-    out = _trained_dir(domain, args.out)
     sidecar = model.save(out)
     report = evaluate(model, data.test, class_starts(domain, classes))
     losses = model.info["training"]["epoch_losses"]
@@ -182,11 +183,13 @@ def run_reach(args: argparse.Namespace) -> int:
     from osg_control.parallel import open_executor
 
     models = str(args.models) if args.models else None
+    domain = domain_of(args)
     with open_executor(args.backend, args.workers, args.address) as executor:
         table = reach_table(
-            domain_of(args), models, args.episodes, args.seed, args.workers, args.noise, executor
+            domain, models, args.episodes, args.seed, args.workers, args.noise, executor
         )
-    _emit(args, table, format_reach_table(table))
+    table["models"] = models_in_use(domain, models)
+    _emit(args, table, f"{format_reach_table(table)}\n{describe_models(table['models'])}")
     return 0
 
 

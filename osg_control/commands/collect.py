@@ -12,6 +12,7 @@ from osg_control.commands.minari import add_verbs as add_minari_verbs
 from osg_control.data.collect import DEFAULT_EPISODES, collect_skill
 from osg_control.data.datasets import dataset_summary, load_dataset
 from osg_control.errors import DatasetError
+from osg_control.io_safety import check_output_dir
 from osg_control.parallel import open_executor
 from osg_control.paths import cache_dir
 
@@ -43,7 +44,7 @@ def run_collect(args: argparse.Namespace) -> int:
     """Collect the requested skills and print their scripted success rates."""
     domain = domain_of(args)
     skills = list(domain.skills) if args.skill == "all" else [domain.skill(args.skill)]
-    out = args.out or cache_dir() / domain.name / "data"
+    out = check_output_dir(args.out or cache_dir() / domain.name / "data", "data folder")
     rows = []
     with open_executor(args.backend, args.workers, args.address) as executor:
         for skill in skills:

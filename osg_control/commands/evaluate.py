@@ -8,7 +8,10 @@ from pathlib import Path
 
 from osg_control.commands import add_backend_arguments, add_filter_argument, domain_of
 from osg_control.evaluation.evaluate import format_task_table, task_table
+from osg_control.execution.defaults import describe_models, models_fingerprint, models_in_use
+from osg_control.io_safety import check_output_dir
 from osg_control.parallel import open_executor
+from osg_control.paths import cache_dir
 
 
 def register(subparsers: argparse._SubParsersAction) -> None:
@@ -39,9 +42,17 @@ def register(subparsers: argparse._SubParsersAction) -> None:
 
 def run_tasks(args: argparse.Namespace) -> int:
     """Print Tables IV and V."""
+    domain = domain_of(args)
+    resume_dir = check_output_dir(
+        cache_dir()
+        / domain.name
+        / "evaluation"
+        / f"tasks-{models_fingerprint(domain, args.models)}",
+        "evaluation cache",
+    )
     with open_executor(args.backend, args.workers, args.address) as executor:
         table = task_table(
-            domain_of(args),
+            domain,
             str(args.models) if args.models else None,
             args.episodes,
             args.seed,
@@ -51,6 +62,10 @@ def run_tasks(args: argparse.Namespace) -> int:
             args.replans,
             args.filter,
             executor,
+            resume_dir=resume_dir,
         )
+    table["models"] = models_in_use(domain, args.models)
     print(json.dumps(table, indent=2) if args.json else format_task_table(table))
+    if not args.json:
+        print(describe_models(table["models"]))
     return 0

@@ -23,6 +23,7 @@ from typing import Any
 from osg_control import __version__
 from osg_control.commands import add_filter_argument, domain_of
 from osg_control.domain.base import Domain
+from osg_control.io_safety import atomic_write, check_output_dir
 from osg_control.learning.checkpoints import sha256_file
 from osg_control.paths import PACKAGE_DIR
 from osg_control.planning.costs import MANIFEST, RATES_KEY
@@ -81,7 +82,7 @@ def run(args: argparse.Namespace) -> int:
 
     domain = domain_of(args)
     scale = QUICK if args.quick else FULL
-    out: Path = args.out
+    out: Path = check_output_dir(args.out, "reproduction folder")
     data, defaults = out / "data", out / "defaults"
     seed, workers = str(args.seed), str(args.workers)
     stage_seconds: dict[str, float] = {}
@@ -164,13 +165,13 @@ def run(args: argparse.Namespace) -> int:
         ),
     )
     manifest = _manifest(domain.name, data, args, scale)
-    (defaults / MANIFEST).write_text(json.dumps(manifest, indent=2))
+    _write_manifest(defaults, manifest)
     figures["table_i"] = stage("table I", lambda: _table_i(domain, defaults, scale, args))
     manifest[RATES_KEY] = deployment_rates(figures["table_i"])
     manifest["success_rates_from"] = f"Table I at sigma = {DEPLOYMENT_NOISE} m" + (
         f", TCP filter gain {args.filter}" if args.filter is not None else ", raw observations"
     )
-    (defaults / MANIFEST).write_text(json.dumps(manifest, indent=2))
+    _write_manifest(defaults, manifest)
     figures["table_ii"] = stage("table II", lambda: _table_ii(domain, defaults, data, args.seed))
     figures["table_iii"] = stage("table III", lambda: _table_iii(domain, defaults, scale, args))
     figures["tables_iv_v"] = stage(
@@ -195,6 +196,11 @@ def run(args: argparse.Namespace) -> int:
             print(f"{name:14s} {seconds:8.1f} s")
         print("report: " + ", ".join(map(str, written)))
     return 0
+
+
+def _write_manifest(defaults: Path, manifest: dict[str, Any]) -> None:
+    text = json.dumps(manifest, indent=2)
+    atomic_write(defaults / MANIFEST, lambda tmp: tmp.write_text(text))
 
 
 def deployment_rates(table_i: dict[str, Any]) -> dict[str, float]:

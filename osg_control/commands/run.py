@@ -12,9 +12,11 @@ import numpy as np
 from osg_control.commands import add_backend_arguments, add_filter_argument, domain_of
 from osg_control.domain.base import Domain
 from osg_control.environment.arm_env import EnvConfig
+from osg_control.errors import UsageError
 from osg_control.evaluation.evaluate import format_skill_table, skill_table
-from osg_control.execution.defaults import defaults_root
+from osg_control.execution.defaults import defaults_root, describe_models, models_in_use
 from osg_control.execution.executor import load_executor
+from osg_control.io_safety import check_output_dir
 from osg_control.parallel import open_executor
 
 
@@ -65,8 +67,8 @@ def _start_options(domain: Domain, start: str, rng: np.random.Generator) -> dict
         region = domain.start_regions[int(rng.integers(len(domain.start_regions)))]
         return {"position": region.position, "radius": region.radius, "angle": region.angle}
     if start not in domain.nodes:
-        raise SystemExit(
-            f"osg run: unknown start {start!r}; use 'random' or one of {list(domain.nodes)}"
+        raise UsageError(
+            f"--start: unknown start {start!r}; use 'random' or one of {list(domain.nodes)}"
         )
     return {"node": start, "radius": 0.0, "angle": 0.0}
 
@@ -76,9 +78,14 @@ def run_task(args: argparse.Namespace) -> int:
     domain = domain_of(args)
     goal = args.goal.split()
     facts = domain.start_world if args.facts is None else tuple(args.facts.split())
+    if args.video:
+        check_output_dir(args.video.parent, "video folder")
     executor = load_executor(
         domain, args.models, max_replans=args.max_replans, filter_gain=args.filter
     )
+    models = models_in_use(domain, args.models)
+    if not args.json:
+        print(describe_models(models))
     env = domain.make_env(
         config=EnvConfig(obs_noise_std=args.noise),
         render_mode="rgb_array" if args.video else None,
@@ -107,7 +114,8 @@ def run_task(args: argparse.Namespace) -> int:
         _write_video(args.video, frames)
     successes = sum(r["success"] for r in results)
     if args.json:
-        print(json.dumps({"episodes": results, "success_rate": successes / len(results)}, indent=2))
+        payload = {"models": models, "episodes": results, "success_rate": successes / len(results)}
+        print(json.dumps(payload, indent=2))
     else:
         print(f"success rate {successes}/{len(results)}")
     return 0 if successes == len(results) else 1
@@ -137,5 +145,8 @@ def run_eval_skills(args: argparse.Namespace) -> int:
             filter_gain=args.filter,
             executor=executor,
         )
+    table["models"] = {"skills": str(models)}
     print(json.dumps(table, indent=2) if args.json else format_skill_table(table))
+    if not args.json:
+        print(f"models: {args.models}")
     return 0

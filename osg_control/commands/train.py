@@ -16,7 +16,8 @@ from osg_control.commands import domain_of
 from osg_control.data.datasets import load_dataset
 from osg_control.domain.base import Domain
 from osg_control.domain.spec import SkillSpec, skill_from_json
-from osg_control.errors import DatasetError, OSGError, SkillSpecError
+from osg_control.errors import DatasetError, OSGError, SkillSpecError, TrainingError
+from osg_control.io_safety import check_output_dir
 from osg_control.learning.checkpoints import Checkpoint, save_checkpoint, sha256_file
 from osg_control.learning.td3bc import (
     ACTION_SCALE,
@@ -114,8 +115,24 @@ def load_skill_input(data_dir: Path, name: str, config: TD3BCConfig) -> SkillInp
     return SkillInput(spec, data, path, sha256_file(path))
 
 
+def check_finite_losses(logs: dict[str, torch.Tensor], step: int, names: list[str]) -> None:
+    """Stop training when a loss is NaN or infinite (its weights are garbage from then on).
+
+    Raises:
+        TrainingError: naming the loss, the skills and the update; nothing is saved.
+    """
+    for key, value in logs.items():
+        bad = ~torch.isfinite(value)
+        if bool(bad.any()):
+            skills = [names[k] for k in torch.nonzero(bad.reshape(-1)).reshape(-1).tolist()]
+            raise TrainingError(
+                f"{key} is non-finite at update {step} for skill(s) {skills}; training stopped, "
+                "no checkpoint written (check the data sets for extreme values)"
+            )
+
+
 def train_with_progress(
-    trainer: TD3BC, replay: BatchedReplay, steps: int
+    trainer: TD3BC, replay: BatchedReplay, steps: int, names: list[str] | None = None
 ) -> dict[str, torch.Tensor]:
     """Run ``steps`` updates under a progress bar (updates/s, losses averaged over skills).
 
@@ -123,11 +140,13 @@ def train_with_progress(
         The latest per-skill (K,) value of every log key (actor keys from the last actor step).
     """
     logs: dict[str, torch.Tensor] = {}
+    names = names or [str(k) for k in range(trainer.num_skills)]
     desc = f"train {trainer.num_skills} skill(s)"
     with tqdm(total=steps, desc=desc, unit="update", mininterval=0.5) as bar:
         for step in range(1, steps + 1):
             logs.update(trainer.train_step(replay.sample()))
             if step % LOG_EVERY == 0 or step == steps:
+                check_finite_losses(logs, step, names)
                 shown = ("critic_loss", "actor_loss", "bc_loss")
                 postfix = {key: f"{logs[key].mean().item():.4g}" for key in shown if key in logs}
                 bar.set_postfix(postfix, refresh=False)
@@ -201,14 +220,16 @@ def run(args: argparse.Namespace) -> int:
         torch.set_num_threads(args.threads)
     config = TD3BCConfig()
     data_dir = args.data or cache_dir() / domain.name / "data"
+    out_dir = check_output_dir(
+        args.out or cache_dir() / domain.name / "skills", "checkpoint folder"
+    )
     inputs = [load_skill_input(data_dir, n, config) for n in names]
     seeds = [skill_seed(args.seed, name) for name in names]
     replay = BatchedReplay([i.data for i in inputs], config.batch_size, seeds, args.device)
     trainer = TD3BC(config, seeds, device=args.device)
     start = time.perf_counter()
-    logs = train_with_progress(trainer, replay, args.steps)
+    logs = train_with_progress(trainer, replay, args.steps, names)
     seconds = time.perf_counter() - start
-    out_dir = args.out or cache_dir() / domain.name / "skills"
     print_summary(
         {
             "device": args.device,

@@ -124,7 +124,7 @@ class Backend:
         self.config = config
         self.lower = np.array(lower, dtype=float)
         self.upper = np.array(upper, dtype=float)
-        self.velocity_limit = _urdf_velocity_limits() * config.velocity_scale
+        self.velocity_limit = urdf_velocity_limits() * config.velocity_scale
         # Constants of the QP, so that build_qp does the per-step arithmetic only.
         cost = np.array([config.position_cost] * 3 + [config.orientation_cost] * 3)
         self._cost_column = cost[:, None]
@@ -267,7 +267,7 @@ BACKENDS: dict[str, Callable[[IKConfig], Backend]] = {
 }
 
 
-def _urdf_velocity_limits() -> np.ndarray:
+def urdf_velocity_limits() -> np.ndarray:
     """Per-joint velocity limits [rad/s] read from the URDF (via Pinocchio's parser)."""
     return np.asarray(load_pinocchio_arm().velocityLimit, dtype=float).copy()
 
@@ -388,6 +388,27 @@ def rotation_error(current: np.ndarray, target: np.ndarray) -> np.ndarray:
     return rotvec
 
 
+class InfeasibleQPError(ControllerError):
+    """The IK QP has no solution for this configuration and target."""
+
+
+ORTHONORMAL_TOL = 1e-6
+
+
+def check_rotation(rot: np.ndarray) -> None:
+    """Refuse a rotation target that is not a rotation matrix.
+
+    Raises:
+        ControllerError: ``rot`` is not orthonormal (within ``ORTHONORMAL_TOL``) with det +1.
+    """
+    error = float(np.abs(rot.T @ rot - np.eye(3)).max())
+    if error > ORTHONORMAL_TOL or np.linalg.det(rot) < 0:
+        raise ControllerError(
+            f"TCP rotation target must be orthonormal with determinant +1 (|R^T R - I| = "
+            f"{error:.2g}, det {np.linalg.det(rot):.3g})"
+        )
+
+
 class DiffIKController:
     """Turns TCP targets or relative TCP commands into joint position targets.
 
@@ -434,16 +455,19 @@ class DiffIKController:
             or not (np.isfinite(target_pos).all() and np.isfinite(target_rot).all())
         ):
             raise ControllerError("TCP target must be a finite position (3,) and rotation (3, 3)")
+        check_rotation(target_rot)
         return self._solve(q, target_pos, target_rot, hard_tcp)
 
     def _solve(
         self, q: np.ndarray, target_pos: np.ndarray, target_rot: np.ndarray, hard_tcp: bool
     ) -> np.ndarray:
-        """``solve_velocity`` on inputs already checked."""
+        """``solve_velocity`` on inputs already checked. A ``q`` a little past a joint limit
+        (contacts can push it there) is linearised at the limit, where the QP is feasible."""
+        q = np.clip(q, self.backend.lower, self.backend.upper)
         problem = self.backend.build_qp(q, target_pos, target_rot, hard_tcp)
         solution = self._solve_qp(problem)
         if solution is None:
-            raise ControllerError(
+            raise InfeasibleQPError(
                 f"QP solver {self.config.solver!r} found no solution at q={q.round(4)}"
             )
         return solution / self.config.dt  # the QP's unknown is dq = v dt
@@ -472,8 +496,16 @@ class DiffIKController:
         return self._integrate(q, velocity)
 
     def reset_step(self, q: np.ndarray, tcp_pos: np.ndarray, tcp_rot: np.ndarray) -> np.ndarray:
-        """One joint-reset step: move toward the posture while holding the TCP pose fixed."""
-        velocity = self.solve_velocity(q, tcp_pos, tcp_rot, hard_tcp=True)
+        """One joint-reset step: move toward the posture while holding the TCP pose fixed.
+
+        Where no such step exists (the QP is infeasible, e.g. joints pinned at their limits
+        with the TCP pose held), the fallback is to hold ``q``: the reset ends there and the
+        TCP keeps its pose, instead of a ``ControllerError``.
+        """
+        try:
+            velocity = self.solve_velocity(q, tcp_pos, tcp_rot, hard_tcp=True)
+        except InfeasibleQPError:
+            return self._check_q(q).copy()
         return self._integrate(np.asarray(q, dtype=float), velocity)
 
 

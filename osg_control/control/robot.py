@@ -19,7 +19,10 @@ from pathlib import Path
 import mujoco
 import numpy as np
 
+from osg_control.control.mujoco_log import install_warning_handler
 from osg_control.errors import ModelNotFoundError
+
+install_warning_handler()
 
 ARM_JOINTS: tuple[str, ...] = tuple(f"panda_joint{i}" for i in range(1, 8))
 FINGER_JOINTS: tuple[str, ...] = ("panda_finger_joint1", "panda_finger_joint2")

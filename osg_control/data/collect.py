@@ -20,6 +20,7 @@ import numpy as np
 from tqdm import tqdm
 
 from osg_control import __version__
+from osg_control.data.chunks import chunk_attrs, keep_chunk
 from osg_control.data.datasets import Dataset, Episode, load_dataset, write_episodes
 from osg_control.data.scripted import ScriptedPolicy
 from osg_control.domain.base import Domain
@@ -117,6 +118,10 @@ def _run_chunk(task: ChunkTask) -> list[Episode]:
     ]
 
 
+def _identity(task: ChunkTask) -> dict[str, Any]:
+    return chunk_attrs(task.skill.to_json(), task.seed, task.start, task.stop)
+
+
 def _attrs(domain: Domain, skill: SkillSpec, seed: int) -> dict[str, Any]:
     return {
         "domain": domain.name,
@@ -155,7 +160,8 @@ def collect_skill(
     final = out / f"{skill.name}.h5"
     if final.exists():
         existing = load_dataset(final)
-        if existing.num_episodes == episodes and int(existing.attrs["seed"]) == seed:
+        same_skill = existing.attrs["skill"] == skill.to_json()
+        if existing.num_episodes == episodes and int(existing.attrs["seed"]) == seed and same_skill:
             return existing
     parts = parts_dir(out, skill)
     tasks = []
@@ -163,15 +169,16 @@ def collect_skill(
         stop = min(start + chunk_episodes, episodes)
         path = parts / f"seed{seed}_{start:06d}_{stop:06d}.h5"
         tasks.append(ChunkTask(domain.name, skill, seed, start, stop, path))
-    todo = [t for t in tasks if not t.path.exists()]
-    done_eps = sum(t.stop - t.start for t in tasks if t.path.exists())
+    kept = {t.path for t in tasks if keep_chunk(t.path, _identity(t))}
+    todo = [t for t in tasks if t.path not in kept]
+    done_eps = sum(t.stop - t.start for t in tasks if t.path in kept)
     successes = sum(
-        int(load_dataset(t.path).episode_successes.sum()) for t in tasks if t.path.exists()
+        int(load_dataset(t.path).episode_successes.sum()) for t in tasks if t.path in kept
     )
     bar = tqdm(total=episodes, initial=done_eps, desc=skill.name, unit="ep", disable=not progress)
     chunks = (executor or LocalExecutor()).map(_run_chunk, todo)
     for task, chunk in zip(todo, chunks, strict=True):
-        write_episodes(task.path, chunk, _attrs(domain, skill, seed))
+        write_episodes(task.path, chunk, {**_attrs(domain, skill, seed), **_identity(task)})
         done_eps += len(chunk)
         successes += sum(e.success for e in chunk)
         bar.update(len(chunk))

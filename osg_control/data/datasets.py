@@ -28,8 +28,6 @@ Per-episode arrays (``E`` episodes): ``episode_starts`` (offset of the first ste
 from __future__ import annotations
 
 import json
-import os
-import tempfile
 from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
@@ -38,11 +36,16 @@ from typing import Any
 import h5py
 import numpy as np
 
+from osg_control.data.validation import check_attrs, check_episode_index, check_step_fields
 from osg_control.errors import DatasetError
+from osg_control.io_safety import atomic_write
 
 FORMAT_VERSION = 1
 OBS_DIM = 10
 ACTION_DIM = 7
+UNKNOWN = "unknown"
+"""``world_states`` attribute of a data set whose world states were not recorded (all NaN,
+e.g. imported from elsewhere): it trains a skill, but yields no effects for the graph."""
 WORLD_WIDTH = -1
 """Stands for the domain's world-state width in ``STEP_FIELDS`` (fixed per file)."""
 STEP_FIELDS: dict[str, tuple[tuple[int, ...], Any]] = {
@@ -140,12 +143,6 @@ class Dataset:
         )
 
 
-def _atomic_h5(path: Path) -> tuple[Path, int]:
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
-    return Path(tmp), fd
-
-
 def write_episodes(path: Path, episodes: Sequence[Episode], attrs: dict[str, Any]) -> None:
     """Write episodes to ``path`` atomically (a temp file renamed over the target).
 
@@ -155,11 +152,10 @@ def write_episodes(path: Path, episodes: Sequence[Episode], attrs: dict[str, Any
     if not isinstance(fields, str) or not fields:
         raise DatasetError(f"{path}: attribute 'world_fields' (the world-state names) is required")
     world_shape = (len(fields.split(",")),)
-    tmp, fd = _atomic_h5(Path(path))
-    os.close(fd)
-    try:
-        lengths = np.array([len(e) for e in episodes], dtype=np.int64)
-        starts = np.concatenate([[0], np.cumsum(lengths)[:-1]]).astype(np.int64)
+    lengths = np.array([len(e) for e in episodes], dtype=np.int64)
+    starts = (np.cumsum(lengths) - lengths).astype(np.int64)
+
+    def write(tmp: Path) -> None:
         with h5py.File(tmp, "w") as f:
             for key, (declared, dtype) in STEP_FIELDS.items():
                 shape = world_shape if declared == (WORLD_WIDTH,) else declared
@@ -178,10 +174,8 @@ def write_episodes(path: Path, episodes: Sequence[Episode], attrs: dict[str, Any
             f.attrs["format_version"] = FORMAT_VERSION
             for key, value in attrs.items():
                 f.attrs[key] = value
-        os.replace(tmp, path)
-    finally:
-        if tmp.exists():
-            tmp.unlink()
+
+    atomic_write(path, write)
 
 
 def _world_width(f: h5py.File, path: Path) -> int:
@@ -197,7 +191,8 @@ def load_dataset(path: str | Path) -> Dataset:
 
     Raises:
         DatasetError: naming the file and what is wrong (missing, not HDF5, missing field,
-            wrong shape, inconsistent episode bounds).
+            wrong shape or dtype, non-finite values, an inconsistent episode index; see
+            ``osg_control.data.validation``).
     """
     path = Path(path)
     if not path.is_file():
@@ -205,39 +200,31 @@ def load_dataset(path: str | Path) -> Dataset:
     try:
         with h5py.File(path, "r") as f:
             arrays: dict[str, np.ndarray] = {}
-            for key, (declared, _dtype) in STEP_FIELDS.items():
+            for key in STEP_FIELDS:
                 if key not in f:
                     raise DatasetError(f"{path}: missing field {key!r}")
-                arrays[key] = f[key][()]
-                shape = (_world_width(f, path),) if declared == (WORLD_WIDTH,) else declared
-                if arrays[key].shape[1:] != shape:
-                    raise DatasetError(
-                        f"{path}: field {key!r} has shape {arrays[key].shape}, expected "
-                        f"(N, {', '.join(map(str, shape))})"
-                    )
+                arrays[key] = np.asarray(f[key][()])
             per_episode = {}
             for key in ("episode_starts", "episode_lengths", "episode_successes"):
                 if key not in f:
                     raise DatasetError(f"{path}: missing field {key!r}")
-                per_episode[key] = f[key][()]
+                per_episode[key] = np.asarray(f[key][()])
             attrs = dict(f.attrs)
+            fields = {
+                key: ((_world_width(f, path),), dtype)
+                if shape == (WORLD_WIDTH,)
+                else (shape, dtype)
+                for key, (shape, dtype) in STEP_FIELDS.items()
+            }
     except DatasetError:
         raise
-    except (OSError, KeyError, ValueError) as err:
+    except (OSError, KeyError, ValueError, TypeError) as err:
         raise DatasetError(f"{path}: not a readable HDF5 data set ({err})") from err
-    steps = {len(v) for v in arrays.values()}
-    if len(steps) != 1:
-        raise DatasetError(f"{path}: step fields disagree on length: {sorted(steps)}")
+    unknown = frozenset({"world_states"}) if attrs.get("world_states") == UNKNOWN else frozenset()
+    check_step_fields(path, arrays, fields, unknown)
+    check_episode_index(path, arrays, per_episode)
+    check_attrs(path, attrs)
     lengths = per_episode["episode_lengths"]
-    if int(lengths.sum()) != steps.pop():
-        raise DatasetError(f"{path}: episode_lengths do not add up to the number of steps")
-    for key in ("skill", "seed"):
-        if key not in attrs:
-            raise DatasetError(f"{path}: missing attribute {key!r}")
-    if not np.all(np.isfinite(arrays["observations"])) or not np.all(
-        np.isfinite(arrays["actions"])
-    ):
-        raise DatasetError(f"{path}: non-finite values in observations or actions")
     return Dataset(
         path=path,
         arrays=arrays,

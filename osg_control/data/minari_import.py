@@ -24,6 +24,7 @@ import numpy as np
 from osg_control.data.datasets import (
     ACTION_DIM,
     OBS_DIM,
+    UNKNOWN,
     Dataset,
     Episode,
     load_dataset,
@@ -156,9 +157,11 @@ def import_minari(
         "domain": domain.name,
         "world_fields": ",".join(domain.world_fields),
         "skill": skill.to_json(),
-        "seed": int(metadata.get("osg_seed", -1)),
+        "seed": max(int(metadata.get("osg_seed", 0)), 0),
         "collector": f"imported from Minari data set {metadata.get('dataset_id', source)}",
         "success_from": success,
     }
+    if any(np.isnan(e.world_states).all() for e in episodes):
+        attrs["world_states"] = UNKNOWN
     write_episodes(Path(out), episodes, attrs)
     return load_dataset(out)

@@ -31,7 +31,14 @@ import mujoco
 import numpy as np
 from scipy.spatial.transform import Rotation
 
-from osg_control.control.ik import DiffIKController, IKConfig, joint_reset_controller, solve_ik
+from osg_control.control.divergence import DivergenceWatch
+from osg_control.control.ik import (
+    DiffIKController,
+    IKConfig,
+    joint_reset_controller,
+    solve_ik,
+    urdf_velocity_limits,
+)
 from osg_control.control.robot import (
     ARM_JOINTS,
     FINGER_JOINTS,
@@ -40,7 +47,9 @@ from osg_control.control.robot import (
     HOME_Q,
     TCP_SITE,
 )
+from osg_control.control.servo import substep_targets
 from osg_control.domain.spec import TOP_DOWN_QUAT, Node, SkillSpec
+from osg_control.environment.options import check_start_options
 from osg_control.errors import SimulationError
 
 __all__ = ["ACTION_BOUNDS", "ArmEnv", "EnvConfig"]
@@ -58,11 +67,6 @@ GRIPPER_OPEN_CMD = 1.0
 GRIPPER_CLOSED_CMD = -1.0
 _TOP_DOWN = np.array(TOP_DOWN_QUAT)
 _TOP_DOWN_ROT = Rotation.from_quat(np.roll(_TOP_DOWN, -1))
-_DIVERGENCE_WARNINGS = (
-    mujoco.mjtWarning.mjWARN_BADQPOS,
-    mujoco.mjtWarning.mjWARN_BADQVEL,
-    mujoco.mjtWarning.mjWARN_BADQACC,
-)
 
 
 @dataclass(frozen=True)
@@ -75,6 +79,9 @@ class EnvConfig:
         ik: the differential-IK controller's configuration.
         start_radius: default random-start radius around the start pose [m].
         start_angle: default random-start angle per axis [rad].
+        limit_joint_speed: spread each step's joint target over the substeps so that no
+            joint is commanded faster than its URDF velocity limit (``control.servo``);
+            off by default: the shipped data, scripts and policies were made without it.
     """
 
     obs_noise_std: float = 0.0
@@ -82,6 +89,7 @@ class EnvConfig:
     ik: IKConfig = field(default_factory=IKConfig)
     start_radius: float = 0.0
     start_angle: float = 0.0
+    limit_joint_speed: bool = False
 
 
 def canonical_quat(quat_wxyz: np.ndarray) -> np.ndarray:
@@ -161,6 +169,7 @@ class ArmEnv(gym.Env):
         self.ik = DiffIKController(self.config.ik)
         self._reset_ik: DiffIKController | None = None
         self.n_substeps = round(1.0 / (CONTROL_HZ * self.model.opt.timestep))
+        self._max_increment = urdf_velocity_limits() * self.model.opt.timestep
         self._arm_qpos = np.array([self.model.joint(j).qposadr[0] for j in ARM_JOINTS])
         self._arm_dof = np.array([self.model.joint(j).dofadr[0] for j in ARM_JOINTS])
         self._arm_act = np.array([self.model.actuator(j).id for j in ARM_JOINTS])
@@ -189,6 +198,13 @@ class ArmEnv(gym.Env):
     def facts_of(self, world: np.ndarray) -> frozenset[str]:
         """The domain's facts that hold in a world-state vector."""
         raise NotImplementedError
+
+    def check_world(self, world: dict[str, Any]) -> None:
+        """Refuse explicit ``world`` reset options that mean nothing (e.g. non-finite).
+
+        Raises:
+            EnvOptionError: naming the option and its value.
+        """
 
     def place_world(
         self, world: dict[str, Any], facts: frozenset[str], holding: str | None
@@ -282,6 +298,8 @@ class ArmEnv(gym.Env):
         default_facts = self.skill.start_facts if self.skill else ()
         facts = frozenset(options.get("facts", default_facts))
         orientation = _quat_rotation(node.orientation)
+        check_start_options(centre, radius, angle)
+        self.check_world(world)
         for _attempt in range(50):
             pos, rot = sample_start_pose(self.np_random, centre, radius, angle, orientation)
             pos, rot = self.snap_start(pos, rot, holding, world, facts)
@@ -337,9 +355,17 @@ class ArmEnv(gym.Env):
         return False
 
     def _settle(self, seconds: float) -> None:
-        """Let contacts settle with the arm servoed in place."""
+        """Let contacts settle with the arm servoed in place.
+
+        Raises:
+            SimulationError: the physics diverged (e.g. a start placed inside the furniture).
+        """
+        watch = DivergenceWatch(self.data)
         for _ in range(round(seconds / self.model.opt.timestep)):
             mujoco.mj_step(self.model, self.data)
+        diverged = watch.check()
+        if diverged is not None:
+            raise SimulationError(f"{diverged} while placing the start")
 
     # ----------------------------------------------------------------- step
     def check_action(self, action: np.ndarray) -> np.ndarray:
@@ -363,11 +389,10 @@ class ArmEnv(gym.Env):
         elif action[6] > 0.5:
             self._gripper_cmd = GRIPPER_OPEN_CMD
         q_target = self.ik.relative_step(self.arm_q, action[:6])
-        self.data.ctrl[self._arm_act] = q_target
         self.data.ctrl[self._gripper_act] = (
             FINGER_OPEN if self._gripper_cmd == GRIPPER_OPEN_CMD else 0.0
         )
-        failure = self._simulate()
+        failure = self._simulate(q_target)
         self._steps += 1
         world = self.world_state()
         reward = 0.0
@@ -387,22 +412,19 @@ class ArmEnv(gym.Env):
             info["failure"] = failure
         return self.observe(), reward, terminated, truncated, info
 
-    def _simulate(self) -> str | None:
-        """Run the physics substeps; return a failure reason if the simulation diverged."""
-        # MuJoCo resets the data (time back to 0) when it meets a bad qpos/qvel/qacc, so a
-        # divergence leaves a finite state behind: detect it by the warnings and the clock.
-        time_before = self.data.time
-        counts_before = [int(self.data.warning[w].number) for w in _DIVERGENCE_WARNINGS]
-        for _ in range(self.n_substeps):
+    def _simulate(self, arm_target: np.ndarray) -> str | None:
+        """Run the physics substeps toward ``arm_target`` (spread over them, see
+        ``control.servo``); return a failure reason if the simulation diverged."""
+        watch = DivergenceWatch(self.data)
+        previous = self.data.ctrl[self._arm_act].copy()
+        if self.config.limit_joint_speed:
+            targets = substep_targets(previous, arm_target, self.n_substeps, self._max_increment)
+        else:
+            targets = np.repeat(arm_target[None], self.n_substeps, axis=0)
+        for target in targets:
+            self.data.ctrl[self._arm_act] = target
             mujoco.mj_step(self.model, self.data)
-        for warning, count in zip(_DIVERGENCE_WARNINGS, counts_before, strict=True):
-            if int(self.data.warning[warning].number) > count:
-                return f"physics diverged: MuJoCo reported {warning.name} and reset the state"
-        if self.data.time < time_before:
-            return "physics diverged: MuJoCo reset the state"
-        if not (np.all(np.isfinite(self.data.qpos)) and np.all(np.isfinite(self.data.qvel))):
-            return "physics diverged: non-finite joint state"
-        return None
+        return watch.check()
 
     def skill_success(
         self, skill: SkillSpec | None = None, world: np.ndarray | None = None
@@ -452,8 +474,7 @@ class ArmEnv(gym.Env):
             if error < tolerance or error > previous - 1e-4:
                 return step
             previous = error
-            self.data.ctrl[self._arm_act] = self._reset_ik.reset_step(self.arm_q, pos, rot)
-            if self._simulate() is not None:
+            if self._simulate(self._reset_ik.reset_step(self.arm_q, pos, rot)) is not None:
                 raise SimulationError("physics diverged during joint reset")
         return max_steps
 

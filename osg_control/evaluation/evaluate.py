@@ -24,6 +24,7 @@ from osg_control.domain.base import Domain
 from osg_control.domain.registry import get_domain
 from osg_control.domain.spec import nearest_start
 from osg_control.environment.arm_env import ArmEnv, EnvConfig
+from osg_control.evaluation.resume import resumable_map
 from osg_control.parallel import LocalExecutor, TaskExecutor
 from osg_control.seeding import skill_seed
 
@@ -325,12 +326,14 @@ def task_table(
     replans: Sequence[int] = (0, 2),
     filter_gain: float | None = None,
     executor: TaskExecutor | None = None,
+    resume_dir: Path | None = None,
 ) -> dict[str, Any]:
     """Tables IV and V: task success per start region, without and with replanning.
 
     ``tasks``: task names (default: all the domain's); ``filter_gain``: the executor's
     ``TcpFilter`` gain (None: raw observations); ``executor``: where the episodes run
-    (default: a local pool of ``workers``).
+    (default: a local pool of ``workers``); ``resume_dir``: keep finished episodes there and
+    resume from them (``resume``).
     """
     regions = domain.start_regions
     tasks = [domain.task(t).name for t in (tasks or [t.name for t in domain.tasks])]
@@ -340,8 +343,8 @@ def task_table(
         for (t, r, k) in cells
         for i in range(episodes)
     ]
-    executor = executor or LocalExecutor(workers)
-    outcomes = np.array(list(executor.map(run_task_episode, jobs)), dtype=float)
+    results = resumable_map(executor or LocalExecutor(workers), run_task_episode, jobs, resume_dir)
+    outcomes = np.array(results, dtype=float)
     rates = outcomes.reshape(len(replans), len(tasks), len(regions), episodes).mean(axis=3)
     return {
         "episodes": episodes,

@@ -7,6 +7,8 @@ from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
 
+from osg_control.io_safety import atomic_write
+
 PUBLISHED_KEYS = ("table_i", "table_ii", "table_iii", "task_averages")
 """What a domain's ``published`` figures may hold: Table I rates per skill (one per noise
 level), Table II's accuracies, Table III's rates per start region, Tables IV/V's averages
@@ -140,7 +142,7 @@ def write_report(
     figures: dict[str, Any], out_dir: Path, published: Mapping[str, Any] | None = None
 ) -> list[Path]:
     """Write ``report.md``, ``figures.json`` and the plots into ``out_dir``."""
-    out_dir.mkdir(parents=True, exist_ok=True)
-    (out_dir / "figures.json").write_text(json.dumps(figures, indent=2))
-    (out_dir / "report.md").write_text(markdown(figures, published))
+    figures_text, report_text = json.dumps(figures, indent=2), markdown(figures, published)
+    atomic_write(out_dir / "figures.json", lambda tmp: tmp.write_text(figures_text))
+    atomic_write(out_dir / "report.md", lambda tmp: tmp.write_text(report_text))
     return [out_dir / "report.md", out_dir / "figures.json", *bar_plots(figures, out_dir)]

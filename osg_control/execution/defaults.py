@@ -9,6 +9,7 @@ reproduce`` writes a directory of the same layout.
 
 from __future__ import annotations
 
+import hashlib
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -75,3 +76,32 @@ def load_defaults(domain: Domain, directory: str | Path | None = None) -> Defaul
         graph=graph_from_specs(domain, success_rates=rates),
         manifest=manifest,
     )
+
+
+def models_in_use(domain: Domain, directory: str | Path | None = None) -> dict[str, str]:
+    """Which skill and classifier checkpoints a command loads (for its output and --json)."""
+    root = defaults_root(domain, directory)
+    shipped = domain.defaults_dir is not None and root.resolve() == domain.defaults_dir.resolve()
+    return {
+        "domain": domain.name,
+        "directory": str(root),
+        "source": "shipped defaults" if shipped else "given --models",
+        "skills": str(root / "skills"),
+        "classifier": str(root / "classifier"),
+    }
+
+
+def describe_models(models: dict[str, str]) -> str:
+    """One line naming the models of ``models_in_use``."""
+    return f"models: {models['directory']} ({models['source']})"
+
+
+def models_fingerprint(domain: Domain, directory: str | Path | None = None) -> str:
+    """A short hash of a defaults folder's sidecars (which record their weights' sha256) and
+    manifest (its success rates set the plan costs): results computed with other models
+    never match it."""
+    root = defaults_root(domain, directory)
+    digest = hashlib.sha256(domain.name.encode())
+    for path in sorted([*root.glob("*/*.json"), *root.glob(MANIFEST)]):
+        digest.update(path.name.encode() + path.read_bytes())
+    return digest.hexdigest()[:16]

@@ -26,10 +26,12 @@ from typing import Any, Protocol
 
 import numpy as np
 
+from osg_control.control.divergence import is_divergence
 from osg_control.control.estimator import TcpTracker
 from osg_control.domain.base import Domain
 from osg_control.domain.spec import SkillSpec, nearest_start
 from osg_control.environment.arm_env import GRIPPER_OPEN_CMD, ArmEnv
+from osg_control.errors import SimulationError
 from osg_control.planning.api import graph_domain, plan_for_goal
 from osg_control.planning.graph import SkillGraph
 
@@ -304,7 +306,9 @@ class Executor:
                 result.success = True
                 break
             if self.domain.hand_empty in facts and obs[7] != GRIPPER_OPEN_CMD:
-                obs = _open_gripper(env)
+                obs, result.failure = _open_gripper(env)
+                if result.failure:
+                    break
             t0 = time.perf_counter()
             seen = obs if tracker is None else tracker.read(obs)
             entry, plan, planned = self.plan(goal, seen, facts)
@@ -326,6 +330,8 @@ class Executor:
                     )
                 break
             result.failure = failed
+            if is_divergence(failed):  # the world was reset: never replan from it
+                break
             if attempt < self.max_replans:
                 result.replans += 1
         if result.success:
@@ -357,20 +363,25 @@ class Executor:
             if not outcome.success:
                 return obs, f"{name}: {outcome.failure}"
             if self.reset_joints and index < len(sequence) - 1:
-                outcome.reset_steps = env.joint_reset()
+                try:
+                    outcome.reset_steps = env.joint_reset()
+                except SimulationError as err:
+                    return obs, f"joint reset after {name}: {err}"
                 obs = env.observe()
                 if tracker is not None:
                     tracker.settle()
         return obs, None
 
 
-def _open_gripper(env: ArmEnv, steps: int = 5) -> np.ndarray:
+def _open_gripper(env: ArmEnv, steps: int = 5) -> tuple[np.ndarray, str | None]:
     """Open an empty but closed gripper in place (recovery before a movement skill, whose
-    termination needs it open)."""
+    termination needs it open); returns the observation and a divergence, if any."""
     obs = env.observe()
     for _ in range(steps):
-        obs, *_ = env.step(np.array([0.0, 0.0, 0.0, 0.0, 0.0, 0.0, GRIPPER_OPEN_CMD]))
-    return obs
+        obs, *_, info = env.step(np.array([0.0, 0.0, 0.0, 0.0, 0.0, 0.0, GRIPPER_OPEN_CMD]))
+        if "failure" in info:
+            return obs, f"opening the gripper: {info['failure']}"
+    return obs, None
 
 
 def load_executor(domain: Domain, directory: str | Path | None = None, **kwargs: Any) -> Executor:

@@ -17,6 +17,7 @@ import numpy as np
 from osg_control.domain.spec import SkillSpec
 from osg_control.environment.arm_env import ArmEnv, EnvConfig
 from osg_control.errors import SkillSpecError, lookup
+from osg_control.kitchen.options import check_world_options
 from osg_control.kitchen.scene import SceneIndex, build_kitchen_model
 from osg_control.kitchen.skills import DOOR_OPENED, NODES, SKILLS_BY_NAME
 from osg_control.kitchen.world import (
@@ -71,6 +72,10 @@ class KitchenEnv(ArmEnv):
     def facts_of(self, world: np.ndarray) -> frozenset[str]:
         """``world.world_facts`` of a world-state vector."""
         return world_facts(world_state_from_array(world))
+
+    def check_world(self, world: dict[str, Any]) -> None:
+        """Refuse a non-finite or out-of-range ``door_opening`` or ``cube_pos``."""
+        check_world_options(world)
 
     def place_world(
         self, world: dict[str, Any], facts: frozenset[str], holding: str | None

@@ -20,8 +20,6 @@ from __future__ import annotations
 
 import hashlib
 import json
-import os
-import tempfile
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -35,6 +33,7 @@ from osg_control import __version__
 from osg_control.data.datasets import ACTION_DIM, OBS_DIM
 from osg_control.domain.spec import SkillSpec, skill_from_json
 from osg_control.errors import CheckpointError, SkillSpecError
+from osg_control.io_safety import atomic_write
 
 FORMAT_VERSION = 1
 OBS_CLIP = 10.0
@@ -121,16 +120,16 @@ def sha256_file(path: str | Path) -> str:
     return digest.hexdigest()
 
 
-def _atomic_write(path: Path, data: bytes) -> None:
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
-    try:
-        with os.fdopen(fd, "wb") as f:
-            f.write(data)
-        os.replace(tmp, path)
-    finally:
-        if os.path.exists(tmp):
-            os.unlink(tmp)
+def check_finite(path: Path, tensors: dict[str, np.ndarray]) -> None:
+    """Refuse weights with a NaN or infinity.
+
+    Raises:
+        CheckpointError: naming the file and the first non-finite tensor.
+    """
+    for key, value in tensors.items():
+        if not np.all(np.isfinite(value)):
+            bad = int(np.size(value) - np.count_nonzero(np.isfinite(value)))
+            raise CheckpointError(f"{path}: tensor {key!r} has {bad} non-finite value(s)")
 
 
 def save_checkpoint(directory: str | Path, checkpoint: Checkpoint) -> tuple[Path, Path]:
@@ -148,6 +147,7 @@ def save_checkpoint(directory: str | Path, checkpoint: Checkpoint) -> tuple[Path
     for i, (weight, bias) in enumerate(checkpoint.layers):
         tensors[f"layers.{i}.weight"] = np.ascontiguousarray(weight, dtype=np.float32)
         tensors[f"layers.{i}.bias"] = np.ascontiguousarray(bias, dtype=np.float32)
+    check_finite(weights_path, tensors)
     weights = save_safetensors(tensors, metadata={"skill": checkpoint.skill.name})
     sidecar = {
         "format_version": FORMAT_VERSION,
@@ -165,9 +165,28 @@ def save_checkpoint(directory: str | Path, checkpoint: Checkpoint) -> tuple[Path
         "weights_sha256": hashlib.sha256(weights).hexdigest(),
         "package_version": checkpoint.package_version,
     }
-    _atomic_write(weights_path, weights)
-    _atomic_write(sidecar_path, (json.dumps(sidecar, indent=2) + "\n").encode())
+    atomic_write(weights_path, lambda tmp: tmp.write_bytes(weights))
+    sidecar_text = json.dumps(sidecar, indent=2) + "\n"
+    atomic_write(sidecar_path, lambda tmp: tmp.write_text(sidecar_text))
     return weights_path, sidecar_path
+
+
+_SIDECAR_TYPES: dict[str, type | tuple[type, ...]] = {
+    "obs_dim": int,
+    "action_dim": int,
+    "hidden_sizes": list,
+    "skill_spec": dict,
+    "train_config": dict,
+    "steps": int,
+    "seed": int,
+    "weights_sha256": str,
+    "dataset_sha256": str,
+    "package_version": str,
+    "obs_mean": list,
+    "obs_std": list,
+    "action_scale": list,
+}
+"""The JSON type of each structural sidecar field (checked before use)."""
 
 
 def _read_sidecar(path: Path, name: str) -> dict[str, Any]:
@@ -187,6 +206,13 @@ def _read_sidecar(path: Path, name: str) -> dict[str, Any]:
             f"{path}: checkpoint format {sidecar['format_version']}, this version reads "
             f"{FORMAT_VERSION}"
         )
+    for key, kind in _SIDECAR_TYPES.items():
+        value = sidecar[key]
+        if not isinstance(value, kind) or isinstance(value, bool):
+            raise CheckpointError(f"{path}: sidecar field {key!r} has the wrong type: {value!r}")
+    sizes = sidecar["hidden_sizes"]
+    if not all(isinstance(n, int) and not isinstance(n, bool) and n > 0 for n in sizes):
+        raise CheckpointError(f"{path}: hidden_sizes must be positive integers, got {sizes}")
     spec = sidecar["skill_spec"]
     recorded = spec.get("name") if isinstance(spec, dict) else None
     if recorded != name:
@@ -208,6 +234,7 @@ def _read_layers(path: Path, sidecar: dict[str, Any]) -> list[Layer]:
         tensors = load_safetensors(data)
     except SafetensorError as err:
         raise CheckpointError(f"{path}: corrupt safetensors file ({err})") from err
+    check_finite(path, tensors)
     sizes = [sidecar["obs_dim"], *sidecar["hidden_sizes"], sidecar["action_dim"]]
     layers = []
     for i, (fan_in, fan_out) in enumerate(zip(sizes[:-1], sizes[1:], strict=True)):
@@ -229,7 +256,10 @@ def _read_layers(path: Path, sidecar: dict[str, Any]) -> list[Layer]:
 def _vector(
     path: Path, sidecar: dict[str, Any], key: str, size: int, positive: bool = False
 ) -> np.ndarray:
-    value = np.asarray(sidecar[key], dtype=np.float32)
+    try:
+        value = np.asarray(sidecar[key], dtype=np.float32)
+    except (TypeError, ValueError) as err:
+        raise CheckpointError(f"{path}: {key} must be {size} numbers ({err})") from err
     valid = np.isfinite(value) & (value > 0) if positive else np.isfinite(value)
     if value.shape != (size,) or not np.all(valid):
         kind = "positive" if positive else "finite"

@@ -1,0 +1,126 @@
+"""Up-front checks of parsed ``osg`` arguments: a value outside its domain is refused before
+any work starts, with a ``UsageError`` naming the option (exit code 2).
+
+The checks are keyed by the argument's destination name, so every verb that takes e.g.
+``--episodes`` gets the same rule; ``cli.main`` calls ``check_args`` once after parsing.
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+from collections.abc import Callable
+from typing import Any
+
+from osg_control.errors import UsageError
+
+
+def _option(dest: str) -> str:
+    return "--" + dest.replace("_", "-")
+
+
+def _at_least(minimum: int) -> Callable[[str, Any], None]:
+    def check(dest: str, value: Any) -> None:
+        for item in value if isinstance(value, list) else [value]:
+            if item < minimum:
+                raise UsageError(f"{_option(dest)} must be >= {minimum}, got {item}")
+
+    return check
+
+
+def _finite_range(low: float, high: float, low_open: bool = False) -> Callable[[str, Any], None]:
+    def check(dest: str, value: Any) -> None:
+        for item in value if isinstance(value, list) else [value]:
+            inside = (item > low if low_open else item >= low) and item <= high
+            if not (math.isfinite(item) and inside):
+                bracket = "(" if low_open else "["
+                raise UsageError(f"{_option(dest)} must lie in {bracket}{low}, {high}], got {item}")
+
+    return check
+
+
+def _goal(dest: str, value: Any) -> None:
+    if not str(value).split():
+        raise UsageError(f"{_option(dest)} needs at least one world fact, got {value!r}")
+
+
+def _video(dest: str, value: Any) -> None:
+    """``--video`` needs an OpenGL back end (MUJOCO_GL=egl or osmesa on a headless machine)."""
+    import warnings
+
+    import mujoco
+
+    model = mujoco.MjModel.from_xml_string("<mujoco><worldbody/></mujoco>")
+    try:
+        with warnings.catch_warnings():
+            warnings.simplefilter("error")  # GLFW reports a missing display as a warning
+            renderer = mujoco.Renderer(model, 16, 16)
+            renderer.update_scene(mujoco.MjData(model))
+            renderer.render()
+            renderer.close()
+    except Exception as err:  # any GL failure means: no back end to render with
+        raise UsageError(
+            f"{_option(dest)}: no OpenGL back end to render with ({err}); set MUJOCO_GL=egl "
+            "or MUJOCO_GL=osmesa, or leave out --video"
+        ) from err
+
+
+CHECKS: dict[str, Callable[[str, Any], None]] = {
+    "goal": _goal,
+    "episodes": _at_least(1),
+    "steps": _at_least(1),
+    "epochs": _at_least(1),
+    "batch_size": _at_least(1),
+    "threads": _at_least(1),
+    "workers": _at_least(1),
+    "seed": _at_least(0),
+    "replans": _at_least(0),
+    "max_replans": _at_least(0),
+    "noise": _finite_range(0.0, 1.0),
+    "filter": _finite_range(0.0, 1.0, low_open=True),
+    "video": _video,
+}
+"""Argument destination -> its check (run only when the argument is present and not None)."""
+
+
+def _domain_values(args: argparse.Namespace) -> None:
+    """``--domain`` names a registered domain; ``--start`` one of its nodes (or random);
+    ``--facts`` and ``--goal`` its facts (an ``(at NODE)`` goal atom is left to the planner)."""
+    from osg_control.domain.registry import get_domain
+    from osg_control.errors import DomainError
+
+    if getattr(args, "command", None) in (None, "domains"):
+        return
+    try:
+        domain = get_domain(args.domain)
+    except DomainError as err:
+        raise UsageError(f"--domain: {err}") from None
+    start = getattr(args, "start", None)
+    if start is not None and start != "random" and start not in domain.nodes:
+        raise UsageError(
+            f"--start: unknown start {start!r} in domain {domain.name!r}; use 'random' or one "
+            f"of {list(domain.nodes)}"
+        )
+    for dest in ("facts", "goal"):
+        words = str(getattr(args, dest, None) or "").split()
+        if dest == "goal" and (getattr(args, "files", None) or "(" in " ".join(words)):
+            continue
+        unknown = sorted(set(words) - set(domain.facts))
+        if unknown:
+            raise UsageError(
+                f"{_option(dest)}: unknown facts {unknown} in domain {domain.name!r}; its facts: "
+                f"{', '.join(domain.facts)}"
+            )
+
+
+def check_args(args: argparse.Namespace) -> None:
+    """Run every applicable check on parsed arguments.
+
+    Raises:
+        UsageError: the first value out of its domain, naming the option.
+    """
+    for dest, check in CHECKS.items():
+        value = getattr(args, dest, None)
+        if value is not None:
+            check(dest, value)
+    _domain_values(args)

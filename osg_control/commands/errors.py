@@ -1,0 +1,79 @@
+"""The ``osg`` top-level error handler: every error becomes one line on stderr and an exit
+code (``errors.EXIT_CODES``); ``--debug`` (or ``OSG_DEBUG=1``) adds the traceback.
+
+SIGTERM is handled like Ctrl-C in the main process: the work in progress stops the same
+way (finished chunks kept, exit 130).
+"""
+
+from __future__ import annotations
+
+import contextlib
+import os
+import signal
+import sys
+import threading
+import traceback
+from collections.abc import Iterator
+from dataclasses import dataclass
+from types import FrameType
+
+from osg_control.errors import EXIT_CODES, OSGError, UsageError
+
+
+@dataclass
+class Outcome:
+    """The exit code the command (or the handler) settled on."""
+
+    code: int = 0
+
+
+def _sigterm_as_interrupt(main_pid: int) -> None:
+    """Raise ``KeyboardInterrupt`` on SIGTERM in this process; children keep the default."""
+
+    def handler(signum: int, _frame: FrameType | None) -> None:
+        if os.getpid() != main_pid:
+            signal.signal(signum, signal.SIG_DFL)
+            os.kill(os.getpid(), signum)
+            return
+        raise KeyboardInterrupt
+
+    signal.signal(signal.SIGTERM, handler)
+
+
+def _report(message: str, debug: bool) -> None:
+    if debug:
+        traceback.print_exc()
+    print(f"osg: error: {message}", file=sys.stderr)
+
+
+@contextlib.contextmanager
+def handle_errors(debug: bool = False) -> Iterator[Outcome]:
+    """Run a command's body; map its exceptions to a message and ``Outcome.code``."""
+    outcome = Outcome()
+    in_main_thread = threading.current_thread() is threading.main_thread()
+    previous = signal.getsignal(signal.SIGTERM)
+    if in_main_thread:  # signal handlers can only be set there
+        _sigterm_as_interrupt(os.getpid())
+    try:
+        yield outcome
+    except UsageError as err:
+        _report(str(err), debug)
+        outcome.code = EXIT_CODES["usage"]
+    except OSGError as err:
+        _report(str(err), debug)
+        outcome.code = EXIT_CODES["failure"]
+    except KeyboardInterrupt:
+        if debug:
+            traceback.print_exc()
+        print("osg: interrupted", file=sys.stderr)
+        outcome.code = EXIT_CODES["interrupted"]
+    except OSError as err:
+        _report(f"{err.filename or 'file system'}: {err.strerror or err}", debug)
+        outcome.code = EXIT_CODES["failure"]
+    except Exception as err:
+        hint = "" if debug else "; rerun with osg --debug for the traceback"
+        _report(f"internal error {type(err).__name__}: {err} (please report it){hint}", debug)
+        outcome.code = EXIT_CODES["failure"]
+    finally:
+        if in_main_thread:
+            signal.signal(signal.SIGTERM, previous)
