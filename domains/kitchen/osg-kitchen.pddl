@@ -5,8 +5,8 @@
     (:types
         node - object
     )
-    (:constants above-cube cabinet-front cube-grasped cube-inside cube-lifted door-front handle handle-open home place-front - node)
-    (:predicates (at ?n - node)  (cube-in-cabinet) (cube-lifted) (cube-on-counter) (door-closed) (door-open) (hand-empty) (holding-cube) (holding-handle))
+    (:constants above-cube above-valve cabinet-front cube-grasped cube-inside cube-lifted door-front handle handle-open home place-front valve-lever valve-pushed - node)
+    (:predicates (at ?n - node)  (cube-in-cabinet) (cube-lifted) (cube-on-counter) (door-closed) (door-open) (hand-empty) (holding-cube) (holding-handle) (valve-closed) (valve-open))
     (:functions (total-cost))
     (:action grab-cube
         :parameters ()
@@ -17,6 +17,16 @@
         :parameters ()
         :precondition (and (at door-front) (door-closed) (hand-empty))
         :effect (and (holding-handle) (not (hand-empty)) (at handle) (not (at door-front)) (increase (total-cost) 100))
+    )
+     (:action leave-valve
+        :parameters ()
+        :precondition (and (at valve-pushed) (hand-empty))
+        :effect (and (at above-valve) (not (at valve-pushed)) (increase (total-cost) 100))
+    )
+     (:action lower-to-valve
+        :parameters ()
+        :precondition (and (at above-valve) (hand-empty) (valve-closed))
+        :effect (and (at valve-lever) (not (at above-valve)) (increase (total-cost) 100))
     )
      (:action move-cabinet-to-cube
         :parameters ()
@@ -53,6 +63,16 @@
         :precondition (and (at home) (hand-empty))
         :effect (and (at door-front) (not (at home)) (increase (total-cost) 100))
     )
+     (:action move-home-to-valve
+        :parameters ()
+        :precondition (and (at home) (hand-empty))
+        :effect (and (at above-valve) (not (at home)) (increase (total-cost) 100))
+    )
+     (:action move-valve-to-home
+        :parameters ()
+        :precondition (and (at above-valve) (hand-empty))
+        :effect (and (at home) (not (at above-valve)) (increase (total-cost) 100))
+    )
      (:action pick-up-cube
         :parameters ()
         :precondition (and (at cube-grasped) (cube-on-counter) (holding-cube))
@@ -62,6 +82,11 @@
         :parameters ()
         :precondition (and (at place-front) (cube-lifted) (door-open) (holding-cube))
         :effect (and (at cube-inside) (not (at place-front)) (increase (total-cost) 100))
+    )
+     (:action push-valve-open
+        :parameters ()
+        :precondition (and (at valve-lever) (hand-empty) (valve-closed))
+        :effect (and (valve-open) (not (valve-closed)) (at valve-pushed) (not (at valve-lever)) (increase (total-cost) 100))
     )
      (:action release-cube
         :parameters ()

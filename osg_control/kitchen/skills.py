@@ -35,6 +35,29 @@ WORKSPACE_RADIUS = 0.855
 """The Panda's reach from the shoulder (joint 2 axis, 0.333 m above the base) [m]."""
 SHOULDER = np.array([0.0, 0.0, 0.333])
 
+VALVE_HINGE = (0.35, -0.45)
+"""The valve's hinge axis (x, y) [m]: a vertical axis through the knob's centre."""
+VALVE_PUSH_Z = 0.07
+"""TCP height [m] of the valve push: the fingertip pads (TCP z +- 9 mm) overlap the lever
+(z 0.06-0.08) and stay above the counter; below the knob's top (0.06) only outside its rim."""
+VALVE_PUSH_RADIUS = 0.075
+"""Distance [m] from the hinge at which the +y finger pushes the lever: beyond the knob's rim
+(4 cm, plus the pad's 9 mm half-width) and short of the lever's tip (9 cm)."""
+VALVE_PUSH_ANGLES = (-0.35, -0.70, -1.05)
+"""Lever angles [rad] of the push's arc waypoints: clockwise (the lever swings to -y, away
+from the cube, the cabinet and every other skill's path) to about 1 rad."""
+
+
+def valve_push_point(angle: float) -> tuple[float, float, float]:
+    """The TCP position [m] that puts the +y finger's inner face (4 cm from the TCP along y)
+    on the lever's +y face (1 cm off its axis) at ``VALVE_PUSH_RADIUS`` when the lever is at
+    ``angle`` [rad] about z."""
+    c, s = np.cos(angle), np.sin(angle)
+    x = VALVE_HINGE[0] + VALVE_PUSH_RADIUS * c - 0.01 * s
+    y = VALVE_HINGE[1] + VALVE_PUSH_RADIUS * s + 0.01 * c - 0.04
+    return (round(float(x), 4), round(float(y), 4), VALVE_PUSH_Z)
+
+
 NODES: dict[str, Node] = {
     node.name: node
     for node in (
@@ -48,6 +71,9 @@ NODES: dict[str, Node] = {
         Node("cube-lifted", (0.50, -0.20, 0.20), "closed"),
         Node("place-front", (0.40, 0.30, 0.20), "closed"),
         Node("cube-inside", (0.64, 0.30, 0.135), "closed"),
+        Node("above-valve", (VALVE_HINGE[0] + VALVE_PUSH_RADIUS, VALVE_HINGE[1], 0.25)),
+        Node("valve-lever", (VALVE_HINGE[0] + VALVE_PUSH_RADIUS, VALVE_HINGE[1], VALVE_PUSH_Z)),
+        Node("valve-pushed", valve_push_point(VALVE_PUSH_ANGLES[-1])),
     )
 }
 """Every node of the skill graph. The first four are where the movement skills meet."""
@@ -62,6 +88,8 @@ WORLD_FACTS: tuple[str, ...] = (
     "cube-on-counter",
     "cube-lifted",
     "cube-in-cabinet",
+    "valve-closed",
+    "valve-open",
 )
 """The 0-ary world predicates of the kitchen domain."""
 
@@ -133,6 +161,11 @@ SCRIPT_PARAMS: dict[str, ScriptParams] = {
     "move-cube-to-cabinet": ScriptParams(0.008, 0.003, 0.0, 0.0045, 22),
     "place-cube-in-cabinet": ScriptParams(0.008, 0.003, 0.0, 0.0068, 12),
     "release-cube": ScriptParams(0.008, 0.003, 0.0, 0.0082, 14),
+    "move-home-to-valve": ScriptParams(0.008, 0.003, 0.0, 0.005, 20),
+    "move-valve-to-home": ScriptParams(0.008, 0.003, 0.0, 0.004, 20),
+    "lower-to-valve": ScriptParams(0.008, 0.003, 0.0, 0.006, 8),
+    "push-valve-open": ScriptParams(0.008, 0.003, 0.0, 0.0112, 4),
+    "leave-valve": ScriptParams(0.008, 0.003, 0.0, 0.0072, 5),
 }
 """Algorithm 1's parameters per skill: threshold N(8 mm, 3 mm), action noise N(0, 5 mm) (and
 25 mrad on the angles), and a per-waypoint step budget tuned by bisection so that the
@@ -236,6 +269,40 @@ _UNTUNED_SKILLS: tuple[SkillSpec, ...] = (
         del_effects=frozenset({"holding-cube", "cube-lifted"}),
         max_steps=100,
         start_facts=_DOOR_OPEN,
+    ),
+    _movement("move-home-to-valve", "home", "above-valve"),
+    _movement("move-valve-to-home", "above-valve", "home"),
+    SkillSpec(
+        name="lower-to-valve",
+        kind="valve",
+        start="above-valve",
+        end="valve-lever",
+        waypoints=(_wp("valve-lever"),),
+        preconditions=frozenset({"hand-empty", "valve-closed"}),
+    ),
+    SkillSpec(
+        name="push-valve-open",
+        kind="valve",
+        start="valve-lever",
+        end="valve-pushed",
+        waypoints=(
+            *(_at(valve_push_point(a), "open") for a in VALVE_PUSH_ANGLES[:-1]),
+            _wp("valve-pushed"),
+        ),
+        preconditions=frozenset({"hand-empty", "valve-closed"}),
+        add_effects=frozenset({"valve-open"}),
+        del_effects=frozenset({"valve-closed"}),
+    ),
+    SkillSpec(
+        name="leave-valve",
+        kind="valve",
+        start="valve-pushed",
+        end="above-valve",
+        waypoints=(
+            _at((*NODES["valve-pushed"].position[:2], 0.15), "open"),
+            _wp("above-valve"),
+        ),
+        preconditions=frozenset({"hand-empty"}),
     ),
 )
 

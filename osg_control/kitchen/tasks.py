@@ -6,8 +6,9 @@ from __future__ import annotations
 from osg_control.domain.base import Task
 from osg_control.errors import PlanningError, lookup
 
-DEFAULT_WORLD: tuple[str, ...] = ("door-closed", "cube-on-counter", "hand-empty")
-"""The kitchen's world facts at the start of a task: door shut, cube on the counter."""
+DEFAULT_WORLD: tuple[str, ...] = ("door-closed", "cube-on-counter", "hand-empty", "valve-closed")
+"""The kitchen's world facts at the start of a task: door shut, cube on the counter, valve
+shut."""
 
 
 def _task(
@@ -30,7 +31,7 @@ KITCHEN_TASKS: tuple[Task, ...] = (
     _task(
         "pick-up-place",
         ("cube-in-cabinet",),
-        world=("door-open", "cube-on-counter", "hand-empty"),
+        world=("door-open", "cube-on-counter", "hand-empty", "valve-closed"),
         description="door already open: pick the cube up and place it in the cabinet",
     ),
     _task(
@@ -38,8 +39,19 @@ KITCHEN_TASKS: tuple[Task, ...] = (
         ("door-open", "cube-in-cabinet"),
         description="open the door, pick the cube up, place it in the cabinet",
     ),
+    _task(
+        "turn-valve",
+        ("valve-open", "hand-empty"),
+        description="push the valve's lever round by about 1 rad (nothing is grasped)",
+    ),
+    _task(
+        "open-door-turn-valve",
+        ("door-open", "valve-open", "hand-empty"),
+        description="slide the cabinet door open, let go of the handle, turn the valve",
+    ),
 )
-"""The paper's five long-horizon tasks (Tables IV and V), in its order."""
+"""The paper's five long-horizon tasks (Tables IV and V), in its order, then the tasks the
+valve's skills added to the graph."""
 TASKS_BY_NAME: dict[str, Task] = {task.name: task for task in KITCHEN_TASKS}
 
 

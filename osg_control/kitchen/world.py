@@ -18,6 +18,9 @@ CABINET_INTERIOR_HIGH = np.array([0.84, 0.56, 0.70])
 """Axis-aligned bounds of the cabinet's interior [m], world frame."""
 DOOR_OPEN_MIN = 0.30
 """Door travel [m] from which the door counts as open (the opening then clears the cube)."""
+VALVE_OPEN_MIN = 0.5
+"""Valve angle [rad], either way, from which the valve counts as open: the push skill
+sweeps the lever about 1 rad, while touches by other skills move it by hundredths."""
 
 
 @dataclass(frozen=True)
@@ -44,6 +47,11 @@ class WorldState:
     def door_open(self) -> bool:
         """The door has slid far enough to clear the cabinet's opening."""
         return self.door_opening >= DOOR_OPEN_MIN
+
+    @property
+    def valve_open(self) -> bool:
+        """The valve has turned far enough from shut, either way."""
+        return abs(self.valve_angle) >= VALVE_OPEN_MIN
 
     @property
     def cube_in_cabinet(self) -> bool:
@@ -85,7 +93,10 @@ def world_facts(world: WorldState) -> frozenset[str]:
     Returns:
         The facts that hold; hand-empty means neither the cube nor the handle is grasped.
     """
-    facts = {"door-open" if world.door_open else "door-closed"}
+    facts = {
+        "door-open" if world.door_open else "door-closed",
+        "valve-open" if world.valve_open else "valve-closed",
+    }
     named = {
         "cube-in-cabinet": world.cube_in_cabinet,
         "cube-on-counter": world.cube_on_counter,

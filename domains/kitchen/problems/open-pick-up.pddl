@@ -1,8 +1,8 @@
-; open the door, pick up; from home with door-closed cube-on-counter hand-empty
+; open the door, pick up; from home with door-closed cube-on-counter hand-empty valve-closed
 (define (problem open-pick-up)
     (:domain osg-kitchen)
     (:requirements :action-costs :strips :typing)
-    (:init (= (total-cost) 0) (at home) (cube-on-counter) (door-closed) (hand-empty))
+    (:init (= (total-cost) 0) (at home) (cube-on-counter) (door-closed) (hand-empty) (valve-closed))
     (:goal (and (door-open) (cube-lifted)))
     (:metric minimize (total-cost))
 )

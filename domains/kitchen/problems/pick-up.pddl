@@ -1,8 +1,8 @@
-; pick the cube up; from home with door-closed cube-on-counter hand-empty
+; pick the cube up; from home with door-closed cube-on-counter hand-empty valve-closed
 (define (problem pick-up)
     (:domain osg-kitchen)
     (:requirements :action-costs :strips :typing)
-    (:init (= (total-cost) 0) (at home) (cube-on-counter) (door-closed) (hand-empty))
+    (:init (= (total-cost) 0) (at home) (cube-on-counter) (door-closed) (hand-empty) (valve-closed))
     (:goal (cube-lifted))
     (:metric minimize (total-cost))
 )
