@@ -58,8 +58,40 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     parser.add_argument("--workers", type=int, default=2)
     parser.add_argument("--noise", type=float, default=0.02, help="noise for Tables IV/V [m]")
     add_filter_argument(parser)
+    parser.add_argument(
+        "--check",
+        action="store_true",
+        help="after the run, compare its figures with the domain's shipped ones within their "
+        "99 %% confidence intervals (exit 1 on a mismatch)",
+    )
+    parser.add_argument(
+        "--compare",
+        type=Path,
+        metavar="REPORT",
+        help="compare an earlier reproduction's figures.json (file or folder) with the shipped "
+        "ones, without running anything",
+    )
     parser.add_argument("--json", action="store_true", help="print the figures as JSON")
     parser.set_defaults(func=run)
+
+
+def check_against_shipped(domain: Domain, figures: dict[str, Any], as_json: bool) -> int:
+    """Compare figures with the domain's shipped ``figures.json``; print the verdict.
+
+    Returns:
+        0 when every shared cell agrees, 1 otherwise.
+    """
+    from osg_control.evaluation.check import FIGURES, compare, read_figures
+    from osg_control.execution.defaults import defaults_root
+
+    compared, mismatches = compare(read_figures(defaults_root(domain) / FIGURES), figures)
+    if as_json:
+        print(json.dumps({"compared": compared, "mismatches": [m.__dict__ for m in mismatches]}))
+    else:
+        print(f"check: {compared} cells compared, {len(mismatches)} outside the intervals")
+        for m in mismatches:
+            print(f"  {m.where}: shipped {m.shipped:.3f}, reproduced {m.reproduced:.3f}")
+    return 1 if mismatches else 0
 
 
 def _git_commit() -> str | None:
@@ -81,6 +113,10 @@ def run(args: argparse.Namespace) -> int:
     from osg_control.cli import main as osg
 
     domain = domain_of(args)
+    if args.compare is not None:
+        from osg_control.evaluation.check import read_figures
+
+        return check_against_shipped(domain, read_figures(args.compare), args.json)
     scale = QUICK if args.quick else FULL
     out: Path = check_output_dir(args.out, "reproduction folder")
     data, defaults = out / "data", out / "defaults"
@@ -195,6 +231,8 @@ def run(args: argparse.Namespace) -> int:
         for name, seconds in stage_seconds.items():
             print(f"{name:14s} {seconds:8.1f} s")
         print("report: " + ", ".join(map(str, written)))
+    if args.check:
+        return check_against_shipped(domain, figures, args.json)
     return 0
 
 
