@@ -13,13 +13,14 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-
 from minidomain import DOMAIN_NAME, mini_domain
+
 from osg_control import cli
 from osg_control.classifier.data import load_classifier_data, movement_classes
 from osg_control.classifier.model import StateClassifier
 from osg_control.classifier.train import TrainConfig, train_classifier
 from osg_control.data.collect import collect_skill
+from osg_control.data.datasets import load_dataset
 from osg_control.domain.base import Domain
 from osg_control.domain.registry import domain_names, get_domain, register_domain
 from osg_control.execution.executor import Executor
@@ -68,8 +69,6 @@ def test_registered_domain_is_listed(domain: Domain, capsys: pytest.CaptureFixtu
 
 
 def test_graph_and_pddl_from_data(domain: Domain, trained: Path, tmp_path: Path) -> None:
-    from osg_control.data.datasets import load_dataset
-
     datasets = [load_dataset(trained / "data" / f"{s.name}.h5") for s in domain.skills]
     graph = graph_from_datasets(domain, datasets)
     assert graph.disagreements == ()  # the data's regions and effects are the specs'
@@ -100,7 +99,10 @@ def test_plan(domain: Domain, capsys: pytest.CaptureFixture[str]) -> None:
 def test_classifier_tells_the_movement_starts_apart(domain: Domain, trained: Path) -> None:
     classifier = StateClassifier.load(trained / "classifier", movement_classes(domain))
     env = domain.make_env()
-    for node, expected in (("home", "move-home-to-button"), ("above-button", "move-button-to-home")):
+    for node, expected in (
+        ("home", "move-home-to-button"),
+        ("above-button", "move-button-to-home"),
+    ):
         obs, _ = env.reset(seed=0, options={"node": node})
         assert classifier.predict(obs) == expected
 

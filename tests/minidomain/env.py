@@ -9,7 +9,7 @@ from typing import Any
 import mujoco
 import numpy as np
 
-from minidomain.domain import NODES, PRESSED_DEPTH, SKILLS, facts_of
+from minidomain.domain import NODES, SKILLS, facts_of
 from osg_control.control.robot import (
     ARM_JOINTS,
     FINGER_JOINTS,
