@@ -21,6 +21,7 @@ import numpy as np
 
 from osg_control.domain.base import Domain, StartRegion, Task
 from osg_control.domain.spec import MOVEMENT, Node, ScriptParams, SkillSpec, Waypoint
+from osg_control.errors import DomainError
 
 FORWARD = (0.5, -0.5, -0.5, -0.5)
 """Tool z along +y, fingers opening along world x: the orientation at the env's reset."""
@@ -273,6 +274,11 @@ def make_franka_env(
     from osg_control.franka.env import FrankaKitchenAdapter
 
     prepare()
+    unknown = sorted(set(tasks or ()) - set(TASK_FACTS))
+    if unknown:
+        raise DomainError(
+            f"franka-kitchen: unknown task(s) {unknown}; the library's tasks: {sorted(TASK_FACTS)}"
+        )
     if env is None:
         import gymnasium
 
