@@ -11,7 +11,7 @@ import pytest
 from osg_control.domain.registry import get_domain
 
 PACKAGE = Path(__file__).resolve().parents[1] / "osg_control"
-DOMAIN_PACKAGES = ("kitchen",)
+DOMAIN_PACKAGES = ("kitchen", "franka")
 """Sub-packages that are domains (the only places that may name their things)."""
 LAYERS: dict[str, int] = {
     "errors": 0, "paths": 0, "seeding": 0, "registration": 0, "io_safety": 0, "__init__": 0,

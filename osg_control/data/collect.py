@@ -57,7 +57,7 @@ def run_scripted_episode(domain: Domain, skill: SkillSpec, seed: int, index: int
         seed=int(rng.integers(2**31)),
         options={"radius": skill.start_radius, "angle": skill.start_angle},
     )
-    policy = ScriptedPolicy(skill, rng)
+    policy = ScriptedPolicy(skill, rng, bounds=getattr(env, "action_bounds", None))
     policy.reset()
     rows: dict[str, list[Any]] = {k: [] for k in ("obs", "next", "act", "rew", "term", "world")}
     hold_left: int | None = None  # steps still to record after the first success

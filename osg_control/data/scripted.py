@@ -25,9 +25,15 @@ class ScriptedPolicy:
     """Algorithm 1 for one skill; call ``reset`` at the start of every episode."""
 
     def __init__(
-        self, skill: SkillSpec, rng: np.random.Generator, params: ScriptParams | None = None
+        self,
+        skill: SkillSpec,
+        rng: np.random.Generator,
+        params: ScriptParams | None = None,
+        bounds: np.ndarray | None = None,
     ) -> None:
         self.skill = skill
+        self.bounds = ACTION_BOUNDS if bounds is None else np.asarray(bounds, dtype=float)
+        """Per-step action bounds (default ``ArmEnv``'s; an env with its own passes them)."""
         self.params = params or skill.script
         self.rng = rng
         self.threshold = 0.0
@@ -64,15 +70,15 @@ class ScriptedPolicy:
         wanted = GRIPPER_OPEN_CMD if waypoint.gripper == "open" else GRIPPER_CLOSED_CMD
         reach = self.threshold if waypoint.reach is None else waypoint.reach
         if np.linalg.norm(position_error) > reach:
-            action[:3] = _scale_into(position_error, ACTION_BOUNDS[0])
+            action[:3] = _scale_into(position_error, self.bounds[0])
             action[3:6] = _scale_into(
-                rotation_error(quat_to_matrix(obs[3:7]), self._rotations[index]), ACTION_BOUNDS[3]
+                rotation_error(quat_to_matrix(obs[3:7]), self._rotations[index]), self.bounds[3]
             )
         elif obs[7] != wanted:
             action[6] = wanted
         noise = self.rng.normal(self.params.noise_mean, self.params.noise_std, 6) * _NOISE_SCALE
         action[:6] += noise
-        return np.clip(action, -ACTION_BOUNDS, ACTION_BOUNDS)
+        return np.clip(action, -self.bounds, self.bounds)
 
 
 def _scale_into(vector: np.ndarray, bound: float) -> np.ndarray:

@@ -1,0 +1,310 @@
+"""FrankaKitchen-v1 as a ``Domain``: nodes, facts (the library's completion rule), skills.
+
+World state: the env's 21 object qpos (qpos 9-29, see ``OBJECT_FIELDS``) and whether both
+fingers squeeze something (``grasped``). A subtask's fact holds when the library's own rule
+holds: ``norm(qpos[OBS_ELEMENT_INDICES[t]] - OBS_ELEMENT_GOALS[t]) < BONUS_THRESH``
+(constants imported from ``gymnasium_robotics``, not copied).
+
+Poses are in the env's world frame. The tool points along +y at the env's reset
+(``FORWARD``: tool z +y, fingers opening along x); the kettle is grasped from above
+(not yet implemented).
+
+Implemented subtasks: slide cabinet, light switch, microwave (see ``SUBTASK_SKILLS``);
+the kettle, burners and hinge cabinet are not yet (their facts exist).
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+
+from osg_control.domain.base import Domain, StartRegion, Task
+from osg_control.domain.spec import MOVEMENT, Node, ScriptParams, SkillSpec, Waypoint
+from osg_control.errors import DomainError
+
+FORWARD = (0.5, -0.5, -0.5, -0.5)
+"""Tool z along +y, fingers opening along world x: the orientation at the env's reset."""
+GRASP_FORCE = 1.0
+"""Both fingers pressing harder than this [N] count as a grasp."""
+
+TASK_FACTS: dict[str, tuple[str, str]] = {
+    "microwave": ("microwave-open", "microwave-closed"),
+    "kettle": ("kettle-moved", "kettle-home"),
+    "light switch": ("light-on", "light-off"),
+    "slide cabinet": ("slide-open", "slide-closed"),
+    "hinge cabinet": ("hinge-open", "hinge-closed"),
+    "bottom burner": ("bottom-burner-on", "bottom-burner-off"),
+    "top burner": ("top-burner-on", "top-burner-off"),
+}
+"""Library task name -> (fact when its completion rule holds, fact when it does not)."""
+FACTS: tuple[str, ...] = (
+    "hand-empty",
+    "holding",
+    *(fact for pair in TASK_FACTS.values() for fact in pair),
+)
+OBJECT_FIELDS: tuple[str, ...] = tuple(f"qpos{i}" for i in range(9, 30))
+WORLD_FIELDS: tuple[str, ...] = (*OBJECT_FIELDS, "grasped")
+_OFFSET = 9
+"""The world vector's first entry is the env's qpos 9."""
+
+
+def world_of(object_qpos: np.ndarray, finger_forces: tuple[float, float]) -> np.ndarray:
+    """The world-state vector from the object qpos (21,) and the two finger forces [N]."""
+    grasped = float(min(finger_forces) > GRASP_FORCE)
+    return np.concatenate([np.asarray(object_qpos, dtype=float), [grasped]])
+
+
+def task_done(world: np.ndarray, task: str) -> bool:
+    """The library's completion rule for ``task`` on a world-state vector."""
+    from gymnasium_robotics.envs.franka_kitchen.kitchen_env import (
+        BONUS_THRESH,
+        OBS_ELEMENT_GOALS,
+        OBS_ELEMENT_INDICES,
+    )
+
+    values = np.asarray(world, dtype=float)[np.asarray(OBS_ELEMENT_INDICES[task]) - _OFFSET]
+    return bool(np.linalg.norm(values - OBS_ELEMENT_GOALS[task]) < BONUS_THRESH)
+
+
+def facts_of(world: np.ndarray) -> frozenset[str]:
+    """The facts of a world-state vector (``WORLD_FIELDS``)."""
+    facts = {"holding" if world[-1] > 0.5 else "hand-empty"}
+    for task, (done, not_done) in TASK_FACTS.items():
+        facts.add(done if task_done(world, task) else not_done)
+    return frozenset(facts)
+
+
+def _node(name: str, position: tuple[float, float, float], gripper: str = "open") -> Node:
+    return Node(name, position, gripper, FORWARD)  # type: ignore[arg-type]
+
+
+# Slide cabinet: push the vertical handle (x -0.108, y 0.607, z 2.49-2.71) along +x with
+# the closed fingers' +x side; the library counts it done once the door is past 0.07 m.
+SLIDE_Z = 2.52
+# Light switch: push the lever (at x -0.374, y 0.626, z 2.28, hinged about z at
+# (-0.40, 0.691)) along -x; done near -0.4 rad of its [-0.7, 0] range.
+LIGHT_Z = 2.28
+# Microwave: grasp the vertical handle (x -0.642, y 0.493, z 1.66-1.92) and pull it along
+# the door's arc about the hinge at (-1.128, 0.455); done once the door is below -0.45 rad.
+MICRO_HINGE = (-1.128, 0.455)
+MICRO_Z = 1.79
+MICRO_RADIUS = 0.4875
+MICRO_PHASE = 0.078
+"""The handle's angle about the hinge at the door's shut position [rad]."""
+
+
+def micro_point(angle: float) -> tuple[float, float, float]:
+    """The TCP on the handle when the door is at ``angle`` [rad]."""
+    phi = MICRO_PHASE + angle
+    return (
+        round(MICRO_HINGE[0] + MICRO_RADIUS * float(np.cos(phi)), 4),
+        round(MICRO_HINGE[1] + MICRO_RADIUS * float(np.sin(phi)), 4),
+        MICRO_Z,
+    )
+
+
+def micro_quat(angle: float) -> tuple[float, float, float, float]:
+    """``FORWARD`` turned by ``angle`` about world z (the hand turns with the door)."""
+    half = angle / 2
+    turn = np.array([np.cos(half), 0.0, 0.0, np.sin(half)])
+    w1, x1, y1, z1 = turn
+    w2, x2, y2, z2 = FORWARD
+    q = (
+        w1 * w2 - x1 * x2 - y1 * y2 - z1 * z2,
+        w1 * x2 + x1 * w2 + y1 * z2 - z1 * y2,
+        w1 * y2 - x1 * z2 + y1 * w2 + z1 * x2,
+        w1 * z2 + x1 * y2 - y1 * x2 + z1 * w2,
+    )
+    return tuple(round(float(v), 6) for v in q)  # type: ignore[return-value]
+
+
+MICRO_ANGLES = (-0.25, -0.5, -0.75, -1.0)
+"""Door angles [rad] of the pull's arc waypoints (the library's goal is -0.75)."""
+
+NODES: dict[str, Node] = {
+    n.name: n
+    for n in (
+        _node("home", (-0.432, 0.119, 2.025)),
+        _node("slide-front", (-0.17, 0.50, SLIDE_Z), "closed"),
+        _node("slide-pushed", (0.08, 0.50, SLIDE_Z), "closed"),
+        _node("light-front", (-0.31, 0.52, LIGHT_Z), "closed"),
+        _node("light-pushed", (-0.52, 0.52, LIGHT_Z), "closed"),
+        _node("microwave-front", (-0.642, 0.40, MICRO_Z)),
+        Node(
+            "microwave-opened",
+            (
+                round(micro_point(MICRO_ANGLES[-1])[0], 4),
+                round(micro_point(MICRO_ANGLES[-1])[1] - 0.08, 4),
+                MICRO_Z,
+            ),
+            "open",
+            micro_quat(MICRO_ANGLES[-1]),
+        ),
+    )
+}
+
+
+def _wp(position: tuple[float, float, float], gripper: str, **kw: Any) -> Waypoint:
+    return Waypoint(position, gripper, orientation=kw.pop("orientation", FORWARD), **kw)  # type: ignore[arg-type]
+
+
+def _at(node: str, **kw: Any) -> Waypoint:
+    n = NODES[node]
+    return Waypoint(n.position, n.gripper, orientation=n.orientation, **kw)
+
+
+SCRIPT = ScriptParams(threshold_mean=0.01, threshold_std=0.003, noise_std=0.005)
+_NO_PRE: frozenset[str] = frozenset()
+
+
+def _movement(name: str, start: str, end: str, via: tuple[float, float, float] | None = None):
+    points = [_wp(via, NODES[end].gripper, steps=15)] if via else []
+    return SkillSpec(
+        name=name,
+        kind=MOVEMENT,
+        start=start,
+        end=end,
+        waypoints=(*points, _at(end, steps=25)),
+        preconditions=frozenset({"hand-empty"}),
+        script=SCRIPT,
+        max_steps=40,
+    )
+
+
+SKILLS: tuple[SkillSpec, ...] = (
+    _movement("move-home-to-slide", "home", "slide-front"),
+    _movement("move-slide-to-home", "slide-pushed", "home"),
+    _movement("move-home-to-light", "home", "light-front"),
+    _movement("move-light-to-home", "light-pushed", "home"),
+    _movement("move-home-to-microwave", "home", "microwave-front"),
+    _movement("move-microwave-to-home", "microwave-opened", "home"),
+    SkillSpec(
+        name="push-slide",
+        kind="push",
+        start="slide-front",
+        end="slide-pushed",
+        waypoints=(
+            _wp((-0.17, 0.60, SLIDE_Z), "closed", steps=10, reach=0.01),
+            _wp((0.08, 0.60, SLIDE_Z), "closed", steps=20, reach=0.01),
+            _at("slide-pushed", steps=8),
+        ),
+        preconditions=frozenset({"hand-empty", "slide-closed"}),
+        add_effects=frozenset({"slide-open"}),
+        del_effects=frozenset({"slide-closed"}),
+        script=SCRIPT,
+        success_tolerance=0.03,
+        max_steps=50,
+    ),
+    SkillSpec(
+        name="push-light",
+        kind="push",
+        start="light-front",
+        end="light-pushed",
+        waypoints=(
+            _wp((-0.31, 0.62, LIGHT_Z), "closed", steps=10, reach=0.01),
+            _wp((-0.52, 0.62, LIGHT_Z), "closed", steps=20, reach=0.01),
+            _at("light-pushed", steps=8),
+        ),
+        preconditions=frozenset({"hand-empty", "light-off"}),
+        add_effects=frozenset({"light-on"}),
+        del_effects=frozenset({"light-off"}),
+        script=SCRIPT,
+        success_tolerance=0.03,
+        max_steps=50,
+    ),
+    SkillSpec(
+        name="open-microwave",
+        kind="pull",
+        start="microwave-front",
+        end="microwave-opened",
+        waypoints=(
+            _wp(micro_point(0.0), "closed", steps=15, reach=0.008),
+            *(
+                _wp(micro_point(a), "closed", steps=8, reach=0.015, orientation=micro_quat(a))
+                for a in MICRO_ANGLES
+            ),
+            _wp(
+                micro_point(MICRO_ANGLES[-1]),
+                "open",
+                steps=5,
+                reach=0.05,
+                orientation=micro_quat(MICRO_ANGLES[-1]),
+            ),
+            _at("microwave-opened", steps=10),
+        ),
+        preconditions=frozenset({"hand-empty", "microwave-closed"}),
+        add_effects=frozenset({"microwave-open"}),
+        del_effects=frozenset({"microwave-closed"}),
+        script=SCRIPT,
+        success_tolerance=0.03,
+        max_steps=80,
+    ),
+)
+SUBTASK_SKILLS: dict[str, str] = {
+    "slide cabinet": "push-slide",
+    "light switch": "push-light",
+    "microwave": "open-microwave",
+}
+"""Library task -> the skill that does it (the implemented ones)."""
+
+TASKS: tuple[Task, ...] = (
+    Task("slide-cabinet", ("slide-open",), description="open the slide cabinet"),
+    Task("light-switch", ("light-on",), description="turn the light switch on"),
+    Task("open-microwave", ("microwave-open",), description="open the microwave"),
+    Task(
+        "kitchen-complete",
+        ("microwave-open", "kettle-moved", "light-on", "slide-open"),
+        description="D4RL kitchen-complete: microwave, kettle, light switch, slide cabinet",
+    ),
+)
+START_WORLD: tuple[str, ...] = ("hand-empty", *(pair[1] for pair in TASK_FACTS.values()))
+
+
+def make_franka_env(
+    skill: SkillSpec | str | None = None,
+    config: Any = None,
+    render_mode: str | None = None,
+    env: Any = None,
+    tasks: list[str] | None = None,
+) -> Any:
+    """A ``FrankaKitchenAdapter`` around ``env`` (default: a new FrankaKitchen-v1 with
+    ``tasks``, all seven if not given)."""
+    from osg_control.franka.compat import prepare
+    from osg_control.franka.env import FrankaKitchenAdapter
+
+    prepare()
+    unknown = sorted(set(tasks or ()) - set(TASK_FACTS))
+    if unknown:
+        raise DomainError(
+            f"franka-kitchen: unknown task(s) {unknown}; the library's tasks: {sorted(TASK_FACTS)}"
+        )
+    if env is None:
+        import gymnasium
+
+        kwargs: dict[str, Any] = {"tasks_to_complete": list(tasks or TASK_FACTS)}
+        if render_mode is not None:
+            kwargs["render_mode"] = render_mode
+        env = gymnasium.make("FrankaKitchen-v1", **kwargs)
+    spec = {s.name: s for s in SKILLS}[skill] if isinstance(skill, str) else skill
+    return FrankaKitchenAdapter(env, NODES, world_of, facts_of, skill=spec, config=config)
+
+
+def franka_domain() -> Domain:
+    """The FrankaKitchen-v1 domain (registered as ``franka-kitchen``)."""
+    return Domain(
+        name="franka-kitchen",
+        description="Gymnasium-Robotics FrankaKitchen-v1 (the D4RL kitchen), via its own env",
+        nodes=NODES,
+        facts=FACTS,
+        skills=SKILLS,
+        tasks=TASKS,
+        start_regions=(StartRegion("home", NODES["home"].position, 0.05, 0.1),),
+        start_world=START_WORLD,
+        home="home",
+        world_fields=WORLD_FIELDS,
+        facts_of=facts_of,
+        make_env=make_franka_env,
+        hand_empty="hand-empty",
+        env_id="FrankaKitchen-v1",
+    )

@@ -1,0 +1,518 @@
+"""The adapter: a caller's FrankaKitchen-v1 with the paper's 10-D state and 7-D TCP action.
+
+Wraps an env made with ``gymnasium.make("FrankaKitchen-v1", tasks_to_complete=[...])``
+(any of its options); its ``step``, reward, observation noise, time limit and task
+completion run as the library ships them: the adapter only chooses the 9-D action.
+
+State (10-D, world frame = the env's frame; the robot base stands at (0, 0, 1.8)):
+``[x, y, z, qw, qx, qy, qz, gripper command, grip force, finger distance]`` of the
+``end_effector`` site; the quaternion's sign is in the hemisphere of ``REFERENCE_QUAT`` (the
+tool's orientation at the env's reset, z along +y). Grip force [N]: the smaller of the two
+fingers' summed normal contact forces on things that are not the robot (a squeeze needs
+both). Finger distance: the sum of the two finger joints [m].
+
+Action (7-D): ``[dx, dy, dz, da, db, dg, g]``, relative TCP position [m] and rotation
+vector [rad], clipped to ``ACTION_BOUNDS`` (4 cm and 0.2 rad per 80 ms step: 0.5 m/s, which
+keeps a whole kitchen-complete path of about 3 m within the 280-step limit; the 2 cm of the
+core's own kitchen is too slow here), and a gripper command (``g < -0.5`` closes,
+``g > 0.5`` opens). mink's differential IK on an arm-only model compiled from the env's own
+MJCF, with the joint limits the env enforces (the intersection of the MJCF joint ranges,
+the actuators' control ranges and ``franka_config.xml``'s position bounds), gives a joint
+velocity ``v`` for the commanded pose; the env's action is ``a = v / 2`` (the env sets the
+servo target to ``observed qpos + 2 a dt``), scaled as a whole vector so that
+``max |a| <= 1``: when it saturates the TCP moves slower along the same direction, never
+along another one. Fingers: ``+1`` opens, ``-1`` closes, every step.
+"""
+
+from __future__ import annotations
+
+import os
+import warnings
+from dataclasses import dataclass
+from typing import Any
+
+import gymnasium as gym
+import mujoco
+import numpy as np
+
+from osg_control.domain.spec import Node, SkillSpec
+from osg_control.environment.arm_env import GRIPPER_CLOSED_CMD, GRIPPER_OPEN_CMD, success_holds
+from osg_control.errors import DomainError, SimulationError
+
+ACTION_BOUNDS = np.array([0.04, 0.04, 0.04, 0.2, 0.2, 0.2, 1.0])
+"""Per-step bound of each action component: 4 cm, 0.2 rad (per 80 ms step), gripper."""
+ARM_JOINTS = tuple(f"robot:panda0_joint{i}" for i in range(1, 8))
+FINGER_JOINTS = ("robot:panda0_finger_joint1", "robot:panda0_finger_joint2")
+TCP_SITE = "end_effector"
+ROBOT_ROOT = "panda0_link0"
+FINGER_BODIES = ("panda0_leftfinger", "panda0_rightfinger")
+REFERENCE_QUAT = (0.5, -0.5, -0.5, -0.5)
+"""The hemisphere of the state's quaternion: tool z along +y, fingers along x (about the
+orientation at the env's reset)."""
+ACTION_SCALE = 2.0
+"""The env's joint speed [rad/s] for an action of 1 (``FrankaRobot.act_rng``)."""
+MODEL_FILE = "envs/assets/kitchen_franka/kitchen_assets/kitchen_env_model.xml"
+
+
+@dataclass(frozen=True)
+class FrankaConfig:
+    """Options of the adapter.
+
+    Attributes:
+        position_cost: mink frame task position weight [1/m].
+        orientation_cost: its orientation weight [1/rad].
+        posture_cost: weight of the posture task toward the env's reset posture.
+        limit_gain: mink configuration-limit gain.
+        obs_noise_std: Gaussian noise on the observed TCP position [m].
+    """
+
+    position_cost: float = 1.0
+    orientation_cost: float = 0.5
+    posture_cost: float = 1e-3
+    limit_gain: float = 0.5
+    obs_noise_std: float = 0.0
+
+
+def model_path() -> str:
+    """The library's kitchen MJCF."""
+    import gymnasium_robotics
+
+    return os.path.join(os.path.dirname(gymnasium_robotics.__file__), MODEL_FILE)
+
+
+def env_joint_limits(kitchen: Any) -> tuple[np.ndarray, np.ndarray]:
+    """The arm's joint limits as the env enforces them: MJCF ``range``, actuator
+    ``ctrlrange`` and ``franka_config.xml``'s ``pos_bound``, intersected. (7,), (7,)."""
+    model = kitchen.model
+    lower, upper = [], []
+    for i, name in enumerate(ARM_JOINTS):
+        joint = model.joint(name)
+        act = next(a for a in range(model.nu) if model.actuator_trnid[a, 0] == joint.id)
+        bounds = np.array([joint.range, model.actuator_ctrlrange[act]])
+        pos_bound = kitchen.robot_env.robot_pos_bound[i]
+        lower.append(max(bounds[:, 0].max(), pos_bound[0]))
+        upper.append(min(bounds[:, 1].min(), pos_bound[1]))
+    return np.array(lower), np.array(upper)
+
+
+def build_arm_model(kitchen: Any) -> mujoco.MjModel:
+    """An arm-only model (7 joints, the ``end_effector`` site) from the env's own MJCF,
+    placed where the env's robot stands, with the env's joint limits."""
+    spec = mujoco.MjSpec.from_file(model_path())
+    root = spec.body(ROBOT_ROOT)
+    arm = mujoco.MjSpec()
+    frame = arm.worldbody.add_frame()
+    parent = int(kitchen.model.body_parentid[kitchen.model.body(ROBOT_ROOT).id])
+    placed = mujoco.MjData(kitchen.model)
+    mujoco.mj_kinematics(kitchen.model, placed)
+    frame.pos = placed.xpos[parent].copy()
+    frame.quat = placed.xquat[parent].copy()
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        frame.attach_body(root, "", "")
+    for actuator in list(arm.actuators):
+        arm.delete(actuator)
+    for name in FINGER_JOINTS:
+        arm.delete(arm.joint(name))
+    lower, upper = env_joint_limits(kitchen)
+    for name, lo, hi in zip(ARM_JOINTS, lower, upper, strict=True):
+        joint = arm.joint(name)
+        joint.range = [lo, hi]
+        joint.limited = mujoco.mjtLimited.mjLIMITED_TRUE
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        model = arm.compile()
+    if model.nq != 7:
+        raise DomainError(f"franka-kitchen: the arm model has {model.nq} joints, expected 7")
+    return model
+
+
+class ArmIK:
+    """mink differential IK on the arm-only model: a TCP pose target -> joint velocity."""
+
+    def __init__(self, model: mujoco.MjModel, config: FrankaConfig, posture: np.ndarray) -> None:
+        import mink
+
+        self.mink = mink
+        self.model = model
+        self.configuration = mink.Configuration(model)
+        self.frame = mink.FrameTask(
+            TCP_SITE,
+            "site",
+            position_cost=config.position_cost,
+            orientation_cost=config.orientation_cost,
+            lm_damping=1e-6,
+        )
+        self.posture = mink.PostureTask(model, cost=config.posture_cost)
+        self.posture.set_target(np.asarray(posture, dtype=float))
+        self.limits = [mink.ConfigurationLimit(model, gain=config.limit_gain)]
+        self.lower = model.jnt_range[:, 0].copy()
+        self.upper = model.jnt_range[:, 1].copy()
+
+    def tcp_pose(self, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """TCP position and rotation matrix at arm joints ``q``."""
+        self.configuration.update(np.asarray(q, dtype=float))
+        data = self.configuration.data
+        site = self.model.site(TCP_SITE).id
+        return data.site_xpos[site].copy(), data.site_xmat[site].reshape(3, 3).copy()
+
+    def velocity(
+        self,
+        q: np.ndarray,
+        position: np.ndarray,
+        rotation: np.ndarray,
+        dt: float,
+        posture_cost: float | None = None,
+    ) -> np.ndarray:
+        """The joint velocity [rad/s] that moves the TCP to the target pose in ``dt``."""
+        mink = self.mink
+        q = np.clip(np.asarray(q, dtype=float), self.lower + 1e-6, self.upper - 1e-6)
+        self.configuration.update(q)
+        self.frame.set_target(
+            mink.SE3.from_rotation_and_translation(mink.SO3.from_matrix(rotation), position)
+        )
+        tasks = [self.frame, self.posture]
+        if posture_cost is not None:
+            self.posture.set_cost(posture_cost)
+        try:
+            v = mink.solve_ik(
+                self.configuration, tasks, dt, "daqp", damping=1e-9, limits=self.limits
+            )
+        finally:
+            if posture_cost is not None:
+                self.posture.set_cost(FrankaConfig.posture_cost)
+        return np.asarray(v, dtype=float)
+
+
+def servo_response(kitchen: Any) -> tuple[np.ndarray, np.ndarray]:
+    """Each arm joint's servo gain ``kp`` [N m/rad] and the fraction of a step's target
+    offset it covers in one env step.
+
+    The env's arm servos are damping-dominated (``kp`` 870 / 120, joint damping 100 / 10,
+    no armature): ``b dq/dt = kp (ctrl - q) - bias``, a first-order lag with time constant
+    ``b / kp`` (0.115 s / 0.083 s), so within one 80 ms step a joint covers
+    ``1 - exp(-dt kp / b)`` (about 0.50 / 0.62) of its target offset. Dividing each joint's
+    offset by its fraction makes all joints arrive together (the Cartesian direction holds).
+    """
+    model = kitchen.model
+    dt = float(kitchen.robot_env.dt)
+    kp, fraction = [], []
+    for name in ARM_JOINTS:
+        joint = model.joint(name)
+        act = next(a for a in range(model.nu) if model.actuator_trnid[a, 0] == joint.id)
+        gain = float(model.actuator_gainprm[act, 0])
+        damping = float(model.dof_damping[joint.dofadr[0]])
+        kp.append(gain)
+        fraction.append(1.0 - np.exp(-dt * gain / damping) if damping > 0 else 1.0)
+    return np.array(kp), np.array(fraction)
+
+
+def scale_to_action(offset: np.ndarray, dt: float) -> np.ndarray:
+    """A joint servo-target offset [rad] -> the env's arm action (the env's target is
+    ``observed q + ACTION_SCALE * a * dt``), scaled as a whole into [-1, 1]."""
+    action = np.asarray(offset, dtype=float) / (ACTION_SCALE * dt)
+    largest = float(np.abs(action).max()) if action.size else 0.0
+    return action / largest if largest > 1.0 else action
+
+
+def rotation_step(rotation: np.ndarray, delta: np.ndarray) -> np.ndarray:
+    """Rotate a rotation matrix by a world-frame rotation vector ``delta``."""
+    quat = np.zeros(4)
+    mujoco.mju_axisAngle2Quat(quat, delta / (np.linalg.norm(delta) + 1e-12), np.linalg.norm(delta))
+    step = np.zeros(9)
+    mujoco.mju_quat2Mat(step, quat)
+    return step.reshape(3, 3) @ rotation
+
+
+def check_kitchen(env: Any) -> Any:
+    """The library's ``KitchenEnv`` under ``env``'s wrappers.
+
+    Raises:
+        DomainError: ``env`` is not a FrankaKitchen-v1.
+    """
+    from gymnasium_robotics.envs.franka_kitchen.kitchen_env import KitchenEnv
+
+    kitchen = getattr(env, "unwrapped", env)
+    if not isinstance(kitchen, KitchenEnv):
+        raise DomainError(
+            f"franka-kitchen wraps a FrankaKitchen-v1 env, got {type(kitchen).__name__}; make "
+            f"one with gymnasium.make('FrankaKitchen-v1', tasks_to_complete=[...])"
+        )
+    return kitchen
+
+
+class FrankaKitchenAdapter(gym.Env):
+    """A FrankaKitchen-v1 driven by relative TCP commands (see module docstring).
+
+    Args:
+        env: the caller's ``gymnasium.make("FrankaKitchen-v1", ...)`` env.
+        nodes: the domain's nodes (a skill's start and end poses).
+        world_of: object qpos (21,) and grasp flag -> the world-state vector (the domain's).
+        facts_of: world-state vector -> facts.
+        skill: the skill whose success the env reports, if any.
+        config: IK weights and observation noise.
+    """
+
+    metadata = {"render_modes": ["rgb_array"], "render_fps": 12}
+
+    def __init__(
+        self,
+        env: Any,
+        nodes: dict[str, Node],
+        world_of: Any,
+        facts_of: Any,
+        skill: SkillSpec | None = None,
+        config: FrankaConfig | None = None,
+    ) -> None:
+        self.env = env
+        self.kitchen = check_kitchen(env)
+        self.model = self.kitchen.model
+        self.data = self.kitchen.data
+        self.nodes = nodes
+        self.skill = skill
+        self._world_of = world_of
+        self._facts_of = facts_of
+        self.config = config or FrankaConfig()
+        self.render_mode = getattr(env, "render_mode", None)
+        self.dt = float(self.kitchen.robot_env.dt)
+        self.posture = np.asarray(self.kitchen.robot_env.init_qpos[:7], dtype=float).copy()
+        self.arm_model = build_arm_model(self.kitchen)
+        self.ik = ArmIK(self.arm_model, self.config, self.posture)
+        self._kp, self._fraction = servo_response(self.kitchen)
+        self._arm_dof = np.array([self.model.joint(j).dofadr[0] for j in ARM_JOINTS])
+        self._arm_qpos = np.array([self.model.joint(j).qposadr[0] for j in ARM_JOINTS])
+        self._finger_qpos = np.array([self.model.joint(j).qposadr[0] for j in FINGER_JOINTS])
+        self._tcp = self.model.site(TCP_SITE).id
+        self._robot_bodies = {
+            b for b in range(self.model.nbody) if self.model.body(b).name.startswith("panda0_")
+        }
+        self._finger_bodies = [self.model.body(b).id for b in FINGER_BODIES]
+        self.observation_space = gym.spaces.Box(-np.inf, np.inf, (10,), np.float64)
+        self.action_space = gym.spaces.Box(-ACTION_BOUNDS, ACTION_BOUNDS, (7,), np.float64)
+        self.action_bounds = ACTION_BOUNDS
+        self._gripper_cmd = GRIPPER_OPEN_CMD
+        self._succeeded = False
+        self._steps = 0
+        self.last_env_info: dict[str, Any] = {}
+        self._rng = np.random.default_rng()
+
+    # ----------------------------------------------------------------- state
+    @property
+    def arm_q(self) -> np.ndarray:
+        """The arm's true joint positions [rad] (a copy)."""
+        return self.data.qpos[self._arm_qpos].copy()
+
+    def tcp_pose(self) -> tuple[np.ndarray, np.ndarray]:
+        """True TCP position [m] and rotation matrix."""
+        return (
+            self.data.site_xpos[self._tcp].copy(),
+            self.data.site_xmat[self._tcp].reshape(3, 3).copy(),
+        )
+
+    def finger_forces(self) -> tuple[float, float]:
+        """Summed normal contact force [N] on each finger from things not the robot."""
+        totals = [0.0, 0.0]
+        wrench = np.zeros(6)
+        for i in range(self.data.ncon):
+            contact = self.data.contact[i]
+            bodies = (
+                int(self.model.geom_bodyid[contact.geom1]),
+                int(self.model.geom_bodyid[contact.geom2]),
+            )
+            for f, finger in enumerate(self._finger_bodies):
+                if finger in bodies:
+                    other = bodies[1] if bodies[0] == finger else bodies[0]
+                    if other not in self._robot_bodies:
+                        mujoco.mj_contactForce(self.model, self.data, i, wrench)
+                        totals[f] += abs(float(wrench[0]))
+        return totals[0], totals[1]
+
+    def grip_force(self) -> float:
+        """The squeeze [N]: the smaller of the two fingers' contact forces."""
+        return float(min(self.finger_forces()))
+
+    def _true_obs(self) -> np.ndarray:
+        pos, _ = self.tcp_pose()
+        quat = np.zeros(4)
+        mujoco.mju_mat2Quat(quat, self.data.site_xmat[self._tcp])
+        if float(np.dot(quat, REFERENCE_QUAT)) < 0:
+            quat = -quat
+        fingers = float(self.data.qpos[self._finger_qpos].sum())
+        return np.concatenate([pos, quat, [self._gripper_cmd, self.grip_force(), fingers]])
+
+    def observe(self) -> np.ndarray:
+        """The 10-D state (with the configured noise on the TCP position)."""
+        obs = self._true_obs()
+        if self.config.obs_noise_std > 0:
+            obs[:3] += self._rng.normal(0.0, self.config.obs_noise_std, 3)
+        return obs
+
+    def world_state(self) -> np.ndarray:
+        """The domain's world-state vector (object qpos, grasp flag)."""
+        return np.asarray(self._world_of(self.data.qpos[9:].copy(), self.finger_forces()))
+
+    def facts_of(self, world: np.ndarray) -> frozenset[str]:
+        """The domain's facts of a world-state vector."""
+        return frozenset(self._facts_of(world))
+
+    def facts(self) -> frozenset[str]:
+        """The facts that hold now."""
+        return self.facts_of(self.world_state())
+
+    def skill_success(
+        self, skill: SkillSpec | None = None, world: np.ndarray | None = None
+    ) -> bool:
+        """TCP within tolerance of the skill's end node, its gripper state, its effects."""
+        skill = skill or self.skill
+        if skill is None:
+            return False
+        facts = self.facts_of(self.world_state() if world is None else world)
+        return success_holds(
+            skill, self.nodes[skill.end], self.tcp_pose()[0], self._gripper_cmd, facts
+        )
+
+    def _info(self, world: np.ndarray) -> dict[str, Any]:
+        return {
+            "world": world,
+            "world_facts": sorted(self.facts_of(world)),
+            "steps": self._steps,
+            "success": self._succeeded,
+            "arm_q": self.arm_q,
+            "episode_task_completions": list(
+                self.last_env_info.get("episode_task_completions", [])
+            ),
+        }
+
+    # ----------------------------------------------------------------- reset / step
+    def reset(
+        self, *, seed: int | None = None, options: dict[str, Any] | None = None
+    ) -> tuple[np.ndarray, dict[str, Any]]:
+        """The env's own reset (deterministic; ``seed`` sets its observation noise), then,
+        with a ``node`` option or a skill, drive to that node's pose through the env's own
+        steps (they count toward its step limit)."""
+        super().reset(seed=seed)
+        self._rng = np.random.default_rng(seed)
+        _obs, env_info = self.env.reset(seed=seed)
+        self.last_env_info = dict(env_info)
+        self._gripper_cmd = GRIPPER_OPEN_CMD
+        self._succeeded = False
+        self._steps = 0
+        options = dict(options or {})
+        node_name = options.get("node") or (self.skill.start if self.skill else None)
+        if node_name is not None:
+            self.drive_to(self.nodes[node_name], max_steps=int(options.get("max_steps", 40)))
+        self._steps = 0
+        return self.observe(), self._info(self.world_state())
+
+    def drive_to(self, node: Node, max_steps: int = 40, tolerance: float = 0.01) -> int:
+        """Step toward a node's pose and gripper state; return the steps used."""
+        from osg_control.control.ik import quat_to_matrix, rotation_error
+
+        target_rot = quat_to_matrix(np.asarray(node.orientation))
+        g = GRIPPER_OPEN_CMD if node.gripper == "open" else GRIPPER_CLOSED_CMD
+        for step in range(max_steps):
+            pos, rot = self.tcp_pose()
+            error = np.asarray(node.position) - pos
+            turn = rotation_error(rot, target_rot)
+            if np.linalg.norm(error) < tolerance and np.linalg.norm(turn) < 0.05:
+                return step
+            action = np.concatenate([_scale(error, 0.04), _scale(turn, 0.2), [g]])
+            *_, terminated, truncated, _info = self.step(action)
+            if terminated or truncated:
+                return step + 1
+        return max_steps
+
+    def check_action(self, action: np.ndarray) -> np.ndarray:
+        """Validate (shape (7,), finite) and clip to ``ACTION_BOUNDS``.
+
+        Raises:
+            ValueError: wrong shape or NaN/inf; nothing reaches the env.
+        """
+        action = np.asarray(action, dtype=float)
+        if action.shape != (7,):
+            raise ValueError(f"action must have shape (7,), got {action.shape}")
+        if not np.all(np.isfinite(action)):
+            raise ValueError(f"action must be finite, got {action.tolist()}")
+        return np.clip(action, -ACTION_BOUNDS, ACTION_BOUNDS)
+
+    def env_action(self, action: np.ndarray) -> np.ndarray:
+        """The env's 9-D action for a (clipped) 7-D TCP action at the current state."""
+        pos, rot = self.tcp_pose()
+        velocity = self.ik.velocity(
+            self.arm_q, pos + action[:3], rotation_step(rot, action[3:6]), self.dt
+        )
+        return self._arm_action(velocity)
+
+    def _arm_action(self, velocity: np.ndarray) -> np.ndarray:
+        """IK joint velocity -> the env's 9-D action: each joint's step offset divided by
+        its servo's one-step response, plus the offset that holds gravity (``qfrc_bias /
+        kp``), scaled as a whole (see ``servo_response``); fingers +-1."""
+        offset = velocity * self.dt / self._fraction
+        offset += self.data.qfrc_bias[self._arm_dof] / self._kp
+        finger = -1.0 if self._gripper_cmd == GRIPPER_CLOSED_CMD else 1.0
+        return np.concatenate([scale_to_action(offset, self.dt), [finger, finger]])
+
+    def step(self, action: np.ndarray) -> tuple[np.ndarray, float, bool, bool, dict[str, Any]]:
+        """One 80 ms step of the env with the IK's action (see module docstring)."""
+        action = self.check_action(action)
+        if action[6] < -0.5:
+            self._gripper_cmd = GRIPPER_CLOSED_CMD
+        elif action[6] > 0.5:
+            self._gripper_cmd = GRIPPER_OPEN_CMD
+        return self._env_step(self.env_action(action), action)
+
+    def _env_step(
+        self, env_action: np.ndarray, applied: np.ndarray
+    ) -> tuple[np.ndarray, float, bool, bool, dict[str, Any]]:
+        _obs, reward, terminated, truncated, env_info = self.env.step(env_action)
+        self.last_env_info = dict(env_info)
+        self._steps += 1
+        world = self.world_state()
+        failure = None
+        if not np.all(np.isfinite(self.data.qpos)):
+            failure = "physics diverged (non-finite qpos)"
+            terminated = True
+        if failure is None and self.skill is not None and not self._succeeded:
+            if self.skill_success(world=world):
+                self._succeeded = True
+        info = self._info(world)
+        info["env_reward"] = float(reward)
+        info["env_info"] = self.last_env_info
+        info["action_applied"] = applied
+        if failure is not None:
+            info["failure"] = failure
+        if self.skill is not None and self._succeeded:
+            terminated = True
+        return self.observe(), float(reward), bool(terminated), bool(truncated), info
+
+    # ----------------------------------------------------------------- joint reset
+    def joint_reset(self, max_steps: int = 20, tolerance: float = 0.05) -> int:
+        """Drive the joints toward the env's reset posture while the TCP holds its pose
+        (a strong posture task under the frame task); returns the steps used."""
+        pos, rot = self.tcp_pose()
+        previous = np.inf
+        for step in range(max_steps):
+            error = float(np.abs(self.arm_q - self.posture).max())
+            if error < tolerance or error > previous - 1e-4:
+                return step
+            previous = error
+            velocity = self.ik.velocity(self.arm_q, pos, rot, self.dt, posture_cost=0.05)
+            action = self._arm_action(velocity)
+            *_, terminated, truncated, info = self._env_step(action, np.zeros(7))
+            if "failure" in info:
+                raise SimulationError(f"joint reset: {info['failure']}")
+            if terminated or truncated:
+                return step + 1
+        return max_steps
+
+    def render(self) -> Any:  # type: ignore[override]
+        """The wrapped env's frame (its own render mode)."""
+        return self.env.render()
+
+    def close(self) -> None:
+        self.env.close()
+
+
+def _scale(vector: np.ndarray, bound: float) -> np.ndarray:
+    largest = float(np.abs(vector).max())
+    return vector * (bound / largest) if largest > bound else vector

@@ -1,0 +1,127 @@
+"""The FrankaKitchen-v1 adapter: IK on this robot, the env's own step, bad input."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+pytest.importorskip("gymnasium_robotics")
+
+import gymnasium as gym  # noqa: E402
+
+from osg_control.errors import DomainError  # noqa: E402
+from osg_control.franka.compat import prepare  # noqa: E402
+from osg_control.franka.domain import make_franka_env  # noqa: E402
+from osg_control.franka.env import (  # noqa: E402
+    ACTION_BOUNDS,
+    FrankaKitchenAdapter,
+    env_joint_limits,
+    scale_to_action,
+)
+
+
+@pytest.fixture()
+def adapter():
+    env = make_franka_env(tasks=["microwave"])
+    yield env
+    env.close()
+
+
+def _go(env, target: np.ndarray, rotation: np.ndarray, steps: int) -> None:
+    from osg_control.control.ik import rotation_error
+
+    for _ in range(steps):
+        pos, rot = env.tcp_pose()
+        action = np.zeros(7)
+        action[:3] = np.clip(target - pos, -ACTION_BOUNDS[0], ACTION_BOUNDS[0])
+        action[3:6] = np.clip(rotation_error(rot, rotation), -ACTION_BOUNDS[3], ACTION_BOUNDS[3])
+        action[6] = 1.0
+        env.step(action)
+
+
+def test_arm_model_matches_the_env(adapter) -> None:
+    adapter.reset(seed=0)
+    pos, rot = adapter.ik.tcp_pose(adapter.arm_q)
+    env_pos, env_rot = adapter.tcp_pose()
+    np.testing.assert_allclose(pos, env_pos, atol=1e-9)
+    np.testing.assert_allclose(rot, env_rot, atol=1e-9)
+    lower, upper = env_joint_limits(adapter.kitchen)
+    np.testing.assert_allclose(adapter.arm_model.jnt_range[:, 0], lower)
+    np.testing.assert_allclose(adapter.arm_model.jnt_range[:, 1], upper)
+    # The env's joint 6 is bounded to [0, 2.1127] (MJCF range, franka_config pos_bound).
+    assert lower[5] == 0.0 and upper[5] == pytest.approx(2.1127)
+    assert upper[3] == pytest.approx(-0.4)
+
+
+@pytest.mark.parametrize(
+    "offset", [(0.1, 0.0, 0.0), (0.0, 0.15, 0.0), (0.0, 0.0, -0.2), (-0.15, 0.2, 0.1)]
+)
+def test_ik_reaches_targets_within_millimetres_and_limits(adapter, offset) -> None:
+    adapter.reset(seed=1)
+    start, rotation = adapter.tcp_pose()
+    target = start + np.asarray(offset)
+    _go(adapter, target, rotation, 30)
+    pos, _ = adapter.tcp_pose()
+    assert np.linalg.norm(pos - target) < 0.003
+    lower, upper = env_joint_limits(adapter.kitchen)
+    assert np.all(adapter.arm_q >= lower - 1e-3) and np.all(adapter.arm_q <= upper + 1e-3)
+
+
+def test_a_step_moves_along_the_commanded_direction(adapter) -> None:
+    adapter.reset(seed=2)
+    adapter.step(np.array([0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 1.0]))
+    before, _ = adapter.tcp_pose()
+    adapter.step(np.array([0.04, 0.0, 0.0, 0.0, 0.0, 0.0, 1.0]))
+    moved = adapter.tcp_pose()[0] - before
+    assert moved[0] > 0.015
+    assert np.linalg.norm(moved[1:]) < 0.25 * moved[0]
+
+
+def test_scaling_keeps_the_direction() -> None:
+    velocity = np.array([8.0, -2.0, 0.5, 0.0, 1.0, 0.0, -4.0])
+    action = scale_to_action(velocity * 0.08, 0.08)
+    assert np.abs(action).max() == pytest.approx(1.0)
+    np.testing.assert_allclose(action / action[0], velocity / velocity[0])
+    small = scale_to_action(np.full(7, 0.01), 0.08)
+    np.testing.assert_allclose(small, np.full(7, 0.01 / 0.16))
+
+
+def test_env_step_reward_and_completion_run_as_shipped(adapter) -> None:
+    obs, info = adapter.reset(seed=0)
+    assert obs.shape == (10,) and info["world"].shape == (22,)
+    # The env's own observation and TimeLimit: truncation at the library's 280 steps.
+    assert adapter.env.spec.max_episode_steps == 280
+    steps, truncated = 0, False
+    while not truncated:
+        obs, reward, terminated, truncated, info = adapter.step(np.zeros(7))
+        steps += 1
+        assert not terminated and reward == 0.0
+        assert set(info) >= {"world", "success", "action_applied", "episode_task_completions"}
+    assert steps == 280
+    # A hold for 280 steps stays where it was (gravity is held).
+    assert np.linalg.norm(obs[:3] - np.array([-0.432, 0.119, 2.025])) < 0.01
+
+
+def test_joint_reset_keeps_the_tcp(adapter) -> None:
+    adapter.reset(seed=0)
+    start, rotation = adapter.tcp_pose()
+    _go(adapter, start + np.array([0.0, 0.15, 0.1]), rotation, 20)
+    before = adapter.tcp_pose()[0]
+    error = np.abs(adapter.arm_q - adapter.posture).max()
+    steps = adapter.joint_reset()
+    assert steps >= 1
+    assert np.abs(adapter.arm_q - adapter.posture).max() < error
+    assert np.linalg.norm(adapter.tcp_pose()[0] - before) < 0.015
+
+
+def test_bad_input_is_refused(adapter) -> None:
+    adapter.reset(seed=0)
+    with pytest.raises(ValueError, match="shape"):
+        adapter.step(np.zeros(6))
+    with pytest.raises(ValueError, match="finite"):
+        adapter.step(np.array([np.nan, 0, 0, 0, 0, 0, 0]))
+    prepare()
+    with pytest.raises(DomainError, match="FrankaKitchen-v1"):
+        FrankaKitchenAdapter(gym.make("CartPole-v1"), {}, None, None)
+    with pytest.raises(ValueError, match="cannot be found"):
+        gym.make("FrankaKitchen-v1", tasks_to_complete=["toaster"])
