@@ -185,7 +185,7 @@ def test_world_state_at_start(env: KitchenEnv) -> None:
     np.testing.assert_allclose(world.cube_pos, (0.50, -0.20, CUBE_HALF_SIZE), atol=1e-3)
     assert world.cube_on_counter and not world.cube_in_cabinet and not world.cube_lifted
     assert not world.cube_grasped and not world.handle_grasped
-    assert world_facts(world) == {"door-closed", "hand-empty", "cube-on-counter"}
+    assert world_facts(world) == {"door-closed", "hand-empty", "cube-on-counter", "valve-closed"}
     assert info["world_facts"] == sorted(world_facts(world))
     assert world_state_from_array(world.as_array()) == world
 

@@ -39,7 +39,7 @@ def world_for(facts: frozenset[str]) -> WorldState:
         cube = (0.50, -0.20, 0.0225)
     return WorldState(
         door_opening=0.4 if "door-open" in facts else 0.0,
-        valve_angle=0.0,
+        valve_angle=1.0 if "valve-open" in facts else 0.0,
         cube_pos=cube,
         cube_quat=(1.0, 0.0, 0.0, 0.0),
         cube_grasped="holding-cube" in facts,
@@ -53,7 +53,8 @@ def start_facts(spec: SkillSpec) -> frozenset[str]:
     door = "door-open" if "door-open" in pre or "door-open" in spec.start_facts else "door-closed"
     hand = next((f for f in ("holding-cube", "holding-handle") if f in pre), "hand-empty")
     cube = "cube-lifted" if "cube-lifted" in pre else "cube-on-counter"
-    return frozenset({door, hand, cube})
+    valve = "valve-open" if "valve-open" in pre else "valve-closed"
+    return frozenset({door, hand, cube, valve})
 
 
 def episodes_for(
@@ -249,7 +250,7 @@ def test_cli_graph(data_dir: Path, tmp_path: Path, capsys: pytest.CaptureFixture
     assert printed["disagreements"] == [] and png.is_file()
     assert load_graph(out).edge("grab-cube").success_rate == 0.75
     assert main(["graph"]) == 0
-    assert "10 nodes, 14 skills" in capsys.readouterr().out
+    assert f"{len(NODES)} nodes, {len(SKILLS)} skills" in capsys.readouterr().out
     assert main(["plan", "--goal", "cube-lifted", "--graph", str(out), "--json"]) == 0
     costs = {s["action"]: s["cost"] for s in json.loads(capsys.readouterr().out)["steps"]}
     assert costs["grab-cube"] == 288  # round(-ln 0.75 * 1000)

@@ -180,11 +180,18 @@ class _PointSet:
     points: np.ndarray
 
 
-def _point_sets(dataset: Dataset, spec: SkillSpec, rng: np.random.Generator) -> list[_PointSet]:
+def _point_sets(
+    dataset: Dataset, spec: SkillSpec, rng: np.random.Generator, match_radius: float
+) -> list[_PointSet]:
+    """The start and end positions that should form one cluster at a node each. Starts
+    drawn over an initiation region wider than ``match_radius`` (movement skills start
+    anywhere within 15 cm) scatter by design and are left out: they would split into many
+    small clusters, each reported as a node disagreement."""
     starts = dataset.arrays["observations"][dataset.episode_starts, :3]
     ends = dataset.arrays["next_observations"][dataset.first_success_steps, :3]
+    roles = [("start", spec.start, starts)] if spec.start_radius <= match_radius else []
     sets = []
-    for role, node, found in (("start", spec.start, starts), ("end", spec.end, ends)):
+    for role, node, found in (*roles, ("end", spec.end, ends)):
         points = np.asarray(found, dtype=float)
         if len(points) > MAX_POINTS_PER_SET:
             points = points[rng.choice(len(points), MAX_POINTS_PER_SET, replace=False)]
@@ -364,7 +371,9 @@ def graph_from_datasets(
     usable = {name: d for name, d in by_skill.items() if d.num_episodes}
     graph = graph_from_specs(domain, specs, success_rates=success_rates)
     rng = np.random.default_rng(seed)
-    sets = [s for name, d in usable.items() for s in _point_sets(d, recorded[name], rng)]
+    sets = [
+        s for name, d in usable.items() for s in _point_sets(d, recorded[name], rng, match_radius)
+    ]
     observed_nodes, issues = (
         _match_regions(domain.nodes, sets, cluster_distance, match_radius) if sets else ({}, [])
     )
