@@ -37,7 +37,12 @@ def test_shipped_defaults_have_a_manifest_and_every_skill(defaults: tuple[dict, 
     policies, _classifier = defaults
     assert set(policies) == {s.name for s in SKILLS}
     manifest = read_manifest(KITCHEN.defaults_dir)
-    assert manifest["command"].startswith("osg collect")
+    assert manifest["command"].startswith("osg --domain kitchen reproduce")
+    assert set(manifest["success_rates"]) == {s.name for s in SKILLS}
+    graph = load_defaults(KITCHEN).graph  # the plan costs of the executor and `osg plan`
+    assert all(
+        graph.edge(name).success_rate == rate for name, rate in manifest["success_rates"].items()
+    )
     assert len(manifest["datasets_sha256"]) == len(SKILLS)
 
 
@@ -77,13 +82,18 @@ def test_three_stage_task_from_a_random_start(defaults: tuple[dict, object]) -> 
 
 def test_pick_up_under_noise_with_the_tcp_filter(defaults: tuple[dict, object]) -> None:
     # At sigma = 2 cm the grasp needs the filtered TCP position (docs/results.md, Table I).
+    # The task succeeds ~98 % of the time there (Tables IV/V), so ten fixed seeds with no
+    # replanning must give at least nine successes, each a lifted cube.
     policies, classifier = defaults
     env = KitchenEnv(config=EnvConfig(obs_noise_std=0.02))
-    obs, _ = env.reset(seed=2, options={"node": "home", "radius": 0.15, "angle": 0.2})
     executor = Executor(policies, classifier, max_replans=0, filter_gain=0.2)
-    result = executor.execute(["cube-lifted"], env, obs)
-    assert result.success, result.to_dict()
-    assert env.world().cube_lifted
+    lifted = 0
+    for seed in range(10):
+        obs, _ = env.reset(seed=seed, options={"node": "home", "radius": 0.15, "angle": 0.2})
+        result = executor.execute(["cube-lifted"], env, obs)
+        assert result.success == env.world().cube_lifted, result.to_dict()
+        lifted += result.success
+    assert lifted >= 9, lifted
 
 
 def test_pick_up_from_a_random_start(defaults: tuple[dict, object]) -> None:

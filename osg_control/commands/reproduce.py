@@ -118,6 +118,7 @@ def run(args: argparse.Namespace) -> int:
 
         return check_against_shipped(domain, read_figures(args.compare), args.json)
     scale = QUICK if args.quick else FULL
+    commit = _git_commit()  # the code that runs, read before the work (HEAD may move)
     out: Path = check_output_dir(args.out, "reproduction folder")
     data, defaults = out / "data", out / "defaults"
     seed, workers = str(args.seed), str(args.workers)
@@ -200,7 +201,7 @@ def run(args: argparse.Namespace) -> int:
             seed,
         ),
     )
-    manifest = _manifest(domain.name, data, args, scale)
+    manifest = _manifest(domain.name, data, args, scale, commit)
     _write_manifest(defaults, manifest)
     figures["table_i"] = stage("table I", lambda: _table_i(domain, defaults, scale, args))
     manifest[RATES_KEY] = deployment_rates(figures["table_i"])
@@ -247,15 +248,18 @@ def deployment_rates(table_i: dict[str, Any]) -> dict[str, float]:
     return {row["skill"]: float(row["rates"][column]) for row in table_i["rows"]}
 
 
-def _manifest(domain: str, data: Path, args: argparse.Namespace, scale: Scale) -> dict[str, Any]:
+def _manifest(
+    domain: str, data: Path, args: argparse.Namespace, scale: Scale, commit: str | None
+) -> dict[str, Any]:
     return {
         "domain": domain,
-        "command": f"osg --domain {domain} reproduce{' --quick' if args.quick else ''} "
+        "command": f"osg --domain {domain} reproduce{' --quick' if args.quick else ''}"
+        f"{'' if args.filter is None else f' --filter {args.filter}'} "
         f"--seed {args.seed} --out {args.out}",
         "seed": args.seed,
         "scale": scale.__dict__,
         "package_version": __version__,
-        "git_commit": _git_commit(),
+        "git_commit": commit,
         "datasets_sha256": {p.name: sha256_file(p) for p in sorted(data.glob("*.h5"))},
     }
 
