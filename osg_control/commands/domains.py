@@ -6,6 +6,7 @@ import argparse
 import json
 
 from osg_control.domain.registry import domain_names, get_domain
+from osg_control.errors import DomainError
 
 
 def register(subparsers: argparse._SubParsersAction) -> None:
@@ -18,11 +19,19 @@ def register(subparsers: argparse._SubParsersAction) -> None:
 
 
 def run_domains(args: argparse.Namespace) -> int:
-    """Describe every registered domain."""
-    summaries = [get_domain(name).summary() for name in domain_names()]
+    """Describe every registered domain; one that cannot be built is listed with its error
+    (exit 1) and the others still are."""
+    summaries, broken = [], []
+    for name in domain_names():
+        try:
+            summaries.append(get_domain(name).summary())
+        except DomainError as err:
+            broken.append({"name": name, "error": str(err)})
     if args.json:
-        print(json.dumps(summaries, indent=2))
-        return 0
+        print(json.dumps(summaries + broken, indent=2))
+        return 1 if broken else 0
+    for entry in broken:
+        print(f"{entry['name']}: BROKEN: {entry['error']}")
     for s in summaries:
         print(f"{s['name']}: {s['description']}")
         print(f"  nodes ({len(s['nodes'])}): {', '.join(s['nodes'])}")
@@ -37,4 +46,4 @@ def run_domains(args: argparse.Namespace) -> int:
             f"  start regions ({len(s['start_regions'])}): "
             + ", ".join(r["name"] for r in s["start_regions"])
         )
-    return 0
+    return 1 if broken else 0
