@@ -16,11 +16,11 @@ from osg_control.errors import DatasetError, SkillSpecError
 from osg_control.kitchen.skills import NODES, SKILLS, SkillSpec
 from osg_control.kitchen.world import WORLD_FIELDS, WorldState, world_facts, world_state_from_array
 from osg_control.planning.graph import (
-    graph_from_datasets,
     graph_from_specs,
     load_graph,
     save_graph,
 )
+from osg_control.planning.graph_data import graph_from_datasets
 from osg_control.planning.graph_draw import draw_graph
 
 WORLD = ",".join(WORLD_FIELDS)

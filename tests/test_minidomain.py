@@ -26,7 +26,7 @@ from osg_control.domain.registry import domain_names, get_domain, register_domai
 from osg_control.execution.executor import Executor
 from osg_control.learning.policy import load_policies
 from osg_control.planning.api import plan_for_goal
-from osg_control.planning.graph import graph_from_datasets
+from osg_control.planning.graph_data import graph_from_datasets
 from osg_control.planning.pddl_io import export_pddl, read_domain, read_problem
 
 EPISODES = 24

@@ -12,10 +12,10 @@ from osg_control.data.datasets import load_dataset
 from osg_control.errors import DatasetError
 from osg_control.planning.graph import (
     SkillGraph,
-    graph_from_datasets,
     graph_from_specs,
     save_graph,
 )
+from osg_control.planning.graph_data import graph_from_datasets
 from osg_control.planning.graph_draw import PROJECTIONS, draw_graph
 
 Verbs: TypeAlias = "argparse._SubParsersAction[argparse.ArgumentParser]"

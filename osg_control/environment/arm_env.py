@@ -29,7 +29,6 @@ from typing import Any
 import gymnasium as gym
 import mujoco
 import numpy as np
-from scipy.spatial.transform import Rotation
 
 from osg_control.control.divergence import DivergenceWatch
 from osg_control.control.ik import (
@@ -48,11 +47,20 @@ from osg_control.control.robot import (
     TCP_SITE,
 )
 from osg_control.control.servo import substep_targets
-from osg_control.domain.spec import TOP_DOWN_QUAT, Node, SkillSpec
+from osg_control.domain.spec import Node, SkillSpec
 from osg_control.environment.options import check_start_options
+from osg_control.environment.poses import canonical_quat, quat_rotation, sample_start_pose
+from osg_control.environment.success import GRIPPER_CLOSED_CMD, GRIPPER_OPEN_CMD, success_holds
 from osg_control.errors import SimulationError
 
-__all__ = ["ACTION_BOUNDS", "ArmEnv", "EnvConfig"]
+__all__ = [
+    "ACTION_BOUNDS",
+    "GRIPPER_CLOSED_CMD",
+    "GRIPPER_OPEN_CMD",
+    "ArmEnv",
+    "EnvConfig",
+    "success_holds",
+]
 
 OBS_DIM = 10
 ACTION_BOUNDS = np.array([0.02, 0.02, 0.02, 0.1, 0.1, 0.1, 1.0])
@@ -63,10 +71,6 @@ OBS_HIGH = np.array([2.0, 2.0, 2.0, 1.0, 1.0, 1.0, 1.0, 1.0, 70.0, 0.1])
 unit quaternion, the gripper command, its force (the actuator's 70 N force range) and the
 finger distance (0 to 8 cm, with slack for contact penetration)."""
 CONTROL_HZ = 20.0
-GRIPPER_OPEN_CMD = 1.0
-GRIPPER_CLOSED_CMD = -1.0
-_TOP_DOWN = np.array(TOP_DOWN_QUAT)
-_TOP_DOWN_ROT = Rotation.from_quat(np.roll(_TOP_DOWN, -1))
 
 
 @dataclass(frozen=True)
@@ -90,47 +94,6 @@ class EnvConfig:
     start_radius: float = 0.0
     start_angle: float = 0.0
     limit_joint_speed: bool = False
-
-
-def canonical_quat(quat_wxyz: np.ndarray) -> np.ndarray:
-    """Flip a quaternion's sign into the hemisphere of ``TOP_DOWN_QUAT``."""
-    return -quat_wxyz if float(np.dot(quat_wxyz, _TOP_DOWN)) < 0 else quat_wxyz
-
-
-def success_holds(
-    skill: SkillSpec, end: Node, position: np.ndarray, gripper_cmd: float, facts: frozenset[str]
-) -> bool:
-    """A skill's success predicate (beta): TCP ``position`` within tolerance of its ``end``
-    node, the gripper command of that node, its effects among ``facts``. Pure, so it also
-    runs over recorded states."""
-    if np.linalg.norm(np.asarray(position) - np.asarray(end.position)) > skill.success_tolerance:
-        return False
-    wanted = GRIPPER_OPEN_CMD if end.gripper == "open" else GRIPPER_CLOSED_CMD
-    if gripper_cmd != wanted:
-        return False
-    return skill.add_effects <= facts and not (skill.del_effects & facts)
-
-
-def _quat_rotation(quat_wxyz: tuple[float, float, float, float]) -> Rotation:
-    return Rotation.from_quat(np.roll(np.asarray(quat_wxyz, dtype=float), -1))
-
-
-def sample_start_pose(
-    rng: np.random.Generator,
-    centre: np.ndarray,
-    radius: float,
-    angle: float,
-    orientation: Rotation = _TOP_DOWN_ROT,
-) -> tuple[np.ndarray, np.ndarray]:
-    """A TCP pose uniform in a ball of ``radius`` [m] around ``centre`` and within ``angle``
-    [rad] per axis of ``orientation`` (default top-down). Returns (position, rotation
-    matrix)."""
-    direction = rng.normal(size=3)
-    direction /= np.linalg.norm(direction) + 1e-12
-    position = centre + direction * radius * rng.uniform() ** (1 / 3)
-    euler = rng.uniform(-angle, angle, size=3)
-    rot = Rotation.from_euler("xyz", euler) * orientation
-    return position, rot.as_matrix()
 
 
 class ArmEnv(gym.Env):
@@ -297,7 +260,7 @@ class ArmEnv(gym.Env):
         world = dict(options.get("world", {}))
         default_facts = self.skill.start_facts if self.skill else ()
         facts = frozenset(options.get("facts", default_facts))
-        orientation = _quat_rotation(node.orientation)
+        orientation = quat_rotation(node.orientation)
         check_start_options(centre, radius, angle)
         self.check_world(world)
         for _attempt in range(50):

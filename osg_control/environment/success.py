@@ -1,0 +1,25 @@
+"""A skill's success predicate (beta), pure so that it also runs over recorded states."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from osg_control.domain.spec import Node, SkillSpec
+
+GRIPPER_OPEN_CMD = 1.0
+"""The observation's gripper command when open (-1 closed)."""
+GRIPPER_CLOSED_CMD = -1.0
+
+
+def success_holds(
+    skill: SkillSpec, end: Node, position: np.ndarray, gripper_cmd: float, facts: frozenset[str]
+) -> bool:
+    """A skill's success predicate (beta): TCP ``position`` within tolerance of its ``end``
+    node, the gripper command of that node, its effects among ``facts``. Pure, so it also
+    runs over recorded states."""
+    if np.linalg.norm(np.asarray(position) - np.asarray(end.position)) > skill.success_tolerance:
+        return False
+    wanted = GRIPPER_OPEN_CMD if end.gripper == "open" else GRIPPER_CLOSED_CMD
+    if gripper_cmd != wanted:
+        return False
+    return skill.add_effects <= facts and not (skill.del_effects & facts)
