@@ -9,8 +9,8 @@ Poses are in the env's world frame. The tool points along +y at the env's reset
 (``FORWARD``: tool z +y, fingers opening along x); the kettle is grasped from above
 (not yet implemented).
 
-Implemented subtasks: slide cabinet, light switch, microwave (see ``SUBTASK_SKILLS``);
-the kettle, burners and hinge cabinet are not yet (their facts exist).
+Implemented subtasks: slide cabinet, light switch, microwave, bottom and top burner (see
+``SUBTASK_SKILLS``); the kettle and hinge cabinet are not yet (their facts exist).
 """
 
 from __future__ import annotations
@@ -104,12 +104,18 @@ def micro_point(angle: float) -> tuple[float, float, float]:
     )
 
 
-def micro_quat(angle: float) -> tuple[float, float, float, float]:
-    """``FORWARD`` turned by ``angle`` about world z (the hand turns with the door)."""
+def turned(
+    axis: tuple[float, float, float],
+    angle: float,
+    base: tuple[float, float, float, float] = FORWARD,
+) -> tuple[float, float, float, float]:
+    """``base`` (default ``FORWARD``) turned by ``angle`` [rad] about the world ``axis``
+    (a unit vector)."""
     half = angle / 2
-    turn = np.array([np.cos(half), 0.0, 0.0, np.sin(half)])
+    s = float(np.sin(half))
+    turn = np.array([np.cos(half), axis[0] * s, axis[1] * s, axis[2] * s])
     w1, x1, y1, z1 = turn
-    w2, x2, y2, z2 = FORWARD
+    w2, x2, y2, z2 = base
     q = (
         w1 * w2 - x1 * x2 - y1 * y2 - z1 * z2,
         w1 * x2 + x1 * w2 + y1 * z2 - z1 * y2,
@@ -119,8 +125,48 @@ def micro_quat(angle: float) -> tuple[float, float, float, float]:
     return tuple(round(float(v), 6) for v in q)  # type: ignore[return-value]
 
 
+def micro_quat(angle: float) -> tuple[float, float, float, float]:
+    """``FORWARD`` turned by ``angle`` about world z (the hand turns with the door)."""
+    return turned((0.0, 0.0, 1.0), angle)
+
+
 MICRO_ANGLES = (-0.25, -0.5, -0.75, -1.0)
 """Door angles [rad] of the pull's arc waypoints (the library's goal is -0.75)."""
+
+# Burner knobs: a vertical bar (2.8 cm wide in x, 9.6 cm tall, y 0.622-0.658) in front of a
+# disk, turning about world -y; the bottom burner's knob (qpos 11) is centred at
+# (-0.256, z 2.226), the top burner's (qpos 15) at (-0.256, z 2.34). Grasp the bar with the
+# fingers across x and twist the hand about +y (the knob's q goes negative); the library
+# counts a burner done once its knob is within 0.3 of -0.88 / -0.92.
+KNOB_X = -0.256
+KNOB_Y = 0.61
+KNOB_FRONT_Y = 0.53
+BOTTOM_KNOB_Z = 2.226
+TOP_KNOB_Z = 2.34
+KNOB_RADIUS = 0.035
+"""The fingers' arc about the knob's axis [m] (the bar reaches 0.048)."""
+KNOB_ARC = (-0.8, -0.4, 0.0, 0.3, 0.6, 0.9)
+"""The fingers' angles on the arc [rad from +z toward +x]; the bar turns ahead of them."""
+KNOB_ARC_STEPS = 5
+KNOB_PITCH = -0.3
+"""The tool tilted down about world x [rad]: level, this low target puts joint 6 at its
+limit (the TCP stalls 15 cm short); 0.3 rad down it is reached in 22 steps."""
+KNOB_GRASP_QUAT = turned((1.0, 0.0, 0.0), KNOB_PITCH)
+
+
+def knob_point(z: float, angle: float, y: float = KNOB_Y) -> tuple[float, float, float]:
+    """The TCP on the push's arc about the knob centred at ``(KNOB_X, z)``."""
+    return (
+        round(KNOB_X + KNOB_RADIUS * float(np.sin(angle)), 4),
+        y,
+        round(z + KNOB_RADIUS * float(np.cos(angle)), 4),
+    )
+
+
+def _knob_front(z: float, side: int) -> tuple[float, float, float]:
+    """In front of the arc's start (``side`` -1) or end (+1), clear of the bar."""
+    return knob_point(z, KNOB_ARC[0 if side < 0 else -1], KNOB_FRONT_Y)
+
 
 NODES: dict[str, Node] = {
     n.name: n
@@ -131,6 +177,10 @@ NODES: dict[str, Node] = {
         _node("light-front", (-0.31, 0.52, LIGHT_Z), "closed"),
         _node("light-pushed", (-0.52, 0.52, LIGHT_Z), "closed"),
         _node("microwave-front", (-0.642, 0.40, MICRO_Z)),
+        Node("bottom-knob-front", _knob_front(BOTTOM_KNOB_Z, -1), "closed", KNOB_GRASP_QUAT),
+        Node("bottom-knob-turned", _knob_front(BOTTOM_KNOB_Z, 1), "closed", KNOB_GRASP_QUAT),
+        Node("top-knob-front", _knob_front(TOP_KNOB_Z, -1), "closed", KNOB_GRASP_QUAT),
+        Node("top-knob-turned", _knob_front(TOP_KNOB_Z, 1), "closed", KNOB_GRASP_QUAT),
         Node(
             "microwave-opened",
             (
@@ -172,6 +222,43 @@ def _movement(name: str, start: str, end: str, via: tuple[float, float, float] |
     )
 
 
+def _turn_knob(name: str, level: str, z: float, on: str, off: str) -> SkillSpec:
+    """Push the top of a burner knob's bar along +x with the closed fingers (the knob turns
+    negative), then back off."""
+    return SkillSpec(
+        name=name,
+        kind="push",
+        start=f"{level}-knob-front",
+        end=f"{level}-knob-turned",
+        waypoints=(
+            _wp(
+                knob_point(z, KNOB_ARC[0]),
+                "closed",
+                steps=10,
+                reach=0.008,
+                orientation=KNOB_GRASP_QUAT,
+            ),
+            *(
+                _wp(
+                    knob_point(z, a),
+                    "closed",
+                    steps=KNOB_ARC_STEPS,
+                    reach=0.008,
+                    orientation=KNOB_GRASP_QUAT,
+                )
+                for a in KNOB_ARC[1:]
+            ),
+            _at(f"{level}-knob-turned", steps=8),
+        ),
+        preconditions=frozenset({"hand-empty", off}),
+        add_effects=frozenset({on}),
+        del_effects=frozenset({off}),
+        script=SCRIPT,
+        success_tolerance=0.03,
+        max_steps=50,
+    )
+
+
 SKILLS: tuple[SkillSpec, ...] = (
     _movement("move-home-to-slide", "home", "slide-front"),
     _movement("move-slide-to-home", "slide-pushed", "home"),
@@ -179,6 +266,14 @@ SKILLS: tuple[SkillSpec, ...] = (
     _movement("move-light-to-home", "light-pushed", "home"),
     _movement("move-home-to-microwave", "home", "microwave-front"),
     _movement("move-microwave-to-home", "microwave-opened", "home"),
+    _movement("move-home-to-bottom-knob", "home", "bottom-knob-front"),
+    _movement("move-bottom-knob-to-home", "bottom-knob-turned", "home"),
+    _movement("move-home-to-top-knob", "home", "top-knob-front"),
+    _movement("move-top-knob-to-home", "top-knob-turned", "home"),
+    _turn_knob(
+        "turn-bottom-knob", "bottom", BOTTOM_KNOB_Z, "bottom-burner-on", "bottom-burner-off"
+    ),
+    _turn_knob("turn-top-knob", "top", TOP_KNOB_Z, "top-burner-on", "top-burner-off"),
     SkillSpec(
         name="push-slide",
         kind="push",
@@ -245,6 +340,8 @@ SUBTASK_SKILLS: dict[str, str] = {
     "slide cabinet": "push-slide",
     "light switch": "push-light",
     "microwave": "open-microwave",
+    "bottom burner": "turn-bottom-knob",
+    "top burner": "turn-top-knob",
 }
 """Library task -> the skill that does it (the implemented ones)."""
 
