@@ -64,3 +64,16 @@ def test_noise_free_scripted_skill_completes_its_task(task: str) -> None:
     assert terminated and steps < 60
     assert TASK_FACTS[task][0] in facts_of(info["world"])
     env.close()
+
+
+def test_core_collection_runs_on_the_domain(tmp_path) -> None:
+    """Algorithm 1 through the core's collector (which passes the core's ``EnvConfig``)."""
+    from osg_control.data.collect import collect_skill
+
+    register_domain("franka-kitchen", franka_domain)
+    domain = get_domain("franka-kitchen")
+    data = collect_skill(domain, "push-slide", 3, 0, tmp_path, None, False)
+    assert data.num_episodes == 3 and data.episode_successes.all()
+    assert data.arrays["world_states"].shape[1] == len(domain.world_fields)
+    facts = domain.facts_of(data.arrays["world_states"][data.first_success_steps[0]])
+    assert "slide-open" in facts

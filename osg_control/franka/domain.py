@@ -366,10 +366,13 @@ def make_franka_env(
     tasks: list[str] | None = None,
 ) -> Any:
     """A ``FrankaKitchenAdapter`` around ``env`` (default: a new FrankaKitchen-v1 with
-    ``tasks``, all seven if not given)."""
+    ``tasks``, all seven if not given). ``config`` is a ``FrankaConfig``, or the core's
+    ``EnvConfig`` (as collection and evaluation pass it), whose observation noise is kept."""
     from osg_control.franka.compat import prepare
-    from osg_control.franka.env import FrankaKitchenAdapter
+    from osg_control.franka.env import FrankaConfig, FrankaKitchenAdapter
 
+    if config is not None and not isinstance(config, FrankaConfig):
+        config = FrankaConfig(obs_noise_std=float(getattr(config, "obs_noise_std", 0.0)))
     prepare()
     unknown = sorted(set(tasks or ()) - set(TASK_FACTS))
     if unknown:
