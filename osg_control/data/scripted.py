@@ -15,6 +15,7 @@ import numpy as np
 
 from osg_control.control.ik import quat_to_matrix, rotation_error
 from osg_control.domain.spec import TOP_DOWN_QUAT, ScriptParams, SkillSpec
+from osg_control.environment.actions import scale_into
 from osg_control.environment.arm_env import ACTION_BOUNDS, GRIPPER_CLOSED_CMD, GRIPPER_OPEN_CMD
 
 _TOP_DOWN_ROT = quat_to_matrix(np.array(TOP_DOWN_QUAT))
@@ -70,8 +71,8 @@ class ScriptedPolicy:
         wanted = GRIPPER_OPEN_CMD if waypoint.gripper == "open" else GRIPPER_CLOSED_CMD
         reach = self.threshold if waypoint.reach is None else waypoint.reach
         if np.linalg.norm(position_error) > reach:
-            action[:3] = _scale_into(position_error, self.bounds[0])
-            action[3:6] = _scale_into(
+            action[:3] = scale_into(position_error, self.bounds[0])
+            action[3:6] = scale_into(
                 rotation_error(quat_to_matrix(obs[3:7]), self._rotations[index]), self.bounds[3]
             )
         elif obs[7] != wanted:
@@ -79,9 +80,3 @@ class ScriptedPolicy:
         noise = self.rng.normal(self.params.noise_mean, self.params.noise_std, 6) * _NOISE_SCALE
         action[:6] += noise
         return np.clip(action, -self.bounds, self.bounds)
-
-
-def _scale_into(vector: np.ndarray, bound: float) -> np.ndarray:
-    """Scale a vector so that no component exceeds ``bound``, keeping its direction."""
-    largest = float(np.abs(vector).max())
-    return vector * (bound / largest) if largest > bound else vector

@@ -48,6 +48,7 @@ from osg_control.control.robot import (
 )
 from osg_control.control.servo import substep_targets
 from osg_control.domain.spec import Node, SkillSpec
+from osg_control.environment.actions import checked_action
 from osg_control.environment.options import check_start_options
 from osg_control.environment.poses import canonical_quat, quat_rotation, sample_start_pose
 from osg_control.environment.success import GRIPPER_CLOSED_CMD, GRIPPER_OPEN_CMD, success_holds
@@ -337,12 +338,7 @@ class ArmEnv(gym.Env):
         Raises:
             ValueError: wrong shape or NaN/inf; nothing reaches the actuators.
         """
-        action = np.asarray(action, dtype=float)
-        if action.shape != (7,):
-            raise ValueError(f"action must have shape (7,), got {action.shape}")
-        if not np.all(np.isfinite(action)):
-            raise ValueError(f"action must be finite, got {action.tolist()}")
-        return np.clip(action, -ACTION_BOUNDS, ACTION_BOUNDS)
+        return checked_action(action, ACTION_BOUNDS)
 
     def step(self, action: np.ndarray) -> tuple[np.ndarray, float, bool, bool, dict[str, Any]]:
         """Apply one 50 ms control step (see module docstring)."""

@@ -36,6 +36,7 @@ import mujoco
 import numpy as np
 
 from osg_control.domain.spec import Node, SkillSpec
+from osg_control.environment.actions import checked_action, scale_into
 from osg_control.environment.arm_env import GRIPPER_CLOSED_CMD, GRIPPER_OPEN_CMD, success_holds
 from osg_control.errors import DomainError, SimulationError
 
@@ -416,7 +417,7 @@ class FrankaKitchenAdapter(gym.Env):
             turn = rotation_error(rot, target_rot)
             if np.linalg.norm(error) < tolerance and np.linalg.norm(turn) < 0.05:
                 return step
-            action = np.concatenate([_scale(error, 0.04), _scale(turn, 0.2), [g]])
+            action = np.concatenate([scale_into(error, 0.04), scale_into(turn, 0.2), [g]])
             *_, terminated, truncated, _info = self.step(action)
             if terminated or truncated:
                 return step + 1
@@ -428,12 +429,7 @@ class FrankaKitchenAdapter(gym.Env):
         Raises:
             ValueError: wrong shape or NaN/inf; nothing reaches the env.
         """
-        action = np.asarray(action, dtype=float)
-        if action.shape != (7,):
-            raise ValueError(f"action must have shape (7,), got {action.shape}")
-        if not np.all(np.isfinite(action)):
-            raise ValueError(f"action must be finite, got {action.tolist()}")
-        return np.clip(action, -ACTION_BOUNDS, ACTION_BOUNDS)
+        return checked_action(action, ACTION_BOUNDS)
 
     def env_action(self, action: np.ndarray) -> np.ndarray:
         """The env's 9-D action for a (clipped) 7-D TCP action at the current state."""
@@ -511,8 +507,3 @@ class FrankaKitchenAdapter(gym.Env):
 
     def close(self) -> None:
         self.env.close()
-
-
-def _scale(vector: np.ndarray, bound: float) -> np.ndarray:
-    largest = float(np.abs(vector).max())
-    return vector * (bound / largest) if largest > bound else vector
