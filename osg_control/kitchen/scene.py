@@ -7,20 +7,12 @@ Also finds the world's movable parts in the compiled model and reads their state
 from __future__ import annotations
 
 import os
-import warnings
 from pathlib import Path
 
 import mujoco
 import numpy as np
 
-from osg_control.control.robot import (
-    ARM_JOINTS,
-    FINGER_JOINTS,
-    FINGER_OPEN,
-    HOME_KEY,
-    HOME_Q,
-    panda_spec,
-)
+from osg_control.control.scene_model import home_keyed_model, with_panda
 from osg_control.errors import ModelNotFoundError
 from osg_control.kitchen.world import WorldState
 from osg_control.paths import PACKAGE_DIR
@@ -45,40 +37,13 @@ def kitchen_xml_path() -> Path:
 
 
 def kitchen_spec() -> mujoco.MjSpec:
-    """Compose the kitchen with the Panda mounted at the world origin and a ``home`` key."""
-    spec = mujoco.MjSpec.from_file(str(kitchen_xml_path()))
-    robot = panda_spec(with_fingers=True)
-    for key in list(robot.keys):
-        robot.delete(key)
-    frame = spec.worldbody.add_frame()
-    with warnings.catch_warnings():
-        # The robot's URDF names are unique in the scene, so no prefix is needed.
-        warnings.filterwarnings("ignore", message="Attaching a spec with an empty prefix")
-        spec.attach(robot, frame=frame, prefix="")
-    return spec
+    """Compose the kitchen with the Panda mounted at the world origin."""
+    return with_panda(mujoco.MjSpec.from_file(str(kitchen_xml_path())))
 
 
 def build_kitchen_model() -> mujoco.MjModel:
-    """Compile the kitchen and add a full-state ``home`` keyframe (arm home, door shut)."""
-    spec = kitchen_spec()
-    model = _compile(spec)
-    data = mujoco.MjData(model)
-    qpos = data.qpos.copy()
-    ctrl = np.zeros(model.nu)
-    for name, value in zip(ARM_JOINTS, HOME_Q, strict=True):
-        qpos[model.joint(name).qposadr[0]] = value
-        ctrl[model.actuator(name).id] = value
-    for name in FINGER_JOINTS:
-        qpos[model.joint(name).qposadr[0]] = FINGER_OPEN
-    ctrl[model.actuator("gripper").id] = FINGER_OPEN
-    spec.add_key(name=HOME_KEY, qpos=qpos, ctrl=ctrl)
-    return _compile(spec)
-
-
-def _compile(spec: mujoco.MjSpec) -> mujoco.MjModel:
-    with warnings.catch_warnings():
-        warnings.filterwarnings("ignore", message="Attaching a spec with an empty prefix")
-        return spec.compile()
+    """Compile the kitchen with a full-state ``HOME_KEY`` keyframe (arm home, door shut)."""
+    return home_keyed_model(kitchen_spec())
 
 
 class SceneIndex:

@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import warnings
 from pathlib import Path
 from typing import Any
 
@@ -10,14 +9,7 @@ import mujoco
 import numpy as np
 
 from minidomain.domain import NODES, SKILLS, facts_of
-from osg_control.control.robot import (
-    ARM_JOINTS,
-    FINGER_JOINTS,
-    FINGER_OPEN,
-    HOME_KEY,
-    HOME_Q,
-    panda_spec,
-)
+from osg_control.control.scene_model import home_keyed_model, with_panda
 from osg_control.domain.spec import SkillSpec
 from osg_control.environment.arm_env import ArmEnv, EnvConfig
 
@@ -27,28 +19,9 @@ PRESSED_START = 0.015
 
 
 def build_model() -> mujoco.MjModel:
-    """``scene.xml`` with the Panda at the origin and a full-state ``HOME_KEY`` keyframe."""
-    spec = mujoco.MjSpec.from_file(str(SCENE))
-    robot = panda_spec(with_fingers=True)
-    for key in list(robot.keys):  # the scene's keyframe must cover its own joints too
-        robot.delete(key)
-    with warnings.catch_warnings():
-        warnings.filterwarnings("ignore", message="Attaching a spec with an empty prefix")
-        spec.attach(robot, frame=spec.worldbody.add_frame(), prefix="")
-        model = spec.compile()
-    data = mujoco.MjData(model)
-    qpos = data.qpos.copy()  # the button up (its qpos0)
-    ctrl = np.zeros(model.nu)
-    for name, value in zip(ARM_JOINTS, HOME_Q, strict=True):
-        qpos[model.joint(name).qposadr[0]] = value
-        ctrl[model.actuator(name).id] = value
-    for name in FINGER_JOINTS:
-        qpos[model.joint(name).qposadr[0]] = FINGER_OPEN
-    ctrl[model.actuator("gripper").id] = FINGER_OPEN
-    spec.add_key(name=HOME_KEY, qpos=qpos, ctrl=ctrl)
-    with warnings.catch_warnings():
-        warnings.filterwarnings("ignore", message="Attaching a spec with an empty prefix")
-        return spec.compile()
+    """``scene.xml`` with the Panda at the origin and a full-state ``HOME_KEY`` keyframe (the
+    button up: its rest value)."""
+    return home_keyed_model(with_panda(mujoco.MjSpec.from_file(str(SCENE))))
 
 
 class MiniEnv(ArmEnv):
