@@ -43,8 +43,8 @@ def _policies(directory: str) -> dict[str, Any]:
 
 @cache
 def _env(domain: str, skill: str, noise: float) -> ArmEnv:
-    spec = get_domain(domain).skill(skill)
-    return get_domain(domain).make_env(skill=spec, config=EnvConfig(obs_noise_std=noise))
+    found = get_domain(domain)
+    return found.make_env(skill=found.skill(skill), config=EnvConfig(obs_noise_std=noise))
 
 
 @dataclass(frozen=True)

@@ -82,8 +82,7 @@ class KitchenEnv(ArmEnv):
     ) -> None:
         """Slide the door (open if ``door-open`` is a start fact) and place the cube (in the
         fingers when held)."""
-        default_door = DOOR_OPENED if "door-open" in facts else 0.0
-        self.data.qpos[self.scene.door_qpos] = float(world.get("door_opening", default_door))
+        self.data.qpos[self.scene.door_qpos] = _door_opening(world, facts)
         cube_pos = world.get("cube_pos")
         if holding == "cube":
             cube_pos = self.data.site_xpos[self._tcp].copy()
@@ -105,7 +104,7 @@ class KitchenEnv(ArmEnv):
         if holding != "handle":
             return pos, rot
         handle = NODES["handle"].position
-        door = float(world.get("door_opening", DOOR_OPENED if "door-open" in facts else 0.0))
+        door = _door_opening(world, facts)
         snapped = np.array([handle[0], handle[1] + door, pos[2]])
         snapped[0] += np.clip(pos[0] - handle[0], -HANDLE_GRASP_SLACK, HANDLE_GRASP_SLACK)
         return snapped, _TOP_DOWN_MATRIX
@@ -121,6 +120,12 @@ class KitchenEnv(ArmEnv):
     def finger_opening(self, holding: str) -> float:
         """Fingers closed on the cube or on the handle fin."""
         return _FINGER_ON[holding]
+
+
+def _door_opening(world: dict[str, Any], facts: frozenset[str]) -> float:
+    """The start's door travel [m]: the explicit ``world`` option, else open (``DOOR_OPENED``)
+    when ``door-open`` is a start fact, else shut."""
+    return float(world.get("door_opening", DOOR_OPENED if "door-open" in facts else 0.0))
 
 
 _TOP_DOWN_MATRIX = np.diag([1.0, -1.0, -1.0])
