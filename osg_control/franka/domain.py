@@ -20,11 +20,10 @@ from typing import Any
 import numpy as np
 
 from osg_control.domain.base import Domain, StartRegion, Task
-from osg_control.domain.spec import MOVEMENT, Node, ScriptParams, SkillSpec, Waypoint
+from osg_control.domain.spec import MOVEMENT, Node, SkillSpec, Waypoint
 from osg_control.errors import DomainError
+from osg_control.franka.poses import FORWARD, SCRIPT, turned, wp
 
-FORWARD = (0.5, -0.5, -0.5, -0.5)
-"""Tool z along +y, fingers opening along world x: the orientation at the env's reset."""
 GRASP_FORCE = 1.0
 """Both fingers pressing harder than this [N] count as a grasp."""
 
@@ -104,27 +103,6 @@ def micro_point(angle: float) -> tuple[float, float, float]:
     )
 
 
-def turned(
-    axis: tuple[float, float, float],
-    angle: float,
-    base: tuple[float, float, float, float] = FORWARD,
-) -> tuple[float, float, float, float]:
-    """``base`` (default ``FORWARD``) turned by ``angle`` [rad] about the world ``axis``
-    (a unit vector)."""
-    half = angle / 2
-    s = float(np.sin(half))
-    turn = np.array([np.cos(half), axis[0] * s, axis[1] * s, axis[2] * s])
-    w1, x1, y1, z1 = turn
-    w2, x2, y2, z2 = base
-    q = (
-        w1 * w2 - x1 * x2 - y1 * y2 - z1 * z2,
-        w1 * x2 + x1 * w2 + y1 * z2 - z1 * y2,
-        w1 * y2 - x1 * z2 + y1 * w2 + z1 * x2,
-        w1 * z2 + x1 * y2 - y1 * x2 + z1 * w2,
-    )
-    return tuple(round(float(v), 6) for v in q)  # type: ignore[return-value]
-
-
 def micro_quat(angle: float) -> tuple[float, float, float, float]:
     """``FORWARD`` turned by ``angle`` about world z (the hand turns with the door)."""
     return turned((0.0, 0.0, 1.0), angle)
@@ -195,21 +173,16 @@ NODES: dict[str, Node] = {
 }
 
 
-def _wp(position: tuple[float, float, float], gripper: str, **kw: Any) -> Waypoint:
-    return Waypoint(position, gripper, orientation=kw.pop("orientation", FORWARD), **kw)  # type: ignore[arg-type]
-
-
 def _at(node: str, **kw: Any) -> Waypoint:
     n = NODES[node]
     return Waypoint(n.position, n.gripper, orientation=n.orientation, **kw)
 
 
-SCRIPT = ScriptParams(threshold_mean=0.01, threshold_std=0.003, noise_std=0.005)
 _NO_PRE: frozenset[str] = frozenset()
 
 
 def _movement(name: str, start: str, end: str, via: tuple[float, float, float] | None = None):
-    points = [_wp(via, NODES[end].gripper, steps=15)] if via else []
+    points = [wp(via, NODES[end].gripper, steps=15)] if via else []
     return SkillSpec(
         name=name,
         kind=MOVEMENT,
@@ -231,7 +204,7 @@ def _turn_knob(name: str, level: str, z: float, on: str, off: str) -> SkillSpec:
         start=f"{level}-knob-front",
         end=f"{level}-knob-turned",
         waypoints=(
-            _wp(
+            wp(
                 knob_point(z, KNOB_ARC[0]),
                 "closed",
                 steps=10,
@@ -239,7 +212,7 @@ def _turn_knob(name: str, level: str, z: float, on: str, off: str) -> SkillSpec:
                 orientation=KNOB_GRASP_QUAT,
             ),
             *(
-                _wp(
+                wp(
                     knob_point(z, a),
                     "closed",
                     steps=KNOB_ARC_STEPS,
@@ -280,8 +253,8 @@ SKILLS: tuple[SkillSpec, ...] = (
         start="slide-front",
         end="slide-pushed",
         waypoints=(
-            _wp((-0.17, 0.60, SLIDE_Z), "closed", steps=10, reach=0.01),
-            _wp((0.08, 0.60, SLIDE_Z), "closed", steps=20, reach=0.01),
+            wp((-0.17, 0.60, SLIDE_Z), "closed", steps=10, reach=0.01),
+            wp((0.08, 0.60, SLIDE_Z), "closed", steps=20, reach=0.01),
             _at("slide-pushed", steps=8),
         ),
         preconditions=frozenset({"hand-empty", "slide-closed"}),
@@ -297,8 +270,8 @@ SKILLS: tuple[SkillSpec, ...] = (
         start="light-front",
         end="light-pushed",
         waypoints=(
-            _wp((-0.31, 0.62, LIGHT_Z), "closed", steps=10, reach=0.01),
-            _wp((-0.52, 0.62, LIGHT_Z), "closed", steps=20, reach=0.01),
+            wp((-0.31, 0.62, LIGHT_Z), "closed", steps=10, reach=0.01),
+            wp((-0.52, 0.62, LIGHT_Z), "closed", steps=20, reach=0.01),
             _at("light-pushed", steps=8),
         ),
         preconditions=frozenset({"hand-empty", "light-off"}),
@@ -314,12 +287,12 @@ SKILLS: tuple[SkillSpec, ...] = (
         start="microwave-front",
         end="microwave-opened",
         waypoints=(
-            _wp(micro_point(0.0), "closed", steps=15, reach=0.008),
+            wp(micro_point(0.0), "closed", steps=15, reach=0.008),
             *(
-                _wp(micro_point(a), "closed", steps=8, reach=0.015, orientation=micro_quat(a))
+                wp(micro_point(a), "closed", steps=8, reach=0.015, orientation=micro_quat(a))
                 for a in MICRO_ANGLES
             ),
-            _wp(
+            wp(
                 micro_point(MICRO_ANGLES[-1]),
                 "open",
                 steps=5,

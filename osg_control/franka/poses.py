@@ -1,0 +1,38 @@
+"""Poses and waypoint helpers shared by the FrankaKitchen-v1 domain's skill modules.
+
+Poses are in the env's world frame (the robot base stands at (0, 0, 1.8)).
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import mujoco
+import numpy as np
+
+from osg_control.domain.spec import ScriptParams, Waypoint
+
+FORWARD = (0.5, -0.5, -0.5, -0.5)
+"""Tool z along +y, fingers opening along world x: the orientation at the env's reset."""
+
+
+def turned(
+    axis: tuple[float, float, float],
+    angle: float,
+    base: tuple[float, float, float, float] = FORWARD,
+) -> tuple[float, float, float, float]:
+    """``base`` (default ``FORWARD``) turned by ``angle`` [rad] about the world ``axis``
+    (a unit vector)."""
+    turn, q = np.zeros(4), np.zeros(4)
+    mujoco.mju_axisAngle2Quat(turn, np.asarray(axis, dtype=float), angle)
+    mujoco.mju_mulQuat(q, turn, np.asarray(base, dtype=float))
+    return tuple(round(float(v), 6) for v in q)  # type: ignore[return-value]
+
+
+def wp(position: tuple[float, float, float], gripper: str, **kw: Any) -> Waypoint:
+    """A waypoint with the tool ``FORWARD`` unless ``orientation`` is given."""
+    return Waypoint(position, gripper, orientation=kw.pop("orientation", FORWARD), **kw)  # type: ignore[arg-type]
+
+
+SCRIPT = ScriptParams(threshold_mean=0.01, threshold_std=0.003, noise_std=0.005)
+"""Algorithm 1 parameters shared by the skills unless tuned per skill."""
