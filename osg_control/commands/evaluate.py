@@ -1,4 +1,5 @@
-"""``osg evaluate tasks``: the paper's Tables IV and V over the 8 start regions."""
+"""``osg evaluate tasks`` (the paper's Tables IV and V over the domain's start regions) and
+``osg evaluate benchmark`` (a domain's outside benchmark, scored by its env)."""
 
 from __future__ import annotations
 
@@ -38,6 +39,81 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     add_filter_argument(tasks)
     tasks.add_argument("--json", action="store_true")
     tasks.set_defaults(func=run_tasks)
+    _register_benchmark(verbs)
+
+
+def _register_benchmark(verbs: argparse._SubParsersAction) -> None:
+    bench = verbs.add_parser(
+        "benchmark",
+        help="the domain's outside benchmark (e.g. D4RL kitchen-complete on FrankaKitchen-v1), "
+        "scored by the env's own task completions",
+    )
+    bench.add_argument(
+        "--set", dest="goal_set", default=None, help="goal set (default: the benchmark's)"
+    )
+    bench.add_argument(
+        "--tasks", nargs="+", default=None, help="the env's task names (instead of --set)"
+    )
+    bench.add_argument("--episodes", type=int, default=100)
+    bench.add_argument("--seed", type=int, default=0)
+    bench.add_argument("--workers", type=int, default=2)
+    add_backend_arguments(bench)
+    bench.add_argument("--models", type=Path, default=None, help="defaults directory")
+    bench.add_argument(
+        "--noise", type=float, default=0.0, help="TCP observation noise [m] (default 0)"
+    )
+    add_filter_argument(bench)
+    bench.add_argument(
+        "--perturbed",
+        action="store_true",
+        help="start from random poses in the domain's first start region (the drive there "
+        "not counted) instead of the env's reset",
+    )
+    bench.add_argument(
+        "--no-limit",
+        action="store_true",
+        help="no episode step limit (only the executor's own budgets)",
+    )
+    bench.add_argument("--max-replans", type=int, default=2)
+    bench.add_argument("--json", action="store_true")
+    bench.set_defaults(func=run_benchmark_command)
+
+
+def run_benchmark_command(args: argparse.Namespace) -> int:
+    """Print the benchmark score, its interval, per-task rates and steps used."""
+    from osg_control.evaluation.benchmark import benchmark_of, format_benchmark, run_benchmark
+
+    domain = domain_of(args)
+    benchmark_of(domain)
+    resume_dir = check_output_dir(
+        cache_dir()
+        / domain.name
+        / "evaluation"
+        / f"benchmark-{models_fingerprint(domain, args.models)}",
+        "evaluation cache",
+    )
+    with open_executor(args.backend, args.workers, args.address) as executor:
+        summary = run_benchmark(
+            domain,
+            goal_set=args.goal_set,
+            tasks=args.tasks,
+            episodes=args.episodes,
+            seed=args.seed,
+            models=str(args.models) if args.models else None,
+            noise=args.noise,
+            filter_gain=args.filter,
+            perturbed=args.perturbed,
+            limited=not args.no_limit,
+            max_replans=args.max_replans,
+            workers=args.workers,
+            executor=executor,
+            resume_dir=resume_dir,
+        )
+    summary["models"] = models_in_use(domain, args.models)
+    print(json.dumps(summary, indent=2) if args.json else format_benchmark(summary))
+    if not args.json:
+        print(describe_models(summary["models"]))
+    return 0
 
 
 def run_tasks(args: argparse.Namespace) -> int:

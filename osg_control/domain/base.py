@@ -19,6 +19,7 @@ from typing import Any
 
 import numpy as np
 
+from osg_control.domain.benchmark import Benchmark, validate_benchmark
 from osg_control.domain.spec import Node, SkillSpec, check_skill_fields
 from osg_control.errors import DomainError, SkillSpecError, lookup
 
@@ -91,6 +92,8 @@ class Domain:
         env_id: the Gymnasium id its env is registered under, if any.
         published: published figures to report beside ours (see
             ``osg_control.evaluation.report.PUBLISHED_KEYS``).
+        benchmark: an outside benchmark's protocol on this domain's env (``osg evaluate
+            benchmark``), if any.
     """
 
     name: str
@@ -110,6 +113,7 @@ class Domain:
     defaults_dir: Path | None = None
     env_id: str | None = None
     published: Mapping[str, Any] = field(default_factory=dict)
+    benchmark: Benchmark | None = None
     skills_by_name: dict[str, SkillSpec] = field(init=False, repr=False, compare=False)
 
     def __post_init__(self) -> None:
@@ -256,6 +260,8 @@ def validate_domain(domain: Domain) -> None:
             raise DomainError(f"{where}: task {task.name!r} names unknown node {task.node!r}")
     for region in domain.start_regions:
         _check_facts(where, f"start_regions[{region.name}].facts", region.facts, facts)
+    if domain.benchmark is not None:
+        validate_benchmark(domain.benchmark, domain.facts, where)
 
 
 def _check_facts(where: str, field_name: str, named: Any, facts: set[str]) -> None:

@@ -29,7 +29,7 @@ from osg_control.parallel import LocalExecutor, TaskExecutor
 from osg_control.seeding import skill_seed
 
 
-def _rng(seed: int, name: str, cell: int, index: int) -> np.random.Generator:
+def episode_rng(seed: int, name: str, cell: int, index: int) -> np.random.Generator:
     """The generator of episode ``index`` of the cell (``name``, ``cell``)."""
     return np.random.default_rng(np.random.SeedSequence([skill_seed(seed, name), cell, index]))
 
@@ -68,7 +68,7 @@ def run_skill_episode(task: SkillEpisode) -> bool:
     if task.filter_gain is not None:
         policy = FilteredPolicy(policy, task.filter_gain)
     env = _env(task.domain, task.skill, task.noise)
-    rng = _rng(task.seed, task.skill, task.cell, task.index)
+    rng = episode_rng(task.seed, task.skill, task.cell, task.index)
     obs, _ = env.reset(
         seed=int(rng.integers(2**31)),
         options={"radius": skill.start_radius, "angle": skill.start_angle},
@@ -160,7 +160,10 @@ def format_skill_table(table: dict[str, Any]) -> str:
 
 
 @cache
-def _executor(domain: str, models: str | None, max_replans: int, filter_gain: float | None) -> Any:
+def cached_executor(
+    domain: str, models: str | None, max_replans: int, filter_gain: float | None
+) -> Any:
+    """The domain's executor over a defaults directory, one per worker process."""
     from osg_control.execution.executor import load_executor
 
     return load_executor(
@@ -189,7 +192,7 @@ class StartEpisode:
 
 
 def _reset_in_region(env: ArmEnv, task: StartEpisode, facts: Sequence[str]) -> np.ndarray:
-    rng = _rng(task.seed, task.name, task.cell, task.index)
+    rng = episode_rng(task.seed, task.name, task.cell, task.index)
     region = get_domain(task.domain).start_regions[task.region]
     obs, _ = env.reset(
         seed=int(rng.integers(2**31)),
@@ -212,7 +215,7 @@ def run_reach_episode(task: StartEpisode) -> tuple[bool, bool, bool]:
         success of the nearest-start-node baseline from the same start).
     """
     domain = get_domain(task.domain)
-    executor = _executor(task.domain, task.models, 0, None)
+    executor = cached_executor(task.domain, task.models, 0, None)
     env = _plain_env(task.domain, task.noise)
     region = domain.start_regions[task.region]
     outcomes = []
@@ -311,7 +314,7 @@ def run_task_episode(episode: TaskEpisode) -> bool:
     task = domain.task(episode.task)
     env = _plain_env(start.domain, start.noise)
     obs = _reset_in_region(env, start, domain.task_world(task))
-    executor = _executor(start.domain, start.models, episode.max_replans, episode.filter_gain)
+    executor = cached_executor(start.domain, start.models, episode.max_replans, episode.filter_gain)
     return bool(executor.execute(task.goal, env, obs).success)
 
 

@@ -35,6 +35,10 @@ from osg_control.errors import SimulationError
 from osg_control.planning.api import graph_domain, plan_for_goal
 from osg_control.planning.graph import SkillGraph
 
+TIME_LIMIT = "the env's episode time limit was reached"
+"""The failure of a skill whose env step came back truncated (e.g. a gymnasium
+``TimeLimit``): the episode is over, so the execution ends without replanning."""
+
 RESULT_SCHEMA_VERSION = 1
 NODE_TOLERANCE = 0.02
 """TCP distance [m] within which the robot counts as on a graph node or a skill's path."""
@@ -266,7 +270,7 @@ class Executor:
             action = policy(seen)
             if tracker is not None:
                 tracker.acted(action)
-            obs, _reward, _terminated, _truncated, info = env.step(action)
+            obs, _reward, _terminated, truncated, info = env.step(action)
             if self.on_step is not None:
                 self.on_step(env)
             if "failure" in info:
@@ -275,6 +279,10 @@ class Executor:
                 ), obs
             if env.skill_success(skill):
                 return SkillOutcome(skill.name, True, step, time.perf_counter() - started), obs
+            if truncated:
+                return SkillOutcome(
+                    skill.name, False, step, time.perf_counter() - started, failure=TIME_LIMIT
+                ), obs
             lost = watched - env.facts_of(info["world"]) if watched else set()
             lost_steps = lost_steps + 1 if lost else 0
             if lost_steps >= GRASP_GRACE_STEPS:
@@ -330,8 +338,8 @@ class Executor:
                     )
                 break
             result.failure = failed
-            if is_divergence(failed):  # the world was reset: never replan from it
-                break
+            if is_divergence(failed) or TIME_LIMIT in failed:
+                break  # the world was reset, or the env's episode is over: never replan
             if attempt < self.max_replans:
                 result.replans += 1
         if result.success:

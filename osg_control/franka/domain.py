@@ -20,6 +20,7 @@ from typing import Any
 import numpy as np
 
 from osg_control.domain.base import Domain, StartRegion, Task
+from osg_control.domain.benchmark import Benchmark
 from osg_control.domain.spec import MOVEMENT, Node, SkillSpec, Waypoint
 from osg_control.errors import DomainError
 from osg_control.franka.poses import FORWARD, SCRIPT, turned, wp
@@ -84,6 +85,9 @@ SLIDE_Z = 2.52
 # Light switch: push the lever (at x -0.374, y 0.626, z 2.28, hinged about z at
 # (-0.40, 0.691)) along -x; done near -0.4 rad of its [-0.7, 0] range.
 LIGHT_Z = 2.28
+LIGHT_END_X = -0.42
+"""Where the push along -x ends: the lever reaches its -0.7 rad stop with the fingers near
+x -0.40 (a push aimed further, at -0.52, stalled there and never reached its end node)."""
 # Microwave: grasp the vertical handle (x -0.642, y 0.493, z 1.66-1.92) and pull it along
 # the door's arc about the hinge at (-1.128, 0.455); done once the door is below -0.45 rad.
 MICRO_HINGE = (-1.128, 0.455)
@@ -108,8 +112,14 @@ def micro_quat(angle: float) -> tuple[float, float, float, float]:
     return turned((0.0, 0.0, 1.0), angle)
 
 
-MICRO_ANGLES = (-0.25, -0.5, -0.75, -1.0)
-"""Door angles [rad] of the pull's arc waypoints (the library's goal is -0.75)."""
+MICRO_ANGLES = (-0.2, -0.4, -0.6)
+"""Door angles [rad] of the pull's arc waypoints (done below -0.45; the library's goal is
+-0.75). Pulling on to -1.0 with the hand turning with the door put joint 6 at its limit
+and the hand left the arc."""
+MICRO_OPENED = (-0.62, 0.16, 1.80)
+"""Where the hand ends after releasing the handle at -0.6 rad: the arc's point (-0.705,
+0.232) is out of reach with the hand turned, so the end node is where the released hand
+settles (noise-free 48 steps; 6 of 8 under the script's noise)."""
 
 # Burner knobs: a vertical bar (2.8 cm wide in x, 9.6 cm tall, y 0.622-0.658) in front of a
 # disk, turning about world -y; the bottom burner's knob (qpos 11) is centred at
@@ -153,22 +163,13 @@ NODES: dict[str, Node] = {
         _node("slide-front", (-0.17, 0.50, SLIDE_Z), "closed"),
         _node("slide-pushed", (0.08, 0.50, SLIDE_Z), "closed"),
         _node("light-front", (-0.31, 0.52, LIGHT_Z), "closed"),
-        _node("light-pushed", (-0.52, 0.52, LIGHT_Z), "closed"),
+        _node("light-pushed", (LIGHT_END_X, 0.52, LIGHT_Z), "closed"),
         _node("microwave-front", (-0.642, 0.40, MICRO_Z)),
         Node("bottom-knob-front", _knob_front(BOTTOM_KNOB_Z, -1), "closed", KNOB_GRASP_QUAT),
         Node("bottom-knob-turned", _knob_front(BOTTOM_KNOB_Z, 1), "closed", KNOB_GRASP_QUAT),
         Node("top-knob-front", _knob_front(TOP_KNOB_Z, -1), "closed", KNOB_GRASP_QUAT),
         Node("top-knob-turned", _knob_front(TOP_KNOB_Z, 1), "closed", KNOB_GRASP_QUAT),
-        Node(
-            "microwave-opened",
-            (
-                round(micro_point(MICRO_ANGLES[-1])[0], 4),
-                round(micro_point(MICRO_ANGLES[-1])[1] - 0.08, 4),
-                MICRO_Z,
-            ),
-            "open",
-            micro_quat(MICRO_ANGLES[-1]),
-        ),
+        Node("microwave-opened", MICRO_OPENED, "open", micro_quat(MICRO_ANGLES[-1])),
     )
 }
 
@@ -181,18 +182,32 @@ def _at(node: str, **kw: Any) -> Waypoint:
 _NO_PRE: frozenset[str] = frozenset()
 
 
-def _movement(name: str, start: str, end: str, via: tuple[float, float, float] | None = None):
-    points = [wp(via, NODES[end].gripper, steps=15)] if via else []
+def _movement(name: str, start: str, end: str, start_facts: tuple[str, ...] = ()) -> SkillSpec:
+    """A movement skill from node ``start`` to node ``end``, recorded in a world where
+    ``start_facts`` hold (made by the adapter's set-ups: e.g. the microwave opened)."""
     return SkillSpec(
         name=name,
         kind=MOVEMENT,
         start=start,
         end=end,
-        waypoints=(*points, _at(end, steps=25)),
+        waypoints=(_at(end, steps=MOVE_STEPS),),
         preconditions=frozenset({"hand-empty"}),
+        start_facts=frozenset(start_facts),
         script=SCRIPT,
-        max_steps=40,
+        max_steps=MOVE_MAX_STEPS,
+        start_radius=MOVE_START_RADIUS,
+        start_angle=MOVE_START_ANGLE,
     )
+
+
+MOVE_STEPS = 36
+"""Algorithm 1's budget for a movement: the longest noise-free one (home to the slide
+cabinet, 0.68 m) takes 27 steps (the servos cover 60-80 % of a 4 cm command per step)."""
+MOVE_MAX_STEPS = 50
+MOVE_START_RADIUS = 0.04
+MOVE_START_ANGLE = 0.1
+"""Random starts of movements: within 4 cm and 0.1 rad of their start node (a skill ends
+within its 3 cm tolerance of its end node)."""
 
 
 def _turn_knob(name: str, level: str, z: float, on: str, off: str) -> SkillSpec:
@@ -234,15 +249,28 @@ def _turn_knob(name: str, level: str, z: float, on: str, off: str) -> SkillSpec:
 
 SKILLS: tuple[SkillSpec, ...] = (
     _movement("move-home-to-slide", "home", "slide-front"),
-    _movement("move-slide-to-home", "slide-pushed", "home"),
+    _movement("move-slide-to-home", "slide-pushed", "home", ("slide-open",)),
     _movement("move-home-to-light", "home", "light-front"),
-    _movement("move-light-to-home", "light-pushed", "home"),
+    _movement("move-light-to-home", "light-pushed", "home", ("light-on",)),
     _movement("move-home-to-microwave", "home", "microwave-front"),
-    _movement("move-microwave-to-home", "microwave-opened", "home"),
+    _movement("move-microwave-to-home", "microwave-opened", "home", ("microwave-open",)),
     _movement("move-home-to-bottom-knob", "home", "bottom-knob-front"),
-    _movement("move-bottom-knob-to-home", "bottom-knob-turned", "home"),
+    _movement("move-bottom-knob-to-home", "bottom-knob-turned", "home", ("bottom-burner-on",)),
     _movement("move-home-to-top-knob", "home", "top-knob-front"),
-    _movement("move-top-knob-to-home", "top-knob-turned", "home"),
+    _movement("move-top-knob-to-home", "top-knob-turned", "home", ("top-burner-on",)),
+    # Direct movements along the tour microwave, kettle, bottom burner, top burner, light
+    # switch, slide cabinet: D4RL's goal sets in that order need no detour through home.
+    _movement("move-light-to-slide", "light-pushed", "slide-front", ("light-on",)),
+    _movement(
+        "move-bottom-knob-to-top-knob",
+        "bottom-knob-turned",
+        "top-knob-front",
+        ("bottom-burner-on",),
+    ),
+    _movement(
+        "move-bottom-knob-to-light", "bottom-knob-turned", "light-front", ("bottom-burner-on",)
+    ),
+    _movement("move-top-knob-to-light", "top-knob-turned", "light-front", ("top-burner-on",)),
     _turn_knob(
         "turn-bottom-knob", "bottom", BOTTOM_KNOB_Z, "bottom-burner-on", "bottom-burner-off"
     ),
@@ -271,7 +299,7 @@ SKILLS: tuple[SkillSpec, ...] = (
         end="light-pushed",
         waypoints=(
             wp((-0.31, 0.62, LIGHT_Z), "closed", steps=10, reach=0.01),
-            wp((-0.52, 0.62, LIGHT_Z), "closed", steps=20, reach=0.01),
+            wp((LIGHT_END_X, 0.62, LIGHT_Z), "closed", steps=12, reach=0.01),
             _at("light-pushed", steps=8),
         ),
         preconditions=frozenset({"hand-empty", "light-off"}),
@@ -289,17 +317,17 @@ SKILLS: tuple[SkillSpec, ...] = (
         waypoints=(
             wp(micro_point(0.0), "closed", steps=15, reach=0.008),
             *(
-                wp(micro_point(a), "closed", steps=8, reach=0.015, orientation=micro_quat(a))
+                wp(micro_point(a), "closed", steps=7, reach=0.015, orientation=micro_quat(a))
                 for a in MICRO_ANGLES
             ),
             wp(
                 micro_point(MICRO_ANGLES[-1]),
                 "open",
-                steps=5,
+                steps=4,
                 reach=0.05,
                 orientation=micro_quat(MICRO_ANGLES[-1]),
             ),
-            _at("microwave-opened", steps=10),
+            _at("microwave-opened", steps=8),
         ),
         preconditions=frozenset({"hand-empty", "microwave-closed"}),
         add_effects=frozenset({"microwave-open"}),
@@ -317,6 +345,23 @@ SUBTASK_SKILLS: dict[str, str] = {
     "top burner": "turn-top-knob",
 }
 """Library task -> the skill that does it (the implemented ones)."""
+
+
+def _setups() -> dict[str, tuple[SkillSpec, ...]]:
+    """Each subtask's fact -> the movement from home to its start and the subtask skill:
+    the adapter's way to record a skill in a world where that subtask is done."""
+    skills = {s.name: s for s in SKILLS}
+    setups: dict[str, tuple[SkillSpec, ...]] = {}
+    for task, name in SUBTASK_SKILLS.items():
+        subtask = skills[name]
+        approach = next(
+            s for s in SKILLS if s.kind == MOVEMENT and s.start == "home" and s.end == subtask.start
+        )
+        setups[TASK_FACTS[task][0]] = (approach, subtask)
+    return setups
+
+
+SETUPS = _setups()
 
 TASKS: tuple[Task, ...] = (
     Task("slide-cabinet", ("slide-open",), description="open the slide cabinet"),
@@ -337,10 +382,14 @@ def make_franka_env(
     render_mode: str | None = None,
     env: Any = None,
     tasks: list[str] | None = None,
+    max_episode_steps: int | None = None,
+    step_limit: int | None = None,
 ) -> Any:
     """A ``FrankaKitchenAdapter`` around ``env`` (default: a new FrankaKitchen-v1 with
-    ``tasks``, all seven if not given). ``config`` is a ``FrankaConfig``, or the core's
-    ``EnvConfig`` (as collection and evaluation pass it), whose observation noise is kept."""
+    ``tasks``, all seven if not given, and the registered 280-step limit unless
+    ``max_episode_steps``). ``config`` is a ``FrankaConfig``, or the core's ``EnvConfig``
+    (as collection and evaluation pass it), whose observation noise is kept;
+    ``step_limit``: the adapter's own limit, counted from the start (see the adapter)."""
     from osg_control.franka.compat import prepare
     from osg_control.franka.env import FrankaConfig, FrankaKitchenAdapter
 
@@ -358,9 +407,63 @@ def make_franka_env(
         kwargs: dict[str, Any] = {"tasks_to_complete": list(tasks or TASK_FACTS)}
         if render_mode is not None:
             kwargs["render_mode"] = render_mode
+        if max_episode_steps is not None:
+            kwargs["max_episode_steps"] = max_episode_steps
         env = gymnasium.make("FrankaKitchen-v1", **kwargs)
     spec = {s.name: s for s in SKILLS}[skill] if isinstance(skill, str) else skill
-    return FrankaKitchenAdapter(env, NODES, world_of, facts_of, skill=spec, config=config)
+    return FrankaKitchenAdapter(
+        env,
+        NODES,
+        world_of,
+        facts_of,
+        skill=spec,
+        config=config,
+        step_limit=step_limit,
+        setups=SETUPS,
+    )
+
+
+STEP_LIMIT = 280
+"""FrankaKitchen-v1's registered episode limit (D4RL's protocol)."""
+UNLIMITED_STEPS = 100_000
+"""The env's limit in the no-limit variant (the executor's own budgets end it first)."""
+GOAL_SETS: dict[str, tuple[str, ...]] = {
+    "kitchen-complete": ("microwave", "kettle", "light switch", "slide cabinet"),
+    "kitchen-mixed": ("microwave", "kettle", "bottom burner", "light switch"),
+    "all-seven": tuple(TASK_FACTS),
+}
+"""D4RL's goal sets (kitchen-complete and kitchen-partial share theirs) and all seven."""
+
+
+def make_benchmark_env(
+    tasks: tuple[str, ...], step_limit: int | None, noise: float, start_steps: int = 0
+) -> Any:
+    """The benchmark's env: FrankaKitchen-v1 for ``tasks``; with ``step_limit`` and no
+    ``start_steps`` exactly the registered env (its own 280-step ``TimeLimit``), else one
+    whose own limit leaves ``start_steps`` for the drive to a perturbed start, the adapter
+    counting ``step_limit`` from the start."""
+    from osg_control.environment.arm_env import EnvConfig
+
+    if step_limit is None:
+        max_steps: int | None = UNLIMITED_STEPS
+    else:
+        max_steps = step_limit + start_steps if start_steps else None
+    return make_franka_env(
+        config=EnvConfig(obs_noise_std=noise),
+        tasks=list(tasks),
+        max_episode_steps=max_steps,
+        step_limit=step_limit if start_steps else None,
+    )
+
+
+BENCHMARK = Benchmark(
+    name="D4RL kitchen (FrankaKitchen-v1)",
+    goal_sets=GOAL_SETS,
+    default_set="kitchen-complete",
+    task_facts={task: pair[0] for task, pair in TASK_FACTS.items()},
+    step_limit=STEP_LIMIT,
+    make_env=make_benchmark_env,
+)
 
 
 def franka_domain() -> Domain:
@@ -380,4 +483,5 @@ def franka_domain() -> Domain:
         make_env=make_franka_env,
         hand_empty="hand-empty",
         env_id="FrankaKitchen-v1",
+        benchmark=BENCHMARK,
     )

@@ -28,6 +28,7 @@ from __future__ import annotations
 
 import os
 import warnings
+from collections.abc import Mapping
 from dataclasses import dataclass
 from typing import Any
 
@@ -38,6 +39,8 @@ import numpy as np
 from osg_control.domain.spec import Node, SkillSpec
 from osg_control.environment.actions import checked_action, scale_into
 from osg_control.environment.arm_env import GRIPPER_CLOSED_CMD, GRIPPER_OPEN_CMD, success_holds
+from osg_control.environment.options import check_start_options
+from osg_control.environment.poses import quat_rotation, sample_start_pose
 from osg_control.errors import DomainError, SimulationError
 
 ACTION_BOUNDS = np.array([0.04, 0.04, 0.04, 0.2, 0.2, 0.2, 1.0])
@@ -52,6 +55,8 @@ REFERENCE_QUAT = (0.5, -0.5, -0.5, -0.5)
 orientation at the env's reset)."""
 ACTION_SCALE = 2.0
 """The env's joint speed [rad/s] for an action of 1 (``FrankaRobot.act_rng``)."""
+SETUP_ATTEMPTS = 3
+"""How often ``reset`` retries a skill's set-up (a noisy script) before giving up."""
 MODEL_FILE = "envs/assets/kitchen_franka/kitchen_assets/kitchen_env_model.xml"
 
 
@@ -252,6 +257,13 @@ class FrankaKitchenAdapter(gym.Env):
         facts_of: world-state vector -> facts.
         skill: the skill whose success the env reports, if any.
         config: IK weights and observation noise.
+        step_limit: steps after ``reset``'s start (the drive to a random start not
+            counted) after which ``step`` reports ``truncated``; None: only the env's own
+            limit.
+        home: the node a ``position`` reset option draws its orientation from.
+        setups: world fact -> the skills whose noise-free scripts make it hold from the
+            env's reset (e.g. open the microwave), run by ``reset`` for a skill's
+            ``start_facts``: the env's world can only be changed through its own steps.
     """
 
     metadata = {"render_modes": ["rgb_array"], "render_fps": 12}
@@ -264,8 +276,14 @@ class FrankaKitchenAdapter(gym.Env):
         facts_of: Any,
         skill: SkillSpec | None = None,
         config: FrankaConfig | None = None,
+        step_limit: int | None = None,
+        home: str = "home",
+        setups: Mapping[str, tuple[SkillSpec, ...]] | None = None,
     ) -> None:
         self.env = env
+        self.setups = dict(setups or {})
+        self.step_limit = step_limit
+        self.home = home
         self.kitchen = check_kitchen(env)
         self.model = self.kitchen.model
         self.data = self.kitchen.data
@@ -379,18 +397,18 @@ class FrankaKitchenAdapter(gym.Env):
             "steps": self._steps,
             "success": self._succeeded,
             "arm_q": self.arm_q,
-            "episode_task_completions": list(
-                self.last_env_info.get("episode_task_completions", [])
-            ),
+            "episode_task_completions": self.completed_tasks(),
         }
 
     # ----------------------------------------------------------------- reset / step
     def reset(
         self, *, seed: int | None = None, options: dict[str, Any] | None = None
     ) -> tuple[np.ndarray, dict[str, Any]]:
-        """The env's own reset (deterministic; ``seed`` sets its observation noise), then,
-        with a ``node`` option or a skill, drive to that node's pose through the env's own
-        steps (they count toward its step limit)."""
+        """The env's own reset (deterministic; ``seed`` sets its observation noise and the
+        random start), then, with a ``node`` option or a skill, drive to a pose drawn
+        around that node's (``radius`` [m] and ``angle`` [rad] per axis, default 0: the
+        node itself) through the env's own steps (they count toward its step limit).
+        ``max_steps`` bounds the drive (default 40)."""
         super().reset(seed=seed)
         self._rng = np.random.default_rng(seed)
         _obs, env_info = self.env.reset(seed=seed)
@@ -399,29 +417,104 @@ class FrankaKitchenAdapter(gym.Env):
         self._succeeded = False
         self._steps = 0
         options = dict(options or {})
+        if self.skill is not None:
+            self._set_up(self.skill.start_facts, seed)
         node_name = options.get("node") or (self.skill.start if self.skill else None)
+        if node_name is None and "position" in options:
+            node_name = self.home
         if node_name is not None:
-            self.drive_to(self.nodes[node_name], max_steps=int(options.get("max_steps", 40)))
+            node = self.nodes[node_name]
+            radius = float(options.get("radius", 0.0))
+            angle = float(options.get("angle", 0.0))
+            centre = np.asarray(options.get("position", node.position), dtype=float)
+            check_start_options(centre, radius, angle)
+            position, rotation = sample_start_pose(
+                self.np_random, centre, radius, angle, quat_rotation(node.orientation)
+            )
+            self.drive_to(
+                position,
+                rotation,
+                node.gripper,
+                max_steps=int(options.get("max_steps", 40)),
+            )
         self._steps = 0
         return self.observe(), self._info(self.world_state())
 
-    def drive_to(self, node: Node, max_steps: int = 40, tolerance: float = 0.01) -> int:
-        """Step toward a node's pose and gripper state; return the steps used."""
-        from osg_control.control.ik import quat_to_matrix, rotation_error
+    def _set_up(self, facts: frozenset[str], seed: int | None) -> None:
+        """Make ``facts`` hold by running their set-up skills' own Algorithm 1 scripts
+        (``setups``) through the env's own steps, from the env's reset; a set-up that does
+        not end at its last skill's end node with the fact holding is run again from a new
+        reset, up to ``SETUP_ATTEMPTS`` times.
 
-        target_rot = quat_to_matrix(np.asarray(node.orientation))
-        g = GRIPPER_OPEN_CMD if node.gripper == "open" else GRIPPER_CLOSED_CMD
+        Raises:
+            SimulationError: a fact has no set-up, or no attempt made it hold.
+        """
+        from osg_control.data.scripted import ScriptedPolicy
+
+        missing = sorted(facts - self.facts())
+        unknown = [f for f in missing if f not in self.setups]
+        if unknown:
+            raise SimulationError(f"no set-up makes start fact(s) {unknown} hold")
+        skill, self.skill = self.skill, None
+        try:
+            for attempt in range(SETUP_ATTEMPTS):
+                if attempt:
+                    self.env.reset(seed=seed)
+                    self._gripper_cmd = GRIPPER_OPEN_CMD
+                ok = True
+                for fact in missing:
+                    for setup in self.setups[fact]:
+                        policy = ScriptedPolicy(setup, self._rng, bounds=ACTION_BOUNDS)
+                        policy.reset()
+                        obs = self.observe()
+                        while not policy.done and not self.skill_success(setup):
+                            obs = self.step(policy(obs))[0]
+                        ok = ok and self.skill_success(setup)
+                if ok and not (set(missing) - self.facts()):
+                    return
+            raise SimulationError(
+                f"set-ups {[s.name for f in missing for s in self.setups[f]]} did not make "
+                f"{missing} hold in {SETUP_ATTEMPTS} attempts"
+            )
+        finally:
+            self.skill = skill
+
+    def drive_to(
+        self,
+        position: np.ndarray,
+        rotation: np.ndarray,
+        gripper: str,
+        max_steps: int = 40,
+        tolerance: float = 0.01,
+    ) -> int:
+        """Step toward a TCP pose (position, rotation matrix) with the gripper ``"open"`` or
+        ``"closed"``; return the steps used."""
+        from osg_control.control.ik import rotation_error
+
+        g = GRIPPER_OPEN_CMD if gripper == "open" else GRIPPER_CLOSED_CMD
         for step in range(max_steps):
             pos, rot = self.tcp_pose()
-            error = np.asarray(node.position) - pos
-            turn = rotation_error(rot, target_rot)
+            error = np.asarray(position) - pos
+            turn = rotation_error(rot, rotation)
             if np.linalg.norm(error) < tolerance and np.linalg.norm(turn) < 0.05:
                 return step
-            action = np.concatenate([scale_into(error, 0.04), scale_into(turn, 0.2), [g]])
+            action = np.concatenate(
+                [scale_into(error, ACTION_BOUNDS[0]), scale_into(turn, ACTION_BOUNDS[3]), [g]]
+            )
             *_, terminated, truncated, _info = self.step(action)
             if terminated or truncated:
                 return step + 1
         return max_steps
+
+    @property
+    def steps(self) -> int:
+        """Steps taken since the start (the end of ``reset``)."""
+        return self._steps
+
+    def completed_tasks(self) -> list[str]:
+        """The env's own record of the tasks completed this episode
+        (``info["episode_task_completions"]``)."""
+        return list(self.last_env_info.get("episode_task_completions", []))
 
     def check_action(self, action: np.ndarray) -> np.ndarray:
         """Validate (shape (7,), finite) and clip to ``ACTION_BOUNDS``.
@@ -479,6 +572,8 @@ class FrankaKitchenAdapter(gym.Env):
             info["failure"] = failure
         if self.skill is not None and self._succeeded:
             terminated = True
+        if self.step_limit is not None and self._steps >= self.step_limit:
+            truncated = True
         return self.observe(), float(reward), bool(terminated), bool(truncated), info
 
     # ----------------------------------------------------------------- joint reset

@@ -1,0 +1,208 @@
+"""``osg evaluate benchmark``: a domain's outside benchmark (``Domain.benchmark``), scored
+by the env's own completion report.
+
+Each episode starts from the env's own reset (or, with ``perturbed``, from a random start
+in the domain's first start region, the drive there not counted), plans for the goal set's
+facts, executes within the env's step limit (or without one), and scores
+``points * (tasks the env reports completed) / (tasks in the goal set)``. The score's
+interval is the Wilson score interval of the mean completed fraction: a fraction in [0, 1]
+has at most the variance of a Bernoulli variable of the same mean, so the interval is
+conservative, and it stays informative when every episode scores the same.
+
+Episode ``i`` resets with a seed drawn from ``SeedSequence([skill_seed(seed, goal set), 0,
+i])``: the same starts for every variant, whatever the number of workers.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+from functools import cache
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from osg_control.domain.base import Domain
+from osg_control.domain.benchmark import Benchmark
+from osg_control.domain.registry import get_domain
+from osg_control.errors import DomainError
+from osg_control.evaluation.check import wilson_interval
+from osg_control.evaluation.evaluate import cached_executor, episode_rng
+from osg_control.evaluation.resume import resumable_map
+from osg_control.parallel import LocalExecutor, TaskExecutor
+
+Z95 = 1.96
+"""Two-sided 95 % normal quantile of the score's interval."""
+START_STEPS = 40
+"""Steps a perturbed start may take to drive from the env's reset to its random pose."""
+
+
+def benchmark_of(domain: Domain) -> Benchmark:
+    """The domain's benchmark.
+
+    Raises:
+        DomainError: the domain has none.
+    """
+    if domain.benchmark is None:
+        raise DomainError(f"domain {domain.name!r} has no outside benchmark")
+    return domain.benchmark
+
+
+@dataclass(frozen=True)
+class BenchmarkEpisode:
+    """One benchmark episode: a goal set's tasks under one protocol variant."""
+
+    domain: str
+    models: str | None
+    goal_set: str
+    tasks: tuple[str, ...]
+    seed: int
+    index: int
+    noise: float = 0.0
+    filter_gain: float | None = None
+    perturbed: bool = False
+    limited: bool = True
+    max_replans: int = 2
+
+
+@cache
+def _benchmark_env(
+    domain: str, tasks: tuple[str, ...], limit: int | None, noise: float, start_steps: int
+) -> Any:
+    return benchmark_of(get_domain(domain)).make_env(tasks, limit, noise, start_steps)
+
+
+def run_benchmark_episode(episode: BenchmarkEpisode) -> dict[str, Any]:
+    """Run one episode; returns the tasks the env reports completed, the steps used (from
+    the start) and the executor's failure, if any."""
+    domain = get_domain(episode.domain)
+    bench = benchmark_of(domain)
+    limit = bench.step_limit if episode.limited else None
+    start_steps = START_STEPS if episode.perturbed else 0
+    env = _benchmark_env(episode.domain, episode.tasks, limit, episode.noise, start_steps)
+    rng = episode_rng(episode.seed, episode.goal_set, 0, episode.index)
+    options = None
+    if episode.perturbed:
+        region = domain.start_regions[0]
+        options = {
+            "position": region.position,
+            "radius": region.radius,
+            "angle": region.angle,
+            "max_steps": START_STEPS,
+        }
+    obs, _ = env.reset(seed=int(rng.integers(2**31)), options=options)
+    executor = cached_executor(
+        episode.domain, episode.models, episode.max_replans, episode.filter_gain
+    )
+    result = executor.execute(bench.goal(episode.tasks), env, obs)
+    completed = sorted(set(env.completed_tasks()) & set(episode.tasks))
+    return {"completed": completed, "steps": int(env.steps), "failure": result.failure}
+
+
+def score_interval(fractions: np.ndarray, points: float, z: float = Z95) -> tuple[float, float]:
+    """The Wilson interval of the mean completed fraction, in points (see module doc)."""
+    low, high = wilson_interval(float(np.mean(fractions)), len(fractions), z)
+    return points * low, points * high
+
+
+def run_benchmark(
+    domain: Domain,
+    goal_set: str | None = None,
+    tasks: Sequence[str] | None = None,
+    episodes: int = 100,
+    seed: int = 0,
+    models: str | None = None,
+    noise: float = 0.0,
+    filter_gain: float | None = None,
+    perturbed: bool = False,
+    limited: bool = True,
+    max_replans: int = 2,
+    workers: int = 2,
+    executor: TaskExecutor | None = None,
+    resume_dir: Path | None = None,
+) -> dict[str, Any]:
+    """Score the domain's policies on its benchmark (see module doc).
+
+    ``goal_set`` names one of the benchmark's sets (default: its ``default_set``);
+    ``tasks`` (the env's task names) overrides it. Returns a JSON-ready summary: ``score``
+    (the mean, 0 to ``points``), ``interval`` (95 %), ``task_rates`` (each task's
+    completion rate), ``full_rate`` (episodes completing every task), ``steps`` (mean and
+    max steps used) and the protocol.
+    """
+    bench = benchmark_of(domain)
+    if tasks:
+        chosen = bench.check_tasks(tuple(tasks))
+        name = "+".join(chosen)
+    else:
+        name = goal_set or bench.default_set
+        chosen = bench.tasks_of(name)
+    jobs = [
+        BenchmarkEpisode(
+            domain.name,
+            models,
+            name,
+            chosen,
+            seed,
+            i,
+            noise,
+            filter_gain,
+            perturbed,
+            limited,
+            max_replans,
+        )
+        for i in range(episodes)
+    ]
+    results = resumable_map(
+        executor or LocalExecutor(workers), run_benchmark_episode, jobs, resume_dir
+    )
+    done = np.array([[t in r["completed"] for t in chosen] for r in results], dtype=float)
+    fractions = done.mean(axis=1)
+    steps = np.array([r["steps"] for r in results])
+    failures: dict[str, int] = {}
+    for r in results:
+        if r["failure"]:
+            failures[r["failure"]] = failures.get(r["failure"], 0) + 1
+    low, high = score_interval(fractions, bench.points)
+    return {
+        "benchmark": bench.name,
+        "goal_set": name,
+        "tasks": list(chosen),
+        "episodes": episodes,
+        "seed": seed,
+        "score": round(float(bench.points * fractions.mean()), 3),
+        "interval": [round(low, 3), round(high, 3)],
+        "confidence": 0.95,
+        "full_rate": float((fractions == 1.0).mean()),
+        "task_rates": {t: float(done[:, k].mean()) for k, t in enumerate(chosen)},
+        "steps": {"mean": float(steps.mean()), "max": int(steps.max())},
+        "step_limit": bench.step_limit if limited else None,
+        "perturbed": perturbed,
+        "noise": noise,
+        "filter_gain": filter_gain,
+        "max_replans": max_replans,
+        "failures": dict(sorted(failures.items(), key=lambda kv: -kv[1])),
+    }
+
+
+def format_benchmark(summary: dict[str, Any]) -> str:
+    """A benchmark summary as text."""
+    limit = summary["step_limit"]
+    protocol = [
+        f"step limit {limit}" if limit else "no step limit",
+        "perturbed starts" if summary["perturbed"] else "the env's reset",
+        f"noise {summary['noise']:g} m" + (" + filter" if summary["filter_gain"] else ""),
+    ]
+    low, high = summary["interval"]
+    lines = [
+        f"{summary['benchmark']}: {summary['goal_set']} ({', '.join(summary['tasks'])})",
+        f"  protocol: {'; '.join(protocol)}; {summary['episodes']} episodes, seed "
+        f"{summary['seed']}",
+        f"  score {summary['score']:.1f}  (95 % interval {low:.1f}-{high:.1f}); all tasks "
+        f"done in {summary['full_rate']:.1%} of episodes",
+        f"  steps used: mean {summary['steps']['mean']:.0f}, max {summary['steps']['max']}",
+    ]
+    lines += [f"  {task:16s} {rate:.3f}" for task, rate in summary["task_rates"].items()]
+    for failure, count in list(summary["failures"].items())[:5]:
+        lines.append(f"  failure x{count}: {failure}")
+    return "\n".join(lines)
