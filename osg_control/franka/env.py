@@ -561,9 +561,11 @@ class FrankaKitchenAdapter(gym.Env):
         if not np.all(np.isfinite(self.data.qpos)):
             failure = "physics diverged (non-finite qpos)"
             terminated = True
-        if failure is None and self.skill is not None and not self._succeeded:
-            if self.skill_success(world=world):
+        if self.skill is not None:
+            reward = 0.0  # with a skill, its sparse reward: 1 on the step beta first holds
+            if failure is None and not self._succeeded and self.skill_success(world=world):
                 self._succeeded = True
+                reward = 1.0
         info = self._info(world)
         info["env_reward"] = float(reward)
         info["env_info"] = self.last_env_info
