@@ -23,7 +23,8 @@ from osg_control.domain.base import Domain, StartRegion, Task
 from osg_control.domain.benchmark import Benchmark
 from osg_control.domain.spec import MOVEMENT, Node, SkillSpec, Waypoint
 from osg_control.errors import DomainError
-from osg_control.franka.poses import FORWARD, SCRIPT, turned, wp
+from osg_control.franka.kettle import KETTLE_NODES, KETTLE_SKILLS
+from osg_control.franka.poses import FORWARD, HOME, SCRIPT, at, movement, turned, wp
 
 GRASP_FORCE = 1.0
 """Both fingers pressing harder than this [N] count as a grasp."""
@@ -159,7 +160,7 @@ def _knob_front(z: float, side: int) -> tuple[float, float, float]:
 NODES: dict[str, Node] = {
     n.name: n
     for n in (
-        _node("home", (-0.432, 0.119, 2.025)),
+        HOME,
         _node("slide-front", (-0.17, 0.50, SLIDE_Z), "closed"),
         _node("slide-pushed", (0.08, 0.50, SLIDE_Z), "closed"),
         _node("light-front", (-0.31, 0.52, LIGHT_Z), "closed"),
@@ -170,44 +171,19 @@ NODES: dict[str, Node] = {
         Node("top-knob-front", _knob_front(TOP_KNOB_Z, -1), "closed", KNOB_GRASP_QUAT),
         Node("top-knob-turned", _knob_front(TOP_KNOB_Z, 1), "closed", KNOB_GRASP_QUAT),
         Node("microwave-opened", MICRO_OPENED, "open", micro_quat(MICRO_ANGLES[-1])),
+        *KETTLE_NODES,
     )
 }
 
 
 def _at(node: str, **kw: Any) -> Waypoint:
-    n = NODES[node]
-    return Waypoint(n.position, n.gripper, orientation=n.orientation, **kw)
-
-
-_NO_PRE: frozenset[str] = frozenset()
+    """``poses.at`` one of ``NODES``."""
+    return at(NODES[node], **kw)
 
 
 def _movement(name: str, start: str, end: str, start_facts: tuple[str, ...] = ()) -> SkillSpec:
-    """A movement skill from node ``start`` to node ``end``, recorded in a world where
-    ``start_facts`` hold (made by the adapter's set-ups: e.g. the microwave opened)."""
-    return SkillSpec(
-        name=name,
-        kind=MOVEMENT,
-        start=start,
-        end=end,
-        waypoints=(_at(end, steps=MOVE_STEPS),),
-        preconditions=frozenset({"hand-empty"}),
-        start_facts=frozenset(start_facts),
-        script=SCRIPT,
-        max_steps=MOVE_MAX_STEPS,
-        start_radius=MOVE_START_RADIUS,
-        start_angle=MOVE_START_ANGLE,
-    )
-
-
-MOVE_STEPS = 36
-"""Algorithm 1's budget for a movement: the longest noise-free one (home to the slide
-cabinet, 0.68 m) takes 27 steps (the servos cover 60-80 % of a 4 cm command per step)."""
-MOVE_MAX_STEPS = 50
-MOVE_START_RADIUS = 0.04
-MOVE_START_ANGLE = 0.1
-"""Random starts of movements: within 4 cm and 0.1 rad of their start node (a skill ends
-within its 3 cm tolerance of its end node)."""
+    """``poses.movement`` between two of ``NODES``."""
+    return movement(name, NODES[start], NODES[end], start_facts)
 
 
 def _turn_knob(name: str, level: str, z: float, on: str, off: str) -> SkillSpec:
@@ -260,6 +236,11 @@ SKILLS: tuple[SkillSpec, ...] = (
     _movement("move-top-knob-to-home", "top-knob-turned", "home", ("top-burner-on",)),
     # Direct movements along the tour microwave, kettle, bottom burner, top burner, light
     # switch, slide cabinet: D4RL's goal sets in that order need no detour through home.
+    _movement("move-microwave-to-kettle", "microwave-opened", "kettle-front", ("microwave-open",)),
+    _movement("move-kettle-to-light", "kettle-pushed", "light-front", ("kettle-moved",)),
+    _movement(
+        "move-kettle-to-bottom-knob", "kettle-pushed", "bottom-knob-front", ("kettle-moved",)
+    ),
     _movement("move-light-to-slide", "light-pushed", "slide-front", ("light-on",)),
     _movement(
         "move-bottom-knob-to-top-knob",
@@ -336,6 +317,7 @@ SKILLS: tuple[SkillSpec, ...] = (
         success_tolerance=0.03,
         max_steps=80,
     ),
+    *KETTLE_SKILLS,
 )
 SUBTASK_SKILLS: dict[str, str] = {
     "slide cabinet": "push-slide",
@@ -343,6 +325,7 @@ SUBTASK_SKILLS: dict[str, str] = {
     "microwave": "open-microwave",
     "bottom burner": "turn-bottom-knob",
     "top burner": "turn-top-knob",
+    "kettle": "push-kettle",
 }
 """Library task -> the skill that does it (the implemented ones)."""
 

@@ -10,10 +10,12 @@ from typing import Any
 import mujoco
 import numpy as np
 
-from osg_control.domain.spec import ScriptParams, Waypoint
+from osg_control.domain.spec import MOVEMENT, Node, ScriptParams, SkillSpec, Waypoint
 
 FORWARD = (0.5, -0.5, -0.5, -0.5)
 """Tool z along +y, fingers opening along world x: the orientation at the env's reset."""
+HOME = Node("home", (-0.432, 0.119, 2.025), "open", FORWARD)
+"""The TCP at the env's reset: every subtask's movement skills start or end here."""
 
 
 def turned(
@@ -36,3 +38,36 @@ def wp(position: tuple[float, float, float], gripper: str, **kw: Any) -> Waypoin
 
 SCRIPT = ScriptParams(threshold_mean=0.01, threshold_std=0.003, noise_std=0.005)
 """Algorithm 1 parameters shared by the skills unless tuned per skill."""
+
+
+def at(node: Node, **kw: Any) -> Waypoint:
+    """A waypoint at a node's pose and gripper state."""
+    return Waypoint(node.position, node.gripper, orientation=node.orientation, **kw)
+
+
+def movement(name: str, start: Node, end: Node, start_facts: tuple[str, ...] = ()) -> SkillSpec:
+    """A contact-free movement skill from ``start`` straight to ``end``, recorded in a world
+    where ``start_facts`` hold (made by the adapter's set-ups: e.g. the microwave opened)."""
+    return SkillSpec(
+        name=name,
+        kind=MOVEMENT,
+        start=start.name,
+        end=end.name,
+        waypoints=(at(end, steps=MOVE_STEPS),),
+        preconditions=frozenset({"hand-empty"}),
+        start_facts=frozenset(start_facts),
+        script=SCRIPT,
+        max_steps=MOVE_MAX_STEPS,
+        start_radius=MOVE_START_RADIUS,
+        start_angle=MOVE_START_ANGLE,
+    )
+
+
+MOVE_STEPS = 36
+"""Algorithm 1's budget for a movement: the longest noise-free one from home (to the slide
+cabinet, 0.68 m) takes 27 steps (the servos cover 60-80 % of a 4 cm command per step)."""
+MOVE_MAX_STEPS = 50
+MOVE_START_RADIUS = 0.04
+MOVE_START_ANGLE = 0.1
+"""Random starts of movements: within 4 cm and 0.1 rad of their start node (a skill ends
+within its 3 cm tolerance of its end node)."""
