@@ -347,13 +347,19 @@ def _setups() -> dict[str, tuple[SkillSpec, ...]]:
 SETUPS = _setups()
 
 TASKS: tuple[Task, ...] = (
-    Task("slide-cabinet", ("slide-open",), description="open the slide cabinet"),
-    Task("light-switch", ("light-on",), description="turn the light switch on"),
-    Task("open-microwave", ("microwave-open",), description="open the microwave"),
+    *(
+        Task(name.replace(" ", "-"), (TASK_FACTS[name][0],), description=f"the {name} alone")
+        for name in SUBTASK_SKILLS
+    ),
     Task(
         "kitchen-complete",
         ("microwave-open", "kettle-moved", "light-on", "slide-open"),
         description="D4RL kitchen-complete: microwave, kettle, light switch, slide cabinet",
+    ),
+    Task(
+        "kitchen-mixed",
+        ("microwave-open", "kettle-moved", "bottom-burner-on", "light-on"),
+        description="D4RL kitchen-mixed: microwave, kettle, bottom burner, light switch",
     ),
 )
 START_WORLD: tuple[str, ...] = ("hand-empty", *(pair[1] for pair in TASK_FACTS.values()))

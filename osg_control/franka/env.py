@@ -55,7 +55,7 @@ REFERENCE_QUAT = (0.5, -0.5, -0.5, -0.5)
 orientation at the env's reset)."""
 ACTION_SCALE = 2.0
 """The env's joint speed [rad/s] for an action of 1 (``FrankaRobot.act_rng``)."""
-SETUP_ATTEMPTS = 3
+SETUP_ATTEMPTS = 5
 """How often ``reset`` retries a skill's set-up (a noisy script) before giving up."""
 MODEL_FILE = "envs/assets/kitchen_franka/kitchen_assets/kitchen_env_model.xml"
 
@@ -431,25 +431,27 @@ class FrankaKitchenAdapter(gym.Env):
             position, rotation = sample_start_pose(
                 self.np_random, centre, radius, angle, quat_rotation(node.orientation)
             )
-            self.drive_to(
-                position,
-                rotation,
-                node.gripper,
-                max_steps=int(options.get("max_steps", 40)),
-            )
+            skill, self.skill = self.skill, None  # the drive is not the skill's episode
+            try:
+                self.drive_to(
+                    position, rotation, node.gripper, max_steps=int(options.get("max_steps", 40))
+                )
+            finally:
+                self.skill = skill
         self._steps = 0
         return self.observe(), self._info(self.world_state())
 
     def _set_up(self, facts: frozenset[str], seed: int | None) -> None:
-        """Make ``facts`` hold by running their set-up skills' own Algorithm 1 scripts
-        (``setups``) through the env's own steps, from the env's reset; a set-up that does
-        not end at its last skill's end node with the fact holding is run again from a new
-        reset, up to ``SETUP_ATTEMPTS`` times.
+        """Make ``facts`` hold by running their set-up skills' scripts (``setups``) through
+        the env's own steps from the env's reset: first noise-free, then, if a fact still
+        does not hold, with the scripts' own Algorithm 1 noise from a new reset, up to
+        ``SETUP_ATTEMPTS`` attempts in all.
 
         Raises:
             SimulationError: a fact has no set-up, or no attempt made it hold.
         """
         from osg_control.data.scripted import ScriptedPolicy
+        from osg_control.domain.spec import ScriptParams
 
         missing = sorted(facts - self.facts())
         unknown = [f for f in missing if f not in self.setups]
@@ -457,25 +459,27 @@ class FrankaKitchenAdapter(gym.Env):
             raise SimulationError(f"no set-up makes start fact(s) {unknown} hold")
         skill, self.skill = self.skill, None
         try:
-            for attempt in range(SETUP_ATTEMPTS):
+            for attempt in range(SETUP_ATTEMPTS if missing else 0):
                 if attempt:
                     self.env.reset(seed=seed)
                     self._gripper_cmd = GRIPPER_OPEN_CMD
-                ok = True
                 for fact in missing:
                     for setup in self.setups[fact]:
-                        policy = ScriptedPolicy(setup, self._rng, bounds=ACTION_BOUNDS)
+                        params = ScriptParams(threshold_std=0.0, noise_std=0.0)
+                        policy = ScriptedPolicy(
+                            setup, self._rng, None if attempt else params, ACTION_BOUNDS
+                        )
                         policy.reset()
                         obs = self.observe()
                         while not policy.done and not self.skill_success(setup):
                             obs = self.step(policy(obs))[0]
-                        ok = ok and self.skill_success(setup)
-                if ok and not (set(missing) - self.facts()):
+                if not set(missing) - self.facts():
                     return
-            raise SimulationError(
-                f"set-ups {[s.name for f in missing for s in self.setups[f]]} did not make "
-                f"{missing} hold in {SETUP_ATTEMPTS} attempts"
-            )
+            if missing:
+                raise SimulationError(
+                    f"set-ups {[s.name for f in missing for s in self.setups[f]]} did not "
+                    f"make {missing} hold in {SETUP_ATTEMPTS} attempts"
+                )
         finally:
             self.skill = skill
 
