@@ -9,8 +9,8 @@ Poses are in the env's world frame. The tool points along +y at the env's reset
 (``FORWARD``: tool z +y, fingers opening along x); the kettle is grasped from above
 (not yet implemented).
 
-Implemented subtasks: slide cabinet, light switch, microwave, bottom and top burner (see
-``SUBTASK_SKILLS``); the kettle and hinge cabinet are not yet (their facts exist).
+Implemented subtasks: slide cabinet, light switch, microwave, bottom and top burner, hinge
+cabinet (``hinge.py``; see ``SUBTASK_SKILLS``); the kettle is not yet (its facts exist).
 """
 
 from __future__ import annotations
@@ -20,9 +20,10 @@ from typing import Any
 import numpy as np
 
 from osg_control.domain.base import Domain, StartRegion, Task
-from osg_control.domain.spec import MOVEMENT, Node, SkillSpec, Waypoint
+from osg_control.domain.spec import Node, SkillSpec, Waypoint
 from osg_control.errors import DomainError
-from osg_control.franka.poses import FORWARD, SCRIPT, turned, wp
+from osg_control.franka.hinge import HINGE_NODES, HINGE_SKILLS
+from osg_control.franka.poses import FORWARD, HOME, SCRIPT, movement, turned, wp
 
 GRASP_FORCE = 1.0
 """Both fingers pressing harder than this [N] count as a grasp."""
@@ -149,7 +150,7 @@ def _knob_front(z: float, side: int) -> tuple[float, float, float]:
 NODES: dict[str, Node] = {
     n.name: n
     for n in (
-        _node("home", (-0.432, 0.119, 2.025)),
+        HOME,
         _node("slide-front", (-0.17, 0.50, SLIDE_Z), "closed"),
         _node("slide-pushed", (0.08, 0.50, SLIDE_Z), "closed"),
         _node("light-front", (-0.31, 0.52, LIGHT_Z), "closed"),
@@ -169,6 +170,7 @@ NODES: dict[str, Node] = {
             "open",
             micro_quat(MICRO_ANGLES[-1]),
         ),
+        *HINGE_NODES,
     )
 }
 
@@ -181,18 +183,9 @@ def _at(node: str, **kw: Any) -> Waypoint:
 _NO_PRE: frozenset[str] = frozenset()
 
 
-def _movement(name: str, start: str, end: str, via: tuple[float, float, float] | None = None):
-    points = [wp(via, NODES[end].gripper, steps=15)] if via else []
-    return SkillSpec(
-        name=name,
-        kind=MOVEMENT,
-        start=start,
-        end=end,
-        waypoints=(*points, _at(end, steps=25)),
-        preconditions=frozenset({"hand-empty"}),
-        script=SCRIPT,
-        max_steps=40,
-    )
+def _movement(name: str, start: str, end: str) -> SkillSpec:
+    """A contact-free move between two of ``NODES`` (``poses.movement``)."""
+    return movement(name, start, NODES[end])
 
 
 def _turn_knob(name: str, level: str, z: float, on: str, off: str) -> SkillSpec:
@@ -308,6 +301,7 @@ SKILLS: tuple[SkillSpec, ...] = (
         success_tolerance=0.03,
         max_steps=80,
     ),
+    *HINGE_SKILLS,
 )
 SUBTASK_SKILLS: dict[str, str] = {
     "slide cabinet": "push-slide",
@@ -315,6 +309,7 @@ SUBTASK_SKILLS: dict[str, str] = {
     "microwave": "open-microwave",
     "bottom burner": "turn-bottom-knob",
     "top burner": "turn-top-knob",
+    "hinge cabinet": "open-hinge",
 }
 """Library task -> the skill that does it (the implemented ones)."""
 

@@ -10,10 +10,12 @@ from typing import Any
 import mujoco
 import numpy as np
 
-from osg_control.domain.spec import ScriptParams, Waypoint
+from osg_control.domain.spec import MOVEMENT, Node, ScriptParams, SkillSpec, Waypoint
 
 FORWARD = (0.5, -0.5, -0.5, -0.5)
 """Tool z along +y, fingers opening along world x: the orientation at the env's reset."""
+HOME = Node("home", (-0.432, 0.119, 2.025), "open", FORWARD)
+"""The TCP at the env's reset: every subtask's movement skills start or end here."""
 
 
 def turned(
@@ -36,3 +38,23 @@ def wp(position: tuple[float, float, float], gripper: str, **kw: Any) -> Waypoin
 
 SCRIPT = ScriptParams(threshold_mean=0.01, threshold_std=0.003, noise_std=0.005)
 """Algorithm 1 parameters shared by the skills unless tuned per skill."""
+
+
+def at(node: Node, **kw: Any) -> Waypoint:
+    """A waypoint at ``node``'s pose and gripper state."""
+    return Waypoint(node.position, node.gripper, orientation=node.orientation, **kw)
+
+
+def movement(name: str, start: str, end: Node, steps: int = 25) -> SkillSpec:
+    """A contact-free move, the hand empty, from the node named ``start`` to ``end`` in a
+    budget of ``steps`` (a learned policy gets 15 more)."""
+    return SkillSpec(
+        name=name,
+        kind=MOVEMENT,
+        start=start,
+        end=end.name,
+        waypoints=(at(end, steps=steps),),
+        preconditions=frozenset({"hand-empty"}),
+        script=SCRIPT,
+        max_steps=steps + 15,
+    )
