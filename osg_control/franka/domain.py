@@ -23,6 +23,7 @@ from osg_control.domain.base import Domain, StartRegion, Task
 from osg_control.domain.benchmark import Benchmark
 from osg_control.domain.spec import MOVEMENT, Node, SkillSpec, Waypoint
 from osg_control.errors import DomainError
+from osg_control.franka.hinge import HINGE_NODES, HINGE_SKILLS
 from osg_control.franka.kettle import KETTLE_NODES, KETTLE_SKILLS
 from osg_control.franka.poses import FORWARD, HOME, SCRIPT, at, movement, turned, wp
 
@@ -172,6 +173,7 @@ NODES: dict[str, Node] = {
         Node("top-knob-turned", _knob_front(TOP_KNOB_Z, 1), "closed", KNOB_GRASP_QUAT),
         Node("microwave-opened", MICRO_OPENED, "open", micro_quat(MICRO_ANGLES[-1])),
         *KETTLE_NODES,
+        *HINGE_NODES,
     )
 }
 
@@ -242,6 +244,7 @@ SKILLS: tuple[SkillSpec, ...] = (
         "move-kettle-to-bottom-knob", "kettle-pushed", "bottom-knob-front", ("kettle-moved",)
     ),
     _movement("move-light-to-slide", "light-pushed", "slide-front", ("light-on",)),
+    _movement("move-slide-to-hinge", "slide-pushed", "hinge-front", ("slide-open",)),
     _movement(
         "move-bottom-knob-to-top-knob",
         "bottom-knob-turned",
@@ -318,6 +321,7 @@ SKILLS: tuple[SkillSpec, ...] = (
         max_steps=80,
     ),
     *KETTLE_SKILLS,
+    *HINGE_SKILLS,
 )
 SUBTASK_SKILLS: dict[str, str] = {
     "slide cabinet": "push-slide",
@@ -326,6 +330,7 @@ SUBTASK_SKILLS: dict[str, str] = {
     "bottom burner": "turn-bottom-knob",
     "top burner": "turn-top-knob",
     "kettle": "push-kettle",
+    "hinge cabinet": "open-hinge",
 }
 """Library task -> the skill that does it (the implemented ones)."""
 
