@@ -125,3 +125,46 @@ def test_bad_input_is_refused(adapter) -> None:
         FrankaKitchenAdapter(gym.make("CartPole-v1"), {}, None, None)
     with pytest.raises(ValueError, match="cannot be found"):
         gym.make("FrankaKitchen-v1", tasks_to_complete=["toaster"])
+
+
+def test_reward_is_the_skills_own_and_completions_are_the_envs() -> None:
+    """With a skill the reward is its sparse beta reward; the env's own task reward and
+    completions are kept in ``info``; the adapter's own step limit counts from the start."""
+    from osg_control.data.scripted import ScriptedPolicy
+    from osg_control.domain.spec import ScriptParams
+
+    env = make_franka_env(skill="push-light", tasks=["light switch", "microwave"], step_limit=50)
+    obs, _ = env.reset(seed=0)
+    policy = ScriptedPolicy(
+        env.skill, np.random.default_rng(0), ScriptParams(threshold_std=0, noise_std=0)
+    )
+    policy.reset()
+    rewards, env_rewards = [], []
+    truncated = terminated = False
+    while not (terminated or truncated):
+        obs, reward, terminated, truncated, info = env.step(policy(obs))
+        rewards.append(reward)
+        env_rewards.append(info["env_reward"])
+    # The env rewarded the light switch once, some steps before the skill reached its end.
+    assert sum(env_rewards) == 1.0 and env.completed_tasks() == ["light switch"]
+    assert rewards[-1] == 1.0 and sum(rewards) == 1.0
+    assert env_rewards.index(1.0) < len(rewards) - 1
+    env.close()
+    limited = make_franka_env(tasks=["light switch"], step_limit=3)
+    limited.reset(seed=0, options={"node": "light-front"})  # the drive is not counted
+    flags = [limited.step(np.zeros(7))[3] for _ in range(3)]
+    assert flags == [False, False, True] and limited.steps == 3
+    limited.close()
+
+
+def test_reset_sets_up_a_skills_start_facts_through_the_envs_steps() -> None:
+    """``move-microwave-to-home`` is recorded with the microwave open: the reset opens it
+    with the set-up scripts, then starts within the skill's start radius of its node."""
+    env = make_franka_env(skill="move-microwave-to-home")
+    obs, info = env.reset(seed=0, options={"radius": 0.04, "angle": 0.1})
+    assert "microwave-open" in info["world_facts"]
+    assert env.completed_tasks() == ["microwave"]
+    start = np.asarray(env.nodes["microwave-opened"].position)
+    assert np.linalg.norm(obs[:3] - start) < 0.04 + 0.015
+    assert env.steps == 0
+    env.close()

@@ -9,6 +9,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
+import numpy as np
 import torch
 from tqdm import tqdm
 
@@ -96,8 +97,11 @@ def skill_names(domain: Domain, selection: str) -> list[str]:
     return [domain.skill(selection).name]
 
 
-def load_skill_input(data_dir: Path, name: str, config: TD3BCConfig) -> SkillInput:
-    """Load and normalise ``<data_dir>/<name>.h5`` (observation eps from ``config``).
+def load_skill_input(
+    data_dir: Path, name: str, config: TD3BCConfig, action_scale: np.ndarray = ACTION_SCALE
+) -> SkillInput:
+    """Load and normalise ``<data_dir>/<name>.h5`` (observation eps from ``config``, actions
+    per ``action_scale``: the domain's ``action_bounds``).
 
     Raises:
         DatasetError: naming the file: missing, malformed, recorded for another skill, or
@@ -111,7 +115,7 @@ def load_skill_input(data_dir: Path, name: str, config: TD3BCConfig) -> SkillInp
         raise DatasetError(f"{path}: invalid skill attribute ({err})") from err
     if spec.name != name:
         raise DatasetError(f"{path}: recorded for skill {spec.name!r}, not {name!r}")
-    data = prepare_skill_data(dataset, ACTION_SCALE, config.obs_norm_eps)
+    data = prepare_skill_data(dataset, action_scale, config.obs_norm_eps)
     return SkillInput(spec, data, path, sha256_file(path))
 
 
@@ -223,7 +227,8 @@ def run(args: argparse.Namespace) -> int:
     out_dir = check_output_dir(
         args.out or cache_dir() / domain.name / "skills", "checkpoint folder"
     )
-    inputs = [load_skill_input(data_dir, n, config) for n in names]
+    bounds = np.asarray(domain.action_bounds, dtype=np.float32)
+    inputs = [load_skill_input(data_dir, n, config, bounds) for n in names]
     seeds = [skill_seed(args.seed, name) for name in names]
     replay = BatchedReplay([i.data for i in inputs], config.batch_size, seeds, args.device)
     trainer = TD3BC(config, seeds, device=args.device)

@@ -94,6 +94,9 @@ class Domain:
             ``osg_control.evaluation.report.PUBLISHED_KEYS``).
         benchmark: an outside benchmark's protocol on this domain's env (``osg evaluate
             benchmark``), if any.
+        action_bounds: the per-step bound of each of the 7 action components (m, rad,
+            gripper); its env clips to them and training scales by them (default: the
+            core's ``ArmEnv``'s 2 cm and 0.1 rad).
     """
 
     name: str
@@ -114,6 +117,7 @@ class Domain:
     env_id: str | None = None
     published: Mapping[str, Any] = field(default_factory=dict)
     benchmark: Benchmark | None = None
+    action_bounds: tuple[float, ...] = (0.02, 0.02, 0.02, 0.1, 0.1, 0.1, 1.0)
     skills_by_name: dict[str, SkillSpec] = field(init=False, repr=False, compare=False)
 
     def __post_init__(self) -> None:
@@ -260,6 +264,12 @@ def validate_domain(domain: Domain) -> None:
             raise DomainError(f"{where}: task {task.name!r} names unknown node {task.node!r}")
     for region in domain.start_regions:
         _check_facts(where, f"start_regions[{region.name}].facts", region.facts, facts)
+    bounds = np.asarray(domain.action_bounds, dtype=float)
+    if bounds.shape != (7,) or not (np.all(np.isfinite(bounds)) and np.all(bounds > 0)):
+        raise DomainError(
+            f"{where}: field 'action_bounds' must be 7 positive finite numbers, got "
+            f"{domain.action_bounds!r}"
+        )
     if domain.benchmark is not None:
         validate_benchmark(domain.benchmark, domain.facts, where)
 

@@ -42,8 +42,9 @@ from osg_control.environment.arm_env import GRIPPER_CLOSED_CMD, GRIPPER_OPEN_CMD
 from osg_control.environment.options import check_start_options
 from osg_control.environment.poses import quat_rotation, sample_start_pose
 from osg_control.errors import DomainError, SimulationError
+from osg_control.franka import poses
 
-ACTION_BOUNDS = np.array([0.04, 0.04, 0.04, 0.2, 0.2, 0.2, 1.0])
+ACTION_BOUNDS = np.array(poses.ACTION_BOUNDS)
 """Per-step bound of each action component: 4 cm, 0.2 rad (per 80 ms step), gripper."""
 ARM_JOINTS = tuple(f"robot:panda0_joint{i}" for i in range(1, 8))
 FINGER_JOINTS = ("robot:panda0_finger_joint1", "robot:panda0_finger_joint2")
@@ -557,7 +558,8 @@ class FrankaKitchenAdapter(gym.Env):
     def _env_step(
         self, env_action: np.ndarray, applied: np.ndarray
     ) -> tuple[np.ndarray, float, bool, bool, dict[str, Any]]:
-        _obs, reward, terminated, truncated, env_info = self.env.step(env_action)
+        _obs, env_reward, terminated, truncated, env_info = self.env.step(env_action)
+        reward = float(env_reward)
         self.last_env_info = dict(env_info)
         self._steps += 1
         world = self.world_state()
@@ -571,7 +573,7 @@ class FrankaKitchenAdapter(gym.Env):
                 self._succeeded = True
                 reward = 1.0
         info = self._info(world)
-        info["env_reward"] = float(reward)
+        info["env_reward"] = float(env_reward)
         info["env_info"] = self.last_env_info
         info["action_applied"] = applied
         if failure is not None:

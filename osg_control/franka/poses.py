@@ -12,6 +12,9 @@ import numpy as np
 
 from osg_control.domain.spec import MOVEMENT, Node, ScriptParams, SkillSpec, Waypoint
 
+ACTION_BOUNDS = (0.04, 0.04, 0.04, 0.2, 0.2, 0.2, 1.0)
+"""Per-step bound of each action component: 4 cm, 0.2 rad (per 80 ms step), gripper (see
+``osg_control.franka.env``: the 2 cm of the core's own kitchen is too slow here)."""
 FORWARD = (0.5, -0.5, -0.5, -0.5)
 """Tool z along +y, fingers opening along world x: the orientation at the env's reset."""
 HOME = Node("home", (-0.432, 0.119, 2.025), "open", FORWARD)
@@ -45,28 +48,37 @@ def at(node: Node, **kw: Any) -> Waypoint:
     return Waypoint(node.position, node.gripper, orientation=node.orientation, **kw)
 
 
-def movement(name: str, start: Node, end: Node, start_facts: tuple[str, ...] = ()) -> SkillSpec:
+def movement(
+    name: str,
+    start: Node,
+    end: Node,
+    start_facts: tuple[str, ...] = (),
+    steps: int | None = None,
+) -> SkillSpec:
     """A contact-free movement skill from ``start`` straight to ``end``, recorded in a world
-    where ``start_facts`` hold (made by the adapter's set-ups: e.g. the microwave opened)."""
+    where ``start_facts`` hold (made by the adapter's set-ups: e.g. the microwave opened);
+    Algorithm 1's budget ``steps`` (default ``MOVE_STEPS``)."""
+    budget = steps or MOVE_STEPS
     return SkillSpec(
         name=name,
         kind=MOVEMENT,
         start=start.name,
         end=end.name,
-        waypoints=(at(end, steps=MOVE_STEPS),),
+        waypoints=(at(end, steps=budget),),
         preconditions=frozenset({"hand-empty"}),
         start_facts=frozenset(start_facts),
         script=SCRIPT,
-        max_steps=MOVE_MAX_STEPS,
+        max_steps=budget + MOVE_MAX_STEPS - MOVE_STEPS,
         start_radius=MOVE_START_RADIUS,
         start_angle=MOVE_START_ANGLE,
     )
 
 
-MOVE_STEPS = 36
-"""Algorithm 1's budget for a movement: the longest noise-free one from home (to the slide
-cabinet, 0.68 m) takes 27 steps (the servos cover 60-80 % of a 4 cm command per step)."""
-MOVE_MAX_STEPS = 50
+MOVE_STEPS = 45
+"""Algorithm 1's budget for a movement: from home to the slide cabinet (0.68 m) takes 27
+steps noise-free (the servos cover 60-80 % of a 4 cm command per step, and the joints'
+2 rad/s binds on long moves). The one longer move sets its own."""
+MOVE_MAX_STEPS = 60
 MOVE_START_RADIUS = 0.04
 MOVE_START_ANGLE = 0.1
 """Random starts of movements: within 4 cm and 0.1 rad of their start node (a skill ends
