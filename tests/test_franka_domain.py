@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from dataclasses import replace
+
 import numpy as np
 import pytest
 
@@ -20,6 +22,7 @@ from osg_control.franka.domain import (  # noqa: E402
     franka_domain,
     make_franka_env,
 )
+from osg_control.franka.poses import SCRIPT  # noqa: E402
 
 NOISE_FREE = ScriptParams(threshold_mean=0.01, threshold_std=0.0, noise_mean=0.0, noise_std=0.0)
 
@@ -115,12 +118,13 @@ def test_kettle_skills_chain_from_reset_and_leave_it_upright() -> None:
 
 
 def test_push_kettle_under_algorithm1_noise_leaves_it_upright() -> None:
-    """The core collector's episodes (the skill's own noise) move the kettle, not tip it."""
+    """The core collector's episodes under 5 mm action noise move the kettle, not tip it."""
     from osg_control.data.collect import run_scripted_episode
 
     register_domain("franka-kitchen", franka_domain)
     domain = get_domain("franka-kitchen")
-    skill = domain.skill("push-kettle")
+    # At 5 mm of action noise (the tuned sigma_2 is higher, to bring the script to 40-50 %).
+    skill = replace(domain.skill("push-kettle"), script=SCRIPT)
     for index in range(4):
         world = run_scripted_episode(domain, skill, 0, index).world_states[-1]
         assert "kettle-moved" in domain.facts_of(world)

@@ -15,6 +15,7 @@ Implemented subtasks: slide cabinet, light switch, microwave, bottom and top bur
 
 from __future__ import annotations
 
+from dataclasses import replace
 from typing import Any
 
 import numpy as np
@@ -322,6 +323,44 @@ SKILLS: tuple[SkillSpec, ...] = (
     ),
     *KETTLE_SKILLS,
     *HINGE_SKILLS,
+)
+NOISE_STD: dict[str, float] = {
+    "move-home-to-slide": 0.0123,
+    "move-slide-to-home": 0.0137,
+    "move-home-to-light": 0.0153,
+    "move-light-to-home": 0.0200,
+    "move-home-to-microwave": 0.0200,
+    "move-microwave-to-home": 0.0200,
+    "move-home-to-bottom-knob": 0.0171,
+    "move-bottom-knob-to-home": 0.0171,
+    "move-home-to-top-knob": 0.0171,
+    "move-top-knob-to-home": 0.0171,
+    "move-microwave-to-kettle": 0.0200,
+    "move-light-to-slide": 0.0181,
+    "move-bottom-knob-to-top-knob": 0.0200,
+    "move-bottom-knob-to-light": 0.0200,
+    "move-top-knob-to-light": 0.0200,
+    "turn-bottom-knob": 0.0041,
+    "turn-top-knob": 0.0054,
+    "push-slide": 0.0050,
+    "push-light": 0.0109,
+    "open-microwave": 0.0109,
+    "move-home-to-kettle": 0.0200,
+    "move-kettle-to-home": 0.0200,
+    "push-kettle": 0.0148,
+    "move-home-to-hinge": 0.0118,
+    "move-hinge-to-home": 0.0200,
+    "open-hinge": 0.0093,
+}
+"""Algorithm 1's action noise sigma_2 [m] per skill (orientation noise scales with it):
+bisected by ``tools/tune_scripts.py --domain franka-kitchen --episodes 30 --rounds 6
+--high 60`` so that the scripted success rate lies in 40-50 %, capped at ``NOISE_CAP``
+(half the 4 cm bound). Ten movements stay above the band at the cap (they need 2.2-5.5 cm
+to drop to it: their step budgets leave a wide margin); see docs/franka-kitchen.md."""
+NOISE_CAP = 0.02
+SKILLS = tuple(
+    replace(s, script=replace(s.script, noise_std=min(NOISE_STD[s.name], NOISE_CAP)))
+    for s in SKILLS
 )
 SUBTASK_SKILLS: dict[str, str] = {
     "slide cabinet": "push-slide",
