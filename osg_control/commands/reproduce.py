@@ -157,20 +157,24 @@ def run(args: argparse.Namespace) -> int:
     )
     stage(
         "train",
-        lambda: cli(
-            "train",
-            "--skill",
-            "all",
-            "--steps",
-            str(scale.train_steps),
-            "--seed",
-            seed,
-            "--data",
-            str(data),
-            "--out",
-            str(defaults / "skills"),
-            "--threads",
-            "2",
+        lambda: (
+            None
+            if trained_already(domain, data, defaults / "skills", scale.train_steps, args.seed)
+            else cli(
+                "train",
+                "--skill",
+                "all",
+                "--steps",
+                str(scale.train_steps),
+                "--seed",
+                seed,
+                "--data",
+                str(data),
+                "--out",
+                str(defaults / "skills"),
+                "--threads",
+                "2",
+            )
         ),
     )
     stage(
@@ -235,6 +239,32 @@ def run(args: argparse.Namespace) -> int:
     if args.check:
         return check_against_shipped(domain, figures, args.json)
     return 0
+
+
+def trained_already(domain: Domain, data: Path, skills: Path, steps: int, seed: int) -> bool:
+    """Whether ``skills`` holds every skill's checkpoint trained by this stage's command on
+    these very data sets (steps, seed, spec and the data set's sha256 in its sidecar): a
+    rerun into the same ``--out`` then keeps them, as collection keeps finished data sets."""
+    for skill in domain.skills:
+        sidecar = skills / f"{skill.name}.json"
+        try:
+            meta = json.loads(sidecar.read_text())
+        except (OSError, ValueError):
+            return False
+        expected = {
+            "steps": steps,
+            "seed": seed,
+            "skill_spec": json.loads(skill.to_json()),
+        }
+        try:
+            expected["dataset_sha256"] = sha256_file(data / f"{skill.name}.h5")
+        except OSError:
+            return False
+        if not isinstance(meta, dict) or any(meta.get(k) != v for k, v in expected.items()):
+            return False
+        if not (skills / f"{skill.name}.safetensors").exists():
+            return False
+    return True
 
 
 def _write_manifest(defaults: Path, manifest: dict[str, Any]) -> None:
