@@ -37,7 +37,8 @@ def _shared_nodes(a: SkillSpec, b: SkillSpec) -> int:
 def class_order(skills: Sequence[SkillSpec]) -> list[str]:
     """Order skills so that skills sharing a start or end node are adjacent.
 
-    Tries every permutation and keeps the best by, in turn:
+    Up to ``MAX_ORDERED_CLASSES`` skills, tries every permutation and keeps the best by,
+    in turn:
 
     1. the number of adjacent pairs that share a node;
     2. the number of nodes shared over adjacent pairs (a skill sits next to its reverse);
@@ -45,20 +46,18 @@ def class_order(skills: Sequence[SkillSpec]) -> list[str]:
        its termination pose, so skills ending together have the most similar states;
     4. the first in permutation order of ``skills`` (deterministic).
 
+    More skills than that (the permutations grow too fast) are ordered greedily: from the
+    first skill, repeatedly append the remaining one that best continues the last by the
+    same criteria for one pair (earliest in ``skills`` on ties).
+
     Args:
-        skills: the skills to order, at most ``MAX_ORDERED_CLASSES``.
+        skills: the skills to order.
 
     Returns:
         Their names in the chosen order.
-
-    Raises:
-        ValueError: for more than ``MAX_ORDERED_CLASSES`` skills.
     """
     if len(skills) > MAX_ORDERED_CLASSES:
-        raise ValueError(
-            f"class_order tries every permutation; {len(skills)} skills is too many "
-            f"(at most {MAX_ORDERED_CLASSES})"
-        )
+        return _greedy_order(skills)
 
     def score(order: tuple[SkillSpec, ...]) -> tuple[int, int, int]:
         pairs = list(itertools.pairwise(order))
@@ -68,6 +67,26 @@ def class_order(skills: Sequence[SkillSpec]) -> list[str]:
 
     best = max(itertools.permutations(skills), key=score)
     return [skill.name for skill in best]
+
+
+def _greedy_order(skills: Sequence[SkillSpec]) -> list[str]:
+    """``class_order`` for many skills: nearest-neighbour by the pairwise criteria."""
+    remaining = list(skills)
+    order = [remaining.pop(0)]
+    while remaining:
+        last = order[-1]
+        best = max(
+            remaining,
+            key=lambda s: (
+                _shared_nodes(last, s) > 0,
+                _shared_nodes(last, s),
+                last.end == s.end,
+                -remaining.index(s),
+            ),
+        )
+        remaining.remove(best)
+        order.append(best)
+    return [skill.name for skill in order]
 
 
 def movement_classes(domain: Domain) -> tuple[str, ...]:

@@ -10,7 +10,7 @@ without a ``Benchmark`` has no such verb.
 from __future__ import annotations
 
 from collections.abc import Callable, Mapping
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Any
 
 from osg_control.errors import DomainError, lookup
@@ -35,6 +35,8 @@ class Benchmark:
         make_env: the env factory (see ``BenchmarkEnvFactory``).
         points: the score of an episode that completes every task of its goal set; each
             task done is worth ``points / len(tasks)`` (D4RL's kitchen: 100, 25 per task).
+        published: method -> goal set -> its published score, shown beside ours.
+        published_note: where those figures come from and how their protocol differs.
     """
 
     name: str
@@ -44,6 +46,8 @@ class Benchmark:
     step_limit: int
     make_env: BenchmarkEnvFactory
     points: float = 100.0
+    published: Mapping[str, Mapping[str, float]] = field(default_factory=dict)
+    published_note: str = ""
 
     def tasks_of(self, goal_set: str) -> tuple[str, ...]:
         """The env tasks of a goal set.

@@ -182,6 +182,10 @@ def run_benchmark(
         "filter_gain": filter_gain,
         "max_replans": max_replans,
         "failures": dict(sorted(failures.items(), key=lambda kv: -kv[1])),
+        "published": {
+            method: scores[name] for method, scores in bench.published.items() if name in scores
+        },
+        "published_note": bench.published_note,
     }
 
 
@@ -205,4 +209,8 @@ def format_benchmark(summary: dict[str, Any]) -> str:
     lines += [f"  {task:16s} {rate:.3f}" for task, rate in summary["task_rates"].items()]
     for failure, count in list(summary["failures"].items())[:5]:
         lines.append(f"  failure x{count}: {failure}")
+    if summary.get("published"):
+        scores = ", ".join(f"{m} {s:g}" for m, s in summary["published"].items())
+        lines.append(f"  published on {summary['goal_set']}: {scores}")
+        lines.append(f"    ({summary['published_note']})")
     return "\n".join(lines)
