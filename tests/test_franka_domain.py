@@ -16,7 +16,7 @@ from osg_control.domain.registry import get_domain, register_domain  # noqa: E40
 from osg_control.domain.spec import ScriptParams  # noqa: E402
 from osg_control.errors import DomainError  # noqa: E402
 from osg_control.franka.domain import (  # noqa: E402
-    SUBTASK_SKILLS,
+    SUBTASK_CHAINS,
     TASK_FACTS,
     facts_of,
     franka_domain,
@@ -32,8 +32,8 @@ def test_domain_registers_and_validates() -> None:
     domain = get_domain("franka-kitchen")
     assert set(TASK_FACTS) == set(kitchen_env.OBS_ELEMENT_GOALS)
     assert len(domain.world_fields) == 22
-    for task, skill in SUBTASK_SKILLS.items():
-        assert TASK_FACTS[task][0] in domain.skill(skill).add_effects
+    for task, chain in SUBTASK_CHAINS.items():
+        assert any(TASK_FACTS[task][0] in domain.skill(s).add_effects for s in chain)
     assert domain.movement_skills
 
 
@@ -50,22 +50,28 @@ def test_reset_world_facts() -> None:
     env.close()
 
 
-@pytest.mark.parametrize("task", sorted(SUBTASK_SKILLS))
-def test_noise_free_scripted_skill_completes_its_task(task: str) -> None:
-    env = make_franka_env(skill=SUBTASK_SKILLS[task], tasks=[task])
-    obs, info = env.reset(seed=0)
-    assert env.skill.start in {n for n in env.nodes}
-    assert np.linalg.norm(obs[:3] - env.nodes[env.skill.start].position) < 0.02
-    policy = ScriptedPolicy(env.skill, np.random.default_rng(0), NOISE_FREE, env.action_bounds)
-    policy.reset()
-    steps, terminated, truncated = 0, False, False
-    while not (policy.done or terminated or truncated):
-        obs, reward, terminated, truncated, info = env.step(policy(obs))
-        steps += 1
+@pytest.mark.parametrize("task", sorted(SUBTASK_CHAINS))
+def test_noise_free_scripted_skills_complete_their_task(task: str) -> None:
+    """From the env's reset, driven to the subtask's first start node, its skills' scripts
+    one after another: each reaches its end node and the env itself records the task."""
+    domain = franka_domain()
+    chain = [domain.skill(name) for name in SUBTASK_CHAINS[task]]
+    env = make_franka_env(tasks=[task, "microwave" if task != "microwave" else "kettle"])
+    obs, info = env.reset(seed=0, options={"node": chain[0].start})
+    assert np.linalg.norm(obs[:3] - env.nodes[chain[0].start].position) < 0.02
+    steps = 0
+    for skill in chain:
+        policy = ScriptedPolicy(skill, np.random.default_rng(0), NOISE_FREE, env.action_bounds)
+        policy.reset()
+        while not (policy.done or env.skill_success(skill)):
+            obs, _reward, _terminated, truncated, info = env.step(policy(obs))
+            steps += 1
+            assert not truncated
+        assert env.skill_success(skill), f"{skill.name} ended at {obs[:3]}, not {skill.end}"
     # The env's own bookkeeping says the task is done, and our fact (its rule) agrees.
     assert info["episode_task_completions"] == [task]
-    assert terminated and steps < 60
     assert TASK_FACTS[task][0] in facts_of(info["world"])
+    assert steps < 70
     env.close()
 
 

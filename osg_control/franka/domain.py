@@ -6,11 +6,12 @@ holds: ``norm(qpos[OBS_ELEMENT_INDICES[t]] - OBS_ELEMENT_GOALS[t]) < BONUS_THRES
 (constants imported from ``gymnasium_robotics``, not copied).
 
 Poses are in the env's world frame. The tool points along +y at the env's reset
-(``FORWARD``: tool z +y, fingers opening along x); the kettle is grasped from above
-(not yet implemented).
+(``FORWARD``: tool z +y, fingers opening along x).
 
-Implemented subtasks: slide cabinet, light switch, microwave, bottom and top burner (see
-``SUBTASK_SKILLS``); the kettle and hinge cabinet are not yet (their facts exist).
+All seven subtasks have skills (``SUBTASK_CHAINS``): pushes for the slide cabinet, light
+switch and kettle (``osg_control.franka.kettle``), swept pushes for the burner knobs, and
+grasp / pull / release for the microwave and the hinge cabinet
+(``osg_control.franka.hinge``); movements join them through ``home`` and along a tour.
 """
 
 from __future__ import annotations
@@ -26,7 +27,17 @@ from osg_control.domain.spec import MOVEMENT, Node, SkillSpec, Waypoint
 from osg_control.errors import DomainError
 from osg_control.franka.hinge import HINGE_NODES, HINGE_SKILLS
 from osg_control.franka.kettle import KETTLE_NODES, KETTLE_SKILLS
-from osg_control.franka.poses import ACTION_BOUNDS, FORWARD, HOME, SCRIPT, at, movement, turned, wp
+from osg_control.franka.poses import (
+    ACTION_BOUNDS,
+    FORWARD,
+    HOME,
+    SCRIPT,
+    at,
+    grasp_pull_release,
+    movement,
+    turned,
+    wp,
+)
 from osg_control.paths import PACKAGE_DIR
 
 GRASP_FORCE = 1.0
@@ -120,6 +131,9 @@ MICRO_ANGLES = (-0.2, -0.4, -0.6)
 """Door angles [rad] of the pull's arc waypoints (done below -0.45; the library's goal is
 -0.75). Pulling on to -1.0 with the hand turning with the door put joint 6 at its limit
 and the hand left the arc."""
+MICRO_PULLED = (-0.68, 0.225, 1.81)
+"""Where the closed hand ends the pull: the arc's point at -0.6 rad, (-0.705, 0.212, 1.79),
+is 3-4 cm out of the turned hand's reach (it stops at (-0.675, 0.221, 1.821))."""
 MICRO_OPENED = (-0.62, 0.16, 1.80)
 """Where the hand ends after releasing the handle at -0.6 rad: the arc's point (-0.705,
 0.232) is out of reach with the hand turned, so the end node is where the released hand
@@ -173,6 +187,8 @@ NODES: dict[str, Node] = {
         Node("bottom-knob-turned", _knob_front(BOTTOM_KNOB_Z, 1), "closed", KNOB_GRASP_QUAT),
         Node("top-knob-front", _knob_front(TOP_KNOB_Z, -1), "closed", KNOB_GRASP_QUAT),
         Node("top-knob-turned", _knob_front(TOP_KNOB_Z, 1), "closed", KNOB_GRASP_QUAT),
+        Node("microwave-handle", micro_point(0.0), "closed", FORWARD),
+        Node("microwave-pulled", MICRO_PULLED, "closed", micro_quat(MICRO_ANGLES[-1])),
         Node("microwave-opened", MICRO_OPENED, "open", micro_quat(MICRO_ANGLES[-1])),
         *KETTLE_NODES,
         *HINGE_NODES,
@@ -295,32 +311,28 @@ SKILLS: tuple[SkillSpec, ...] = (
         success_tolerance=0.03,
         max_steps=50,
     ),
-    SkillSpec(
-        name="open-microwave",
-        kind="pull",
-        start="microwave-front",
-        end="microwave-opened",
-        waypoints=(
-            wp(micro_point(0.0), "closed", steps=15, reach=0.008),
-            *(
-                wp(micro_point(a), "closed", steps=7, reach=0.015, orientation=micro_quat(a))
-                for a in MICRO_ANGLES
-            ),
-            wp(
-                micro_point(MICRO_ANGLES[-1]),
-                "open",
-                steps=4,
-                reach=0.05,
-                orientation=micro_quat(MICRO_ANGLES[-1]),
-            ),
-            _at("microwave-opened", steps=8),
+    *grasp_pull_release(
+        "microwave",
+        (
+            NODES["microwave-front"],
+            NODES["microwave-handle"],
+            NODES["microwave-pulled"],
+            NODES["microwave-opened"],
         ),
-        preconditions=frozenset({"hand-empty", "microwave-closed"}),
-        add_effects=frozenset({"microwave-open"}),
-        del_effects=frozenset({"microwave-closed"}),
-        script=SCRIPT,
-        success_tolerance=0.03,
-        max_steps=80,
+        _at("microwave-handle", steps=15, reach=0.008),
+        tuple(
+            wp(micro_point(a), "closed", steps=7, reach=0.015, orientation=micro_quat(a))
+            for a in MICRO_ANGLES
+        ),
+        wp(
+            micro_point(MICRO_ANGLES[-1]),
+            "open",
+            steps=4,
+            reach=0.05,
+            orientation=micro_quat(MICRO_ANGLES[-1]),
+        ),
+        "microwave-closed",
+        "microwave-open",
     ),
     *KETTLE_SKILLS,
     *HINGE_SKILLS,
@@ -345,13 +357,17 @@ NOISE_STD: dict[str, float] = {
     "turn-top-knob": 0.0054,
     "push-slide": 0.0050,
     "push-light": 0.0109,
-    "open-microwave": 0.0109,
+    "grasp-microwave": 0.0109,
+    "pull-microwave": 0.0109,
+    "release-microwave": 0.0109,
     "move-home-to-kettle": 0.0200,
     "move-kettle-to-home": 0.0200,
     "push-kettle": 0.0148,
     "move-home-to-hinge": 0.0118,
     "move-hinge-to-home": 0.0200,
-    "open-hinge": 0.0093,
+    "grasp-hinge": 0.0093,
+    "pull-hinge": 0.0093,
+    "release-hinge": 0.0093,
 }
 """Algorithm 1's action noise sigma_2 [m] per skill (orientation noise scales with it):
 bisected by ``tools/tune_scripts.py --domain franka-kitchen --episodes 30 --rounds 6
@@ -363,29 +379,33 @@ SKILLS = tuple(
     replace(s, script=replace(s.script, noise_std=min(NOISE_STD[s.name], NOISE_CAP)))
     for s in SKILLS
 )
-SUBTASK_SKILLS: dict[str, str] = {
-    "slide cabinet": "push-slide",
-    "light switch": "push-light",
-    "microwave": "open-microwave",
-    "bottom burner": "turn-bottom-knob",
-    "top burner": "turn-top-knob",
-    "kettle": "push-kettle",
-    "hinge cabinet": "open-hinge",
+SUBTASK_CHAINS: dict[str, tuple[str, ...]] = {
+    "slide cabinet": ("push-slide",),
+    "light switch": ("push-light",),
+    "microwave": ("grasp-microwave", "pull-microwave", "release-microwave"),
+    "bottom burner": ("turn-bottom-knob",),
+    "top burner": ("turn-top-knob",),
+    "kettle": ("push-kettle",),
+    "hinge cabinet": ("grasp-hinge", "pull-hinge", "release-hinge"),
 }
-"""Library task -> the skill that does it (the implemented ones)."""
+"""Library task -> the skills that do it, in order, from its start node in front of it."""
 
 
 def _setups() -> dict[str, tuple[SkillSpec, ...]]:
-    """Each subtask's fact -> the movement from home to its start and the subtask skill:
-    the adapter's way to record a skill in a world where that subtask is done."""
+    """Each node a subtask's skills end at -> the skills that bring the env there from its
+    reset (the movement from home, then the subtask's skills up to that node): the
+    adapter's way to start a skill in the world it needs, through the env's own steps."""
     skills = {s.name: s for s in SKILLS}
     setups: dict[str, tuple[SkillSpec, ...]] = {}
-    for task, name in SUBTASK_SKILLS.items():
-        subtask = skills[name]
+    for names in SUBTASK_CHAINS.values():
+        chain = [skills[n] for n in names]
         approach = next(
-            s for s in SKILLS if s.kind == MOVEMENT and s.start == "home" and s.end == subtask.start
+            s
+            for s in SKILLS
+            if s.kind == MOVEMENT and s.start == "home" and s.end == chain[0].start
         )
-        setups[TASK_FACTS[task][0]] = (approach, subtask)
+        for k, skill in enumerate(chain):
+            setups[skill.end] = (approach, *chain[: k + 1])
     return setups
 
 
@@ -394,7 +414,7 @@ SETUPS = _setups()
 TASKS: tuple[Task, ...] = (
     *(
         Task(name.replace(" ", "-"), (TASK_FACTS[name][0],), description=f"the {name} alone")
-        for name in SUBTASK_SKILLS
+        for name in SUBTASK_CHAINS
     ),
     Task(
         "kitchen-complete",

@@ -262,9 +262,9 @@ class FrankaKitchenAdapter(gym.Env):
             counted) after which ``step`` reports ``truncated``; None: only the env's own
             limit.
         home: the node a ``position`` reset option draws its orientation from.
-        setups: world fact -> the skills whose noise-free scripts make it hold from the
-            env's reset (e.g. open the microwave), run by ``reset`` for a skill's
-            ``start_facts``: the env's world can only be changed through its own steps.
+        setups: node -> the skills whose scripts bring the env from its reset to that
+            node in the world a skill starting there needs (e.g. the microwave opened),
+            run by ``reset``: the env's world changes only through its own steps.
     """
 
     metadata = {"render_modes": ["rgb_array"], "render_fps": 12}
@@ -418,8 +418,8 @@ class FrankaKitchenAdapter(gym.Env):
         self._succeeded = False
         self._steps = 0
         options = dict(options or {})
-        if self.skill is not None:
-            self._set_up(self.skill.start_facts, seed)
+        if self.skill is not None and self.skill.start in self.setups:
+            self._set_up(self.skill.start, seed)
         node_name = options.get("node") or (self.skill.start if self.skill else None)
         if node_name is None and "position" in options:
             node_name = self.home
@@ -442,45 +442,44 @@ class FrankaKitchenAdapter(gym.Env):
         self._steps = 0
         return self.observe(), self._info(self.world_state())
 
-    def _set_up(self, facts: frozenset[str], seed: int | None) -> None:
-        """Make ``facts`` hold by running their set-up skills' scripts (``setups``) through
-        the env's own steps from the env's reset: first noise-free, then, if a fact still
-        does not hold, with the scripts' own Algorithm 1 noise from a new reset, up to
-        ``SETUP_ATTEMPTS`` attempts in all.
+    def _set_up(self, node: str, seed: int | None) -> None:
+        """Bring the env from its reset to ``node`` in the world a skill starting there
+        needs, by running the node's set-up skills' scripts (``setups``) through the env's
+        own steps: first noise-free, then, if a skill's effects do not hold at its end,
+        with the scripts' own Algorithm 1 noise from a new reset, up to ``SETUP_ATTEMPTS``
+        attempts in all.
 
         Raises:
-            SimulationError: a fact has no set-up, or no attempt made it hold.
+            SimulationError: no attempt gave every set-up skill its effects.
         """
         from osg_control.data.scripted import ScriptedPolicy
         from osg_control.domain.spec import ScriptParams
 
-        missing = sorted(facts - self.facts())
-        unknown = [f for f in missing if f not in self.setups]
-        if unknown:
-            raise SimulationError(f"no set-up makes start fact(s) {unknown} hold")
+        chain = self.setups[node]
         skill, self.skill = self.skill, None
         try:
-            for attempt in range(SETUP_ATTEMPTS if missing else 0):
+            for attempt in range(SETUP_ATTEMPTS):
                 if attempt:
                     self.env.reset(seed=seed)
                     self._gripper_cmd = GRIPPER_OPEN_CMD
-                for fact in missing:
-                    for setup in self.setups[fact]:
-                        params = ScriptParams(threshold_std=0.0, noise_std=0.0)
-                        policy = ScriptedPolicy(
-                            setup, self._rng, None if attempt else params, ACTION_BOUNDS
-                        )
-                        policy.reset()
-                        obs = self.observe()
-                        while not policy.done and not self.skill_success(setup):
-                            obs = self.step(policy(obs))[0]
-                if not set(missing) - self.facts():
+                done = True
+                for setup in chain:
+                    params = None if attempt else ScriptParams(threshold_std=0.0, noise_std=0.0)
+                    policy = ScriptedPolicy(setup, self._rng, params, ACTION_BOUNDS)
+                    policy.reset()
+                    obs = self.observe()
+                    while not policy.done and not self.skill_success(setup):
+                        obs = self.step(policy(obs))[0]
+                    facts = self.facts()
+                    if not (setup.add_effects <= facts and not setup.del_effects & facts):
+                        done = False
+                        break
+                if done:
                     return
-            if missing:
-                raise SimulationError(
-                    f"set-ups {[s.name for f in missing for s in self.setups[f]]} did not "
-                    f"make {missing} hold in {SETUP_ATTEMPTS} attempts"
-                )
+            raise SimulationError(
+                f"set-up {[s.name for s in chain]} of node {node!r} did not give its effects "
+                f"in {SETUP_ATTEMPTS} attempts"
+            )
         finally:
             self.skill = skill
 

@@ -41,7 +41,7 @@ from __future__ import annotations
 import numpy as np
 
 from osg_control.domain.spec import Node, SkillSpec
-from osg_control.franka.poses import HOME, SCRIPT, at, movement, turned, wp
+from osg_control.franka.poses import HOME, at, grasp_pull_release, movement, turned, wp
 
 HINGE_AXIS = (-0.224, 0.71)
 """The right door's hinge axis (world x, y) [m]; it turns about world +z."""
@@ -80,37 +80,30 @@ def _shifted(point: tuple[float, float, float], dy: float) -> tuple[float, float
 
 HINGE_NODES: tuple[Node, ...] = (
     Node("hinge-front", _shifted(handle_point(0.0), -HINGE_FRONT), "open", HINGE_QUAT),
+    Node("hinge-handle", handle_point(0.0), "closed", HINGE_QUAT),
+    Node("hinge-pulled", handle_point(HINGE_ARC[-1]), "closed", HINGE_QUAT),
     Node(
         "hinge-opened", _shifted(handle_point(HINGE_ARC[-1]), -HINGE_BACK_OFF), "open", HINGE_QUAT
     ),
 )
-"""The open-hinge skill's start (open hand in front of the shut door's handle) and end
-(open hand backed off the opened door's handle)."""
+"""The door's nodes: the open hand in front of the shut door's handle, the hand closed on
+it, closed on it with the door pulled open, and the open hand backed off."""
 
 HINGE_SKILLS: tuple[SkillSpec, ...] = (
     movement("move-home-to-hinge", HOME, HINGE_NODES[0]),
     movement("move-hinge-to-home", HINGE_NODES[-1], HOME, ("hinge-open",)),
-    SkillSpec(
-        name="open-hinge",
-        kind="pull",
-        start=HINGE_NODES[0].name,
-        end=HINGE_NODES[-1].name,
-        waypoints=(
-            wp(handle_point(0.0), "closed", steps=12, reach=0.012, orientation=HINGE_QUAT),
-            *(
-                wp(handle_point(a), "closed", steps=n, reach=0.02, orientation=HINGE_QUAT)
-                for a, n in zip(HINGE_ARC, HINGE_ARC_STEPS, strict=True)
-            ),
-            wp(handle_point(HINGE_ARC[-1]), "open", steps=3, reach=0.05, orientation=HINGE_QUAT),
-            at(HINGE_NODES[-1], steps=8),
+    *grasp_pull_release(
+        "hinge",
+        HINGE_NODES,  # type: ignore[arg-type]
+        at(HINGE_NODES[1], steps=12, reach=0.012),
+        tuple(
+            wp(handle_point(a), "closed", steps=n, reach=0.02, orientation=HINGE_QUAT)
+            for a, n in zip(HINGE_ARC, HINGE_ARC_STEPS, strict=True)
         ),
-        preconditions=frozenset({"hand-empty", "hinge-closed"}),
-        add_effects=frozenset({"hinge-open"}),
-        del_effects=frozenset({"hinge-closed"}),
-        script=SCRIPT,
-        success_tolerance=0.03,
-        max_steps=80,
+        wp(handle_point(HINGE_ARC[-1]), "open", steps=3, reach=0.05, orientation=HINGE_QUAT),
+        "hinge-closed",
+        "hinge-open",
     ),
 )
-"""The movements between home and the hinge nodes, and ``open-hinge``: grasp the bar, pull
-it along the door's arc, let go and back off."""
+"""The movements between home and the hinge nodes, and the door's grasp, pull (along the
+door's arc) and release (let go, back off)."""

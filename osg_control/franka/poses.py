@@ -83,3 +83,71 @@ MOVE_START_RADIUS = 0.04
 MOVE_START_ANGLE = 0.1
 """Random starts of movements: within 4 cm and 0.1 rad of their start node (a skill ends
 within its 3 cm tolerance of its end node)."""
+
+
+def grasp_pull_release(
+    name: str,
+    nodes: tuple[Node, Node, Node, Node],
+    grasp: Waypoint,
+    arc: tuple[Waypoint, ...],
+    release: Waypoint,
+    closed_fact: str,
+    open_fact: str,
+) -> tuple[SkillSpec, SkillSpec, SkillSpec]:
+    """A handle's door as three skills, split where the gripper changes (as the core
+    kitchen's grab-handle / slide-door-open / release-handle): ``grasp-NAME`` (front ->
+    handle, closing at the end), ``pull-NAME`` (handle -> pulled along ``arc``, closed
+    throughout), ``release-NAME`` (pulled -> opened: open, back off). Algorithm 1 switches
+    the gripper in a single step, so a policy that had to learn a close or an open in the
+    middle of a skill would average it away; at a skill's end it is what the reward asks.
+
+    ``nodes``: (front, handle, pulled, opened).
+    """
+    front, handle, pulled, opened = nodes
+    return (
+        SkillSpec(
+            name=f"grasp-{name}",
+            kind="grasp",
+            start=front.name,
+            end=handle.name,
+            waypoints=(grasp,),
+            preconditions=frozenset({"hand-empty", closed_fact}),
+            add_effects=frozenset({"holding"}),
+            del_effects=frozenset({"hand-empty"}),
+            max_steps=40,
+            script=SCRIPT,
+            success_tolerance=0.03,
+        ),
+        SkillSpec(
+            name=f"pull-{name}",
+            kind="pull",
+            start=handle.name,
+            end=pulled.name,
+            waypoints=arc,
+            preconditions=frozenset({"holding", closed_fact}),
+            add_effects=frozenset({open_fact}),
+            del_effects=frozenset({closed_fact}),
+            start_facts=frozenset({"holding"}),
+            max_steps=60,
+            script=SCRIPT,
+            success_tolerance=0.03,
+            start_radius=0.0,
+            start_angle=0.0,
+        ),
+        SkillSpec(
+            name=f"release-{name}",
+            kind="release",
+            start=pulled.name,
+            end=opened.name,
+            waypoints=(release, at(opened, steps=8)),
+            preconditions=frozenset({"holding", open_fact}),
+            add_effects=frozenset({"hand-empty"}),
+            del_effects=frozenset({"holding"}),
+            start_facts=frozenset({"holding", open_fact}),
+            max_steps=30,
+            script=SCRIPT,
+            success_tolerance=0.03,
+            start_radius=0.0,
+            start_angle=0.0,
+        ),
+    )
