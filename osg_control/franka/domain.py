@@ -358,16 +358,16 @@ NOISE_STD: dict[str, float] = {
     "push-slide": 0.0050,
     "push-light": 0.0109,
     "grasp-microwave": 0.0109,
-    "pull-microwave": 0.0109,
-    "release-microwave": 0.0109,
+    "pull-microwave": 0.0178,
+    "release-microwave": 0.0340,
     "move-home-to-kettle": 0.0200,
     "move-kettle-to-home": 0.0200,
     "push-kettle": 0.0148,
     "move-home-to-hinge": 0.0118,
     "move-hinge-to-home": 0.0200,
-    "grasp-hinge": 0.0093,
+    "grasp-hinge": 0.0102,
     "pull-hinge": 0.0093,
-    "release-hinge": 0.0093,
+    "release-hinge": 0.0211,
 }
 """Algorithm 1's action noise sigma_2 [m] per skill (orientation noise scales with it):
 bisected by ``tools/tune_scripts.py --domain franka-kitchen --episodes 30 --rounds 6
