@@ -61,7 +61,13 @@ def register(subparsers: argparse._SubParsersAction) -> None:
         description="Train one skill, or all of them batched in one process, with TD3+BC "
         "from <DATA>/<skill>.h5, writing <OUT>/<skill>.safetensors and <OUT>/<skill>.json.",
     )
-    parser.add_argument("--skill", required=True, help='a skill name, or "all"')
+    parser.add_argument(
+        "--skill",
+        required=True,
+        nargs="+",
+        help="skill names (trained batched; each skill's weights do not depend on the "
+        'others), or "all"',
+    )
     parser.add_argument(
         "--steps", type=_positive_int, default=DEFAULT_STEPS, help="updates per skill"
     )
@@ -86,15 +92,16 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     parser.set_defaults(func=run)
 
 
-def skill_names(domain: Domain, selection: str) -> list[str]:
-    """Resolve ``--skill``: a skill name of the domain or ``all``.
+def skill_names(domain: Domain, selection: str | list[str]) -> list[str]:
+    """Resolve ``--skill``: skill names of the domain, or ``all``.
 
     Raises:
         SkillSpecError: an unknown name, listing the known ones.
     """
-    if selection == "all":
+    names = [selection] if isinstance(selection, str) else list(selection)
+    if names == ["all"]:
         return [skill.name for skill in domain.skills]
-    return [domain.skill(selection).name]
+    return list(dict.fromkeys(domain.skill(name).name for name in names))
 
 
 def load_skill_input(

@@ -12,6 +12,7 @@ them by name.
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -97,6 +98,9 @@ class Domain:
         action_bounds: the per-step bound of each of the 7 action components (m, rad,
             gripper); its env clips to them and training scales by them (default: the
             core's ``ArmEnv``'s 2 cm and 0.1 rad).
+        step_cost: plan cost per step of a skill's Algorithm 1 budget, added to its
+            ``round(-ln p * 1000)`` (0: plans minimise failure only; a domain whose env has
+            an episode step limit prefers the shorter of two likely plans with it).
     """
 
     name: str
@@ -118,6 +122,7 @@ class Domain:
     published: Mapping[str, Any] = field(default_factory=dict)
     benchmark: Benchmark | None = None
     action_bounds: tuple[float, ...] = (0.02, 0.02, 0.02, 0.1, 0.1, 0.1, 1.0)
+    step_cost: float = 0.0
     skills_by_name: dict[str, SkillSpec] = field(init=False, repr=False, compare=False)
 
     def __post_init__(self) -> None:
@@ -270,6 +275,8 @@ def validate_domain(domain: Domain) -> None:
             f"{where}: field 'action_bounds' must be 7 positive finite numbers, got "
             f"{domain.action_bounds!r}"
         )
+    if not (math.isfinite(domain.step_cost) and domain.step_cost >= 0):
+        raise DomainError(f"{where}: field 'step_cost' must be >= 0, got {domain.step_cost!r}")
     if domain.benchmark is not None:
         validate_benchmark(domain.benchmark, domain.facts, where)
 

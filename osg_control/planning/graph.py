@@ -71,6 +71,9 @@ class SkillEdge:
     del_effects: tuple[str, ...] = ()
     success_rate: float | None = None
     observed: Observed | None = None
+    step_cost: int = 0
+    """Plan cost for the skill's duration (``Domain.step_cost`` x its step budget), added
+    to its success-rate cost."""
 
 
 @dataclass(frozen=True)
@@ -119,7 +122,12 @@ class SkillGraph:
         return {"format": GRAPH_FORMAT, "version": GRAPH_VERSION, **asdict(self)}
 
 
-def _edge_from_spec(spec: SkillSpec, success_rate: float | None) -> SkillEdge:
+def step_budget(spec: SkillSpec) -> int:
+    """A skill's Algorithm 1 step budget: the sum of its waypoints' budgets."""
+    return sum(w.steps or spec.script.steps_per_waypoint for w in spec.waypoints)
+
+
+def _edge_from_spec(spec: SkillSpec, success_rate: float | None, step_cost: float) -> SkillEdge:
     return SkillEdge(
         name=spec.name,
         start=spec.start,
@@ -128,6 +136,7 @@ def _edge_from_spec(spec: SkillSpec, success_rate: float | None) -> SkillEdge:
         add_effects=tuple(sorted(spec.add_effects)),
         del_effects=tuple(sorted(spec.del_effects)),
         success_rate=success_rate,
+        step_cost=round(step_cost * step_budget(spec)),
     )
 
 
@@ -166,7 +175,7 @@ def graph_from_specs(
         for node in domain.nodes.values()
         if node.name in used
     )
-    edges = tuple(_edge_from_spec(spec, rates.get(spec.name)) for spec in skills)
+    edges = tuple(_edge_from_spec(spec, rates.get(spec.name), domain.step_cost) for spec in skills)
     return SkillGraph(nodes=nodes, edges=edges, facts=domain.facts)
 
 
@@ -225,6 +234,7 @@ def graph_from_dict(data: Mapping[str, Any], source: str = "<graph>") -> SkillGr
                 del_effects=tuple(e.get("del_effects", ())),
                 success_rate=e.get("success_rate"),
                 observed=_observed_from(e.get("observed")),
+                step_cost=int(e.get("step_cost", 0)),
             )
             for e in data["edges"]
         )
@@ -250,6 +260,8 @@ def _check_references(
         rate = edge.success_rate
         if rate is not None and not 0.0 <= rate <= 1.0:
             raise DatasetError(f"{source}: skill {edge.name!r} success rate {rate} not in [0, 1]")
+        if edge.step_cost < 0:
+            raise DatasetError(f"{source}: skill {edge.name!r} step cost {edge.step_cost} < 0")
 
 
 def save_graph(graph: SkillGraph, path: str | Path) -> None:

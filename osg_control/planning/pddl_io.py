@@ -92,7 +92,8 @@ def build_domain(graph: SkillGraph, name: str = GRAPH_DOMAIN) -> Domain:
         effects += [Not(facts[f]) for f in edge.del_effects]
         # Also for a self-loop: add wins over delete, and the effect stays an (and ...).
         effects += [at[edge.end], Not(at[edge.start])]
-        effects.append(Increase(TOTAL_COST, NumericValue(skill_cost(edge.success_rate))))
+        cost = skill_cost(edge.success_rate) + edge.step_cost
+        effects.append(Increase(TOTAL_COST, NumericValue(cost)))
         pre = And(at[edge.start], *(facts[f] for f in edge.preconditions))
         actions.append(Action(edge.name, [], precondition=pre, effect=And(*effects)))
     return Domain(
