@@ -7,7 +7,7 @@ import dataclasses
 
 from osg_control.domain.registry import get_domain
 from osg_control.planning.api import plan_for_goal
-from osg_control.planning.graph import graph_from_specs, graph_from_dict, step_budget
+from osg_control.planning.graph import graph_from_dict, graph_from_specs, step_budget
 from osg_control.planning.pddl_io import skill_cost
 
 GOAL = "microwave-open kettle-moved light-on slide-open"
