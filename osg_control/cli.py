@@ -83,11 +83,29 @@ def _modules_for(argv: Sequence[str]) -> list[str]:
     return [module for name, module, _ in VERBS if name == verb]
 
 
+def hoist_global_options(argv: Sequence[str]) -> list[str]:
+    """``argv`` with ``--domain NAME`` (or ``--domain=NAME``) moved before the verb, so that
+    ``osg reproduce --domain franka-kitchen`` means ``osg --domain franka-kitchen
+    reproduce``."""
+    words, hoisted = list(argv), []
+    k = 0
+    while k < len(words):
+        word = words[k]
+        if word in GLOBAL_OPTIONS_WITH_VALUE and k + 1 < len(words):
+            hoisted += words[k : k + 2]
+            del words[k : k + 2]
+        elif word.split("=", 1)[0] in GLOBAL_OPTIONS_WITH_VALUE:
+            hoisted.append(words.pop(k))
+        else:
+            k += 1
+    return hoisted + words
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     """Entry point; returns the process exit code (``errors.EXIT_CODES``: 0 success, 1 an
     osg-control error, 2 a bad command-line value, 3 no plan, 4 no answer within the
     planner's limits, 5 malformed PDDL, 130 interrupted)."""
-    argv = sys.argv[1:] if argv is None else list(argv)
+    argv = hoist_global_options(sys.argv[1:] if argv is None else argv)
     parser = build_parser(_modules_for(argv))
     args = parser.parse_args(argv)
     if not getattr(args, "func", None):

@@ -26,3 +26,16 @@ def test_verb_table_matches_the_modules() -> None:
 def test_each_verb_parses_as_in_the_full_parser(verb: str) -> None:
     lazy = _verb_parsers(build_parser(_modules_for(["--version", verb, "--help"])))[verb]
     assert lazy.format_help() == _verb_parsers(build_parser())[verb].format_help()
+
+
+def test_domain_after_the_verb_means_the_same() -> None:
+    from osg_control.cli import hoist_global_options
+
+    assert hoist_global_options(["reproduce", "--domain", "mini", "--quick"]) == [
+        "--domain",
+        "mini",
+        "reproduce",
+        "--quick",
+    ]
+    assert hoist_global_options(["plan", "--domain=mini"]) == ["--domain=mini", "plan"]
+    assert hoist_global_options(["--domain", "mini", "plan"]) == ["--domain", "mini", "plan"]
