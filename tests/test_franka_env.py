@@ -125,6 +125,10 @@ def test_bad_input_is_refused(adapter) -> None:
         FrankaKitchenAdapter(gym.make("CartPole-v1"), {}, None, None)
     with pytest.raises(ValueError, match="cannot be found"):
         gym.make("FrankaKitchen-v1", tasks_to_complete=["toaster"])
+    own = gym.make("FrankaKitchen-v1", tasks_to_complete=["microwave"])
+    with pytest.raises(DomainError, match=r"lacks task\(s\) \['kettle'\]"):
+        make_franka_env(env=own, tasks=["microwave", "kettle"])
+    assert make_franka_env(env=own, tasks=["microwave"]).kitchen is own.unwrapped
 
 
 def test_reward_is_the_skills_own_and_completions_are_the_envs() -> None:

@@ -439,7 +439,8 @@ def make_franka_env(
     max_episode_steps: int | None = None,
     step_limit: int | None = None,
 ) -> Any:
-    """A ``FrankaKitchenAdapter`` around ``env`` (default: a new FrankaKitchen-v1 with
+    """A ``FrankaKitchenAdapter`` around ``env`` (a caller's env must track ``tasks``, if
+    given; default: a new FrankaKitchen-v1 with
     ``tasks``, all seven if not given, and the registered 280-step limit unless
     ``max_episode_steps``). ``config`` is a ``FrankaConfig``, or the core's ``EnvConfig``
     (as collection and evaluation pass it), whose observation noise is kept;
@@ -464,6 +465,17 @@ def make_franka_env(
         if max_episode_steps is not None:
             kwargs["max_episode_steps"] = max_episode_steps
         env = gymnasium.make("FrankaKitchen-v1", **kwargs)
+    elif tasks:
+        from osg_control.franka.env import check_kitchen
+
+        configured = set(getattr(check_kitchen(env), "goal", {}))
+        lacking = sorted(set(tasks) - configured)
+        if lacking:
+            raise DomainError(
+                f"franka-kitchen: the env given lacks task(s) {lacking} (its tasks: "
+                f"{sorted(configured)}); make it with gymnasium.make('FrankaKitchen-v1', "
+                f"tasks_to_complete=[...]) listing them"
+            )
     spec = {s.name: s for s in SKILLS}[skill] if isinstance(skill, str) else skill
     return FrankaKitchenAdapter(
         env,
