@@ -1,0 +1,8 @@
+; D4RL kitchen-mixed: microwave, kettle, bottom burner, light switch; from home with hand-empty microwave-closed kettle-home light-off slide-closed hinge-closed bottom-burner-off top-burner-off
+(define (problem kitchen-mixed)
+    (:domain osg-franka-kitchen)
+    (:requirements :action-costs :strips :typing)
+    (:init (= (total-cost) 0) (at home) (bottom-burner-off) (hand-empty) (hinge-closed) (kettle-home) (light-off) (microwave-closed) (slide-closed) (top-burner-off))
+    (:goal (and (microwave-open) (kettle-moved) (bottom-burner-on) (light-on)))
+    (:metric minimize (total-cost))
+)

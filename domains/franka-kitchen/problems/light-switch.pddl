@@ -1,0 +1,8 @@
+; the light switch alone; from home with hand-empty microwave-closed kettle-home light-off slide-closed hinge-closed bottom-burner-off top-burner-off
+(define (problem light-switch)
+    (:domain osg-franka-kitchen)
+    (:requirements :action-costs :strips :typing)
+    (:init (= (total-cost) 0) (at home) (bottom-burner-off) (hand-empty) (hinge-closed) (kettle-home) (light-off) (microwave-closed) (slide-closed) (top-burner-off))
+    (:goal (light-on))
+    (:metric minimize (total-cost))
+)

@@ -1,0 +1,8 @@
+; the slide cabinet alone; from home with hand-empty microwave-closed kettle-home light-off slide-closed hinge-closed bottom-burner-off top-burner-off
+(define (problem slide-cabinet)
+    (:domain osg-franka-kitchen)
+    (:requirements :action-costs :strips :typing)
+    (:init (= (total-cost) 0) (at home) (bottom-burner-off) (hand-empty) (hinge-closed) (kettle-home) (light-off) (microwave-closed) (slide-closed) (top-burner-off))
+    (:goal (slide-open))
+    (:metric minimize (total-cost))
+)
