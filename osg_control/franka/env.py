@@ -467,9 +467,10 @@ class FrankaKitchenAdapter(gym.Env):
                     params = None if attempt else ScriptParams(threshold_std=0.0, noise_std=0.0)
                     policy = ScriptedPolicy(setup, self._rng, params, ACTION_BOUNDS)
                     policy.reset()
-                    obs = self.observe()
                     while not policy.done and not self.skill_success(setup):
-                        obs = self.step(policy(obs))[0]
+                        # The true state: the set-up prepares the scene, it is not the
+                        # evaluated episode (whose observation noise it must not see).
+                        self.step(policy(self._true_obs()))
                     facts = self.facts()
                     if not (setup.add_effects <= facts and not setup.del_effects & facts):
                         done = False
