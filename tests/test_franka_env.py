@@ -181,9 +181,7 @@ def test_set_ups_ignore_the_episodes_observation_noise() -> None:
 
     starts = []
     for noise in (0.0, 0.02):
-        env = make_franka_env(
-            skill="move-microwave-to-home", config=EnvConfig(obs_noise_std=noise)
-        )
+        env = make_franka_env(skill="move-microwave-to-home", config=EnvConfig(obs_noise_std=noise))
         _obs, info = env.reset(seed=3)
         assert "microwave-open" in info["world_facts"]
         starts.append(env.tcp_pose()[0])
