@@ -33,8 +33,7 @@ BAND = (0.40, 0.50)
 
 
 def _success(domain: str, skill: Any, seed: int, index: int) -> bool:
-    episode = run_scripted_episode(get_domain(domain), skill, seed, index)
-    return bool(episode.terminations.any())
+    return run_scripted_episode(get_domain(domain), skill, seed, index).success
 
 
 def rate(domain: str, skill: Any, noise: float, episodes: int, seed: int, pool: Any) -> float:

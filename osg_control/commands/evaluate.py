@@ -5,9 +5,12 @@ from __future__ import annotations
 
 import argparse
 import json
+from collections.abc import Callable
 from pathlib import Path
+from typing import Any
 
 from osg_control.commands import add_backend_arguments, add_filter_argument, domain_of
+from osg_control.domain.base import Domain
 from osg_control.evaluation.evaluate import format_task_table, task_table
 from osg_control.execution.defaults import describe_models, models_fingerprint, models_in_use
 from osg_control.io_safety import check_output_dir
@@ -85,13 +88,7 @@ def run_benchmark_command(args: argparse.Namespace) -> int:
 
     domain = domain_of(args)
     benchmark_of(domain)
-    resume_dir = check_output_dir(
-        cache_dir()
-        / domain.name
-        / "evaluation"
-        / f"benchmark-{models_fingerprint(domain, args.models)}",
-        "evaluation cache",
-    )
+    resume_dir = evaluation_cache(domain, "benchmark", args.models)
     with open_executor(args.backend, args.workers, args.address) as executor:
         summary = run_benchmark(
             domain,
@@ -109,23 +106,13 @@ def run_benchmark_command(args: argparse.Namespace) -> int:
             executor=executor,
             resume_dir=resume_dir,
         )
-    summary["models"] = models_in_use(domain, args.models)
-    print(json.dumps(summary, indent=2) if args.json else format_benchmark(summary))
-    if not args.json:
-        print(describe_models(summary["models"]))
-    return 0
+    return print_result(domain, args, summary, format_benchmark)
 
 
 def run_tasks(args: argparse.Namespace) -> int:
     """Print Tables IV and V."""
     domain = domain_of(args)
-    resume_dir = check_output_dir(
-        cache_dir()
-        / domain.name
-        / "evaluation"
-        / f"tasks-{models_fingerprint(domain, args.models)}",
-        "evaluation cache",
-    )
+    resume_dir = evaluation_cache(domain, "tasks", args.models)
     with open_executor(args.backend, args.workers, args.address) as executor:
         table = task_table(
             domain,
@@ -140,8 +127,27 @@ def run_tasks(args: argparse.Namespace) -> int:
             executor,
             resume_dir=resume_dir,
         )
-    table["models"] = models_in_use(domain, args.models)
-    print(json.dumps(table, indent=2) if args.json else format_task_table(table))
+    return print_result(domain, args, table, format_task_table)
+
+
+def evaluation_cache(domain: Domain, kind: str, models: Path | None) -> Path:
+    """Where an evaluation of ``kind`` over a defaults directory keeps finished episodes
+    (resume), checked writable before the work."""
+    fingerprint = models_fingerprint(domain, models)
+    return check_output_dir(
+        cache_dir() / domain.name / "evaluation" / f"{kind}-{fingerprint}", "evaluation cache"
+    )
+
+
+def print_result(
+    domain: Domain,
+    args: argparse.Namespace,
+    result: dict[str, Any],
+    formatter: Callable[[dict[str, Any]], str],
+) -> int:
+    """Print an evaluation (JSON with ``--json``, else text), naming the models it used."""
+    result["models"] = models_in_use(domain, args.models)
+    print(json.dumps(result, indent=2) if args.json else formatter(result))
     if not args.json:
-        print(describe_models(table["models"]))
+        print(describe_models(result["models"]))
     return 0

@@ -92,13 +92,12 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     parser.set_defaults(func=run)
 
 
-def skill_names(domain: Domain, selection: str | list[str]) -> list[str]:
+def skill_names(domain: Domain, names: list[str]) -> list[str]:
     """Resolve ``--skill``: skill names of the domain, or ``all``.
 
     Raises:
         SkillSpecError: an unknown name, listing the known ones.
     """
-    names = [selection] if isinstance(selection, str) else list(selection)
     if names == ["all"]:
         return [skill.name for skill in domain.skills]
     return list(dict.fromkeys(domain.skill(name).name for name in names))

@@ -39,8 +39,7 @@ class ScriptedPolicy:
         self.rng = rng
         self.threshold = 0.0
         self._step = 0
-        budgets = [w.steps or self.params.steps_per_waypoint for w in skill.waypoints]
-        self._ends = np.cumsum(budgets)
+        self._ends = np.cumsum(skill.waypoint_budgets(self.params))
         """The step at which each waypoint's budget ends."""
         self._rotations = [
             _TOP_DOWN_ROT if w.orientation is None else quat_to_matrix(np.array(w.orientation))

@@ -132,6 +132,12 @@ class SkillSpec:
         """Every world fact the spec names."""
         return self.preconditions | self.add_effects | self.del_effects | self.start_facts
 
+    def waypoint_budgets(self, params: ScriptParams | None = None) -> list[int]:
+        """Algorithm 1's step budget of each waypoint: its own ``steps``, else the
+        script's (``params``, default the skill's) ``steps_per_waypoint``."""
+        per_waypoint = (params or self.script).steps_per_waypoint
+        return [w.steps or per_waypoint for w in self.waypoints]
+
     def to_json(self) -> str:
         """Serialise (for data-set attributes and checkpoint sidecars)."""
         data = asdict(self)

@@ -22,4 +22,9 @@ def success_holds(
     wanted = GRIPPER_OPEN_CMD if end.gripper == "open" else GRIPPER_CLOSED_CMD
     if gripper_cmd != wanted:
         return False
+    return effects_hold(skill, facts)
+
+
+def effects_hold(skill: SkillSpec, facts: frozenset[str]) -> bool:
+    """The world part of beta: every add effect among ``facts``, no delete effect."""
     return skill.add_effects <= facts and not (skill.del_effects & facts)

@@ -15,6 +15,7 @@ i])``: the same starts for every variant, whatever the number of workers.
 
 from __future__ import annotations
 
+from collections import Counter
 from collections.abc import Sequence
 from dataclasses import dataclass
 from functools import cache
@@ -159,10 +160,7 @@ def run_benchmark(
     done = np.array([[t in r["completed"] for t in chosen] for r in results], dtype=float)
     fractions = done.mean(axis=1)
     steps = np.array([r["steps"] for r in results])
-    failures: dict[str, int] = {}
-    for r in results:
-        if r["failure"]:
-            failures[r["failure"]] = failures.get(r["failure"], 0) + 1
+    failures = Counter(r["failure"] for r in results if r["failure"])
     low, high = score_interval(fractions, bench.points)
     return {
         "benchmark": bench.name,
@@ -181,7 +179,7 @@ def run_benchmark(
         "noise": noise,
         "filter_gain": filter_gain,
         "max_replans": max_replans,
-        "failures": dict(sorted(failures.items(), key=lambda kv: -kv[1])),
+        "failures": dict(failures.most_common()),
         "published": {
             method: scores[name] for method, scores in bench.published.items() if name in scores
         },

@@ -28,7 +28,8 @@ from __future__ import annotations
 
 import os
 import warnings
-from collections.abc import Mapping
+from collections.abc import Iterator, Mapping
+from contextlib import contextmanager
 from dataclasses import dataclass
 from typing import Any
 
@@ -36,11 +37,16 @@ import gymnasium as gym
 import mujoco
 import numpy as np
 
-from osg_control.domain.spec import Node, SkillSpec
+from osg_control.domain.spec import Node, ScriptParams, SkillSpec
 from osg_control.environment.actions import checked_action, scale_into
-from osg_control.environment.arm_env import GRIPPER_CLOSED_CMD, GRIPPER_OPEN_CMD, success_holds
 from osg_control.environment.options import check_start_options
 from osg_control.environment.poses import quat_rotation, sample_start_pose
+from osg_control.environment.success import (
+    GRIPPER_CLOSED_CMD,
+    GRIPPER_OPEN_CMD,
+    effects_hold,
+    success_holds,
+)
 from osg_control.errors import DomainError, SimulationError
 from osg_control.franka import poses
 
@@ -56,6 +62,8 @@ REFERENCE_QUAT = (0.5, -0.5, -0.5, -0.5)
 orientation at the env's reset)."""
 ACTION_SCALE = 2.0
 """The env's joint speed [rad/s] for an action of 1 (``FrankaRobot.act_rng``)."""
+NOISE_FREE = ScriptParams(threshold_std=0.0, noise_std=0.0)
+"""Algorithm 1 without its noise: a set-up's first attempt."""
 SETUP_ATTEMPTS = 5
 """How often ``reset`` retries a skill's set-up (a noisy script) before giving up."""
 MODEL_FILE = "envs/assets/kitchen_franka/kitchen_assets/kitchen_env_model.xml"
@@ -406,10 +414,14 @@ class FrankaKitchenAdapter(gym.Env):
         self, *, seed: int | None = None, options: dict[str, Any] | None = None
     ) -> tuple[np.ndarray, dict[str, Any]]:
         """The env's own reset (deterministic; ``seed`` sets its observation noise and the
-        random start), then, with a ``node`` option or a skill, drive to a pose drawn
-        around that node's (``radius`` [m] and ``angle`` [rad] per axis, default 0: the
-        node itself) through the env's own steps (they count toward its step limit).
-        ``max_steps`` bounds the drive (default 40)."""
+        random start); with a skill whose start node has a set-up (``setups``), that set-up;
+        then, with a ``node`` option or a skill, drive to a pose drawn around that node's
+        (``radius`` [m] and ``angle`` [rad] per axis, default 0: the node itself;
+        ``position`` moves the centre, with the ``home`` node's orientation unless ``node``
+        is given) through the env's own steps (they count toward the env's own limit, not
+        toward ``steps`` or ``step_limit``). ``max_steps`` bounds the drive (default 40).
+        The world is the env's own: other options of the core (``facts``, ``gripper``) are
+        not used."""
         super().reset(seed=seed)
         self._rng = np.random.default_rng(seed)
         _obs, env_info = self.env.reset(seed=seed)
@@ -432,13 +444,10 @@ class FrankaKitchenAdapter(gym.Env):
             position, rotation = sample_start_pose(
                 self.np_random, centre, radius, angle, quat_rotation(node.orientation)
             )
-            skill, self.skill = self.skill, None  # the drive is not the skill's episode
-            try:
+            with self._outside_the_skill():  # the drive is not the skill's episode
                 self.drive_to(
                     position, rotation, node.gripper, max_steps=int(options.get("max_steps", 40))
                 )
-            finally:
-                self.skill = skill
         self._steps = 0
         return self.observe(), self._info(self.world_state())
 
@@ -453,26 +462,23 @@ class FrankaKitchenAdapter(gym.Env):
             SimulationError: no attempt gave every set-up skill its effects.
         """
         from osg_control.data.scripted import ScriptedPolicy
-        from osg_control.domain.spec import ScriptParams
 
         chain = self.setups[node]
-        skill, self.skill = self.skill, None
-        try:
+        with self._outside_the_skill():
             for attempt in range(SETUP_ATTEMPTS):
                 if attempt:
                     self.env.reset(seed=seed)
                     self._gripper_cmd = GRIPPER_OPEN_CMD
                 done = True
                 for setup in chain:
-                    params = None if attempt else ScriptParams(threshold_std=0.0, noise_std=0.0)
+                    params = None if attempt else NOISE_FREE
                     policy = ScriptedPolicy(setup, self._rng, params, ACTION_BOUNDS)
                     policy.reset()
                     while not policy.done and not self.skill_success(setup):
                         # The true state: the set-up prepares the scene, it is not the
                         # evaluated episode (whose observation noise it must not see).
                         self.step(policy(self._true_obs()))
-                    facts = self.facts()
-                    if not (setup.add_effects <= facts and not setup.del_effects & facts):
+                    if not effects_hold(setup, self.facts()):
                         done = False
                         break
                 if done:
@@ -481,6 +487,14 @@ class FrankaKitchenAdapter(gym.Env):
                 f"set-up {[s.name for s in chain]} of node {node!r} did not give its effects "
                 f"in {SETUP_ATTEMPTS} attempts"
             )
+
+    @contextmanager
+    def _outside_the_skill(self) -> Iterator[None]:
+        """Steps that are not the skill's episode (a set-up, the drive to a start): no
+        success check, no reward, no termination from the skill."""
+        skill, self.skill = self.skill, None
+        try:
+            yield
         finally:
             self.skill = skill
 

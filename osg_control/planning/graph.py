@@ -124,7 +124,7 @@ class SkillGraph:
 
 def step_budget(spec: SkillSpec) -> int:
     """A skill's Algorithm 1 step budget: the sum of its waypoints' budgets."""
-    return sum(w.steps or spec.script.steps_per_waypoint for w in spec.waypoints)
+    return sum(spec.waypoint_budgets())
 
 
 def _edge_from_spec(spec: SkillSpec, success_rate: float | None, step_cost: float) -> SkillEdge:
