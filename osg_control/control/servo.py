@@ -1,27 +1,40 @@
-"""Joint position targets spread over a control step's physics substeps.
+"""A velocity-limited position servo: the arm's joint targets within the URDF speed limits.
 
 The IK bounds each control step's joint motion by the URDF velocity limits, but a position
 servo handed the whole step at once chases it with a velocity peak well above them (up to
-2.7x). Here the servo's target moves along the straight line from the previous target to
-the new one as fast as the limits allow (``max_increment`` per substep for every joint),
-then holds: a small step is reached early in the control step, as before, and no joint is
-commanded faster than its limit.
+2.7x). MuJoCo's position servo applies ``kp (target - q) - kv qdot``, i.e. a velocity servo
+of gain ``kv`` toward the set-point ``(kp / kv) (target - q)``. Clamping the target on every
+physics substep to within ``SPEED_MARGIN * limit * kv / kp`` of the measured joint caps that
+set-point below the limit: far from the target a joint runs at the capped speed, near it
+the position servo takes over as before.
+
+A ramped target (interpolated across the substeps) was tried first: the servo follows a
+ramp about ``kv / kp`` (16 ms) behind, and the IK, which starts each step from the measured
+joints, lost that lag every step, a third of the arm's speed. Leading the ramp by the lag
+restored the speed but overshot the limits by up to 1.6x when a step reversed a joint.
 """
 
 from __future__ import annotations
 
-import math
-
+import mujoco
 import numpy as np
 
+SPEED_MARGIN = 0.8
+"""The servo's velocity set-point cap as a fraction of the URDF limit: the arm's inertial
+coupling makes a joint overshoot its set-point by up to about 20 % (at 1.0 the shipped
+skills peaked at 1.23x the limit, at 0.8 at 0.99x; ``tools/joint_speeds.py``)."""
 
-def substep_targets(
-    previous: np.ndarray, target: np.ndarray, substeps: int, max_increment: np.ndarray
+
+def servo_speed_band(
+    model: mujoco.MjModel, actuators: np.ndarray, velocity_limits: np.ndarray
 ) -> np.ndarray:
-    """(substeps, n) targets from ``previous`` to ``target``: a ramp of the fewest substeps
-    whose per-substep increments stay within ``max_increment`` (n,), then ``target``."""
-    delta = np.asarray(target, dtype=float) - previous
-    ratio = float(np.max(np.abs(delta) / max_increment, initial=0.0))
-    ramp = min(substeps, max(1, math.ceil(ratio - 1e-9)))
-    fractions = np.minimum(np.arange(1, substeps + 1, dtype=float) / ramp, 1.0)[:, None]
-    return previous + fractions * delta
+    """How far [rad] a position actuator's target may lead its joint (n,): the distance at
+    which its velocity set-point reaches ``SPEED_MARGIN`` of the limit, ``kv / kp`` times it
+    (MuJoCo's ``kp = gainprm[0]``, ``kv = -biasprm[2]``)."""
+    lead_time = -model.actuator_biasprm[actuators, 2] / model.actuator_gainprm[actuators, 0]
+    return SPEED_MARGIN * np.asarray(velocity_limits) * lead_time
+
+
+def velocity_limited_target(target: np.ndarray, joints: np.ndarray, band: np.ndarray) -> np.ndarray:
+    """``target`` clamped to within ``band`` of the measured ``joints`` (see the module doc)."""
+    return np.clip(target, joints - band, joints + band)
