@@ -14,6 +14,7 @@ from osg_control.execution.executor import (
     RESULT_SCHEMA_VERSION,
     node_at,
     skill_on_path,
+    task_env_config,
 )
 from osg_control.execution.executor import Executor as DomainExecutor
 from osg_control.kitchen.env import EnvConfig, KitchenEnv
@@ -257,3 +258,18 @@ def test_result_schema_is_stable(defaults: tuple[dict, object]) -> None:
     ]  # fmt: skip
     assert json.loads(json.dumps(result)) == result  # JSON-ready, nothing lost
     assert result["success"] and result["plan"] == [] and result["outcomes"] == []
+
+
+def test_a_task_env_is_not_cut_at_the_single_skill_episode_limit() -> None:
+    """A long plan (e.g. the three-stage task, ~250 steps) must not end at the 200 steps
+    of a single-skill episode: the executor bounds each skill itself."""
+    env = KITCHEN.make_env(config=task_env_config(0.0))
+    env.reset(seed=0)
+    hold = np.zeros(7)
+    for _ in range(EnvConfig().max_steps + 5):
+        _obs, _reward, terminated, truncated, _info = env.step(hold)
+        assert not (terminated or truncated)
+    skill_env = KITCHEN.make_env(config=EnvConfig())
+    skill_env.reset(seed=0)
+    truncations = [skill_env.step(hold)[3] for _ in range(EnvConfig().max_steps)]
+    assert truncations[-1] and not any(truncations[:-1])

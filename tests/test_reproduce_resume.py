@@ -1,10 +1,10 @@
-"""``osg reproduce`` keeps a training stage only when its checkpoints match these data."""
+"""``osg reproduce`` keeps a skill's checkpoint only when it was trained on these data."""
 
 from __future__ import annotations
 
 import json
 
-from osg_control.commands.reproduce import trained_already
+from osg_control.commands.reproduce import untrained_skills
 from osg_control.domain.registry import get_domain
 from osg_control.learning.checkpoints import sha256_file
 
@@ -30,20 +30,20 @@ def _fake_run(tmp_path, domain, steps=300, seed=0):
 def test_matching_checkpoints_are_kept(tmp_path) -> None:
     domain = get_domain("kitchen")
     data, skills = _fake_run(tmp_path, domain)
-    assert trained_already(domain, data, skills, 300, 0)
+    assert untrained_skills(domain, data, skills, 300, 0) == []
 
 
-def test_any_difference_retrains(tmp_path) -> None:
+def test_any_difference_retrains_that_skill(tmp_path) -> None:
     domain = get_domain("kitchen")
     data, skills = _fake_run(tmp_path, domain)
-    assert not trained_already(domain, data, skills, 10000, 0)  # other steps
-    assert not trained_already(domain, data, skills, 300, 1)  # other seed
-    name = domain.skills[0].name
-    (data / f"{name}.h5").write_bytes(b"new data")  # the data set changed
-    assert not trained_already(domain, data, skills, 300, 0)
+    everything = [skill.name for skill in domain.skills]
+    assert untrained_skills(domain, data, skills, 10000, 0) == everything  # other steps
+    assert untrained_skills(domain, data, skills, 300, 1) == everything  # other seed
+    first, second = everything[:2]
+    (data / f"{first}.h5").write_bytes(b"new data")  # the data set changed
+    assert untrained_skills(domain, data, skills, 300, 0) == [first]
     (tmp_path / "b").mkdir()
     data, skills = _fake_run(tmp_path / "b", domain)
-    (skills / f"{name}.safetensors").unlink()  # a checkpoint missing
-    assert not trained_already(domain, data, skills, 300, 0)
-    (skills / f"{domain.skills[1].name}.json").write_text("{not json")
-    assert not trained_already(domain, data, skills, 300, 0)
+    (skills / f"{first}.safetensors").unlink()  # a checkpoint missing
+    (skills / f"{second}.json").write_text("{not json")  # a corrupt sidecar
+    assert untrained_skills(domain, data, skills, 300, 0) == [first, second]

@@ -2,7 +2,8 @@
 
 Usage: ``python tools/joint_speeds.py [--episodes N] [--skill NAME ...] [--unlimited]``.
 Runs each shipped kitchen policy from random starts (then the joint reset) and prints the
-largest |qvel| / limit over every physics substep (``evaluation.joint_speeds``);
+largest |qvel| / limit over every physics substep and the successes
+(``evaluation.joint_speeds``);
 ``--unlimited`` turns the servo's speed limit off (``EnvConfig(limit_joint_speed=False)``).
 """
 
@@ -28,8 +29,11 @@ def main() -> None:
     config = EnvConfig(limit_joint_speed=not args.unlimited)
     for name in args.skill:
         env = kitchen.make_env(skill=kitchen.skill(name), config=config)
-        peak = peak_joint_speed(env, policies[name], args.episodes)
-        print(f"{name:26s} peak |qvel|/limit {peak:.3f}")
+        check = peak_joint_speed(env, policies[name], args.episodes)
+        print(
+            f"{name:26s} peak |qvel|/limit {check.peak_ratio:.3f}  "
+            f"successes {check.successes}/{args.episodes}"
+        )
 
 
 if __name__ == "__main__":

@@ -23,6 +23,7 @@ from typing import Any
 from osg_control import __version__
 from osg_control.commands import add_filter_argument, domain_of
 from osg_control.domain.base import Domain
+from osg_control.domain.spec import SkillSpec
 from osg_control.io_safety import atomic_write, check_output_dir
 from osg_control.learning.checkpoints import sha256_file
 from osg_control.paths import PACKAGE_DIR
@@ -155,28 +156,28 @@ def run(args: argparse.Namespace) -> int:
             str(data),
         ),
     )
-    stage(
-        "train",
-        lambda: (
-            None
-            if trained_already(domain, data, defaults / "skills", scale.train_steps, args.seed)
-            else cli(
-                "train",
-                "--skill",
-                "all",
-                "--steps",
-                str(scale.train_steps),
-                "--seed",
-                seed,
-                "--data",
-                str(data),
-                "--out",
-                str(defaults / "skills"),
-                "--threads",
-                "2",
-            )
-        ),
-    )
+
+    def train() -> int | None:
+        stale = untrained_skills(domain, data, defaults / "skills", scale.train_steps, args.seed)
+        if not stale:
+            return None
+        return cli(
+            "train",
+            "--skill",
+            *stale,
+            "--steps",
+            str(scale.train_steps),
+            "--seed",
+            seed,
+            "--data",
+            str(data),
+            "--out",
+            str(defaults / "skills"),
+            "--threads",
+            "2",
+        )
+
+    stage("train", train)
     stage(
         "graph+pddl",
         lambda: (
@@ -241,30 +242,30 @@ def run(args: argparse.Namespace) -> int:
     return 0
 
 
-def trained_already(domain: Domain, data: Path, skills: Path, steps: int, seed: int) -> bool:
-    """Whether ``skills`` holds every skill's checkpoint trained by this stage's command on
-    these very data sets (steps, seed, spec and the data set's sha256 in its sidecar): a
-    rerun into the same ``--out`` then keeps them, as collection keeps finished data sets."""
-    for skill in domain.skills:
-        sidecar = skills / f"{skill.name}.json"
-        try:
-            meta = json.loads(sidecar.read_text())
-        except (OSError, ValueError):
-            return False
-        expected = {
-            "steps": steps,
-            "seed": seed,
-            "skill_spec": json.loads(skill.to_json()),
-        }
-        try:
-            expected["dataset_sha256"] = sha256_file(data / f"{skill.name}.h5")
-        except OSError:
-            return False
-        if not isinstance(meta, dict) or any(meta.get(k) != v for k, v in expected.items()):
-            return False
-        if not (skills / f"{skill.name}.safetensors").exists():
-            return False
-    return True
+def untrained_skills(domain: Domain, data: Path, skills: Path, steps: int, seed: int) -> list[str]:
+    """The domain's skills whose checkpoint in ``skills`` was not trained by this stage's
+    command on these very data sets (steps, seed, spec and the data set's sha256 in its
+    sidecar): a rerun into the same ``--out`` trains only these, as collection keeps
+    finished data sets. Training one skill or all gives the same weights (the seeds derive
+    from each skill's name, ``tests/test_growth.py``)."""
+    return [skill.name for skill in domain.skills if not _trained(skill, data, skills, steps, seed)]
+
+
+def _trained(skill: SkillSpec, data: Path, skills: Path, steps: int, seed: int) -> bool:
+    try:
+        meta = json.loads((skills / f"{skill.name}.json").read_text())
+        dataset_sha256 = sha256_file(data / f"{skill.name}.h5")
+    except (OSError, ValueError):
+        return False
+    expected = {
+        "steps": steps,
+        "seed": seed,
+        "skill_spec": json.loads(skill.to_json()),
+        "dataset_sha256": dataset_sha256,
+    }
+    if not isinstance(meta, dict) or any(meta.get(k) != v for k, v in expected.items()):
+        return False
+    return (skills / f"{skill.name}.safetensors").exists()
 
 
 def _write_manifest(defaults: Path, manifest: dict[str, Any]) -> None:

@@ -11,11 +11,10 @@ import numpy as np
 
 from osg_control.commands import add_backend_arguments, add_filter_argument, domain_of
 from osg_control.domain.base import Domain
-from osg_control.environment.arm_env import EnvConfig
 from osg_control.errors import UsageError
 from osg_control.evaluation.evaluate import format_skill_table, skill_table
 from osg_control.execution.defaults import defaults_root, describe_models, models_in_use
-from osg_control.execution.executor import load_executor
+from osg_control.execution.executor import load_executor, task_env_config
 from osg_control.io_safety import check_output_dir
 from osg_control.parallel import open_executor
 
@@ -87,7 +86,7 @@ def run_task(args: argparse.Namespace) -> int:
     if not args.json:
         print(describe_models(models))
     env = domain.make_env(
-        config=EnvConfig(obs_noise_std=args.noise),
+        config=task_env_config(args.noise),
         render_mode="rgb_array" if args.video else None,
     )
     rng = np.random.default_rng(args.seed)

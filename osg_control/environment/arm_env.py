@@ -12,8 +12,10 @@ command: ``g < -0.5`` closes, ``g > 0.5`` opens, otherwise the gripper holds.
 
 The control rate is 20 Hz (25 physics steps of 2 ms). A differential-IK QP
 (``osg_control.control.ik``) turns each command into joint position targets within joint and
-velocity limits. With a ``skill``, the env gives the skill's sparse reward (1 on the step
-its success predicate first holds, which also terminates the episode).
+velocity limits; the position servos chase them within the velocity limits on every
+physics substep (``osg_control.control.servo``). With a ``skill``, the env gives the skill's
+sparse reward (1 on the step its success predicate first holds, which also terminates the
+episode).
 
 A domain's env subclasses ``ArmEnv`` and supplies the scene: the compiled model, the
 world-state readout (a float vector of named fields), the facts it abstracts to, and how a
@@ -80,7 +82,8 @@ class EnvConfig:
 
     Attributes:
         obs_noise_std: Gaussian noise on the observed TCP position [m] (0 = none).
-        max_steps: episode step budget (truncation); a skill's own budget wins if set.
+        max_steps: episode step budget (truncation); a skill's own budget wins if set;
+            None: no truncation (task execution, where the executor bounds each skill).
         ik: the differential-IK controller's configuration.
         start_radius: default random-start radius around the start pose [m].
         start_angle: default random-start angle per axis [rad].
@@ -90,7 +93,7 @@ class EnvConfig:
     """
 
     obs_noise_std: float = 0.0
-    max_steps: int = 200
+    max_steps: int | None = 200
     ik: IKConfig = field(default_factory=IKConfig)
     start_radius: float = 0.0
     start_angle: float = 0.0
@@ -370,7 +373,7 @@ class ArmEnv(gym.Env):
         if failure is not None:
             terminated = True
         budget = self.skill.max_steps if self.skill else self.config.max_steps
-        truncated = not terminated and self._steps >= budget
+        truncated = not terminated and budget is not None and self._steps >= budget
         info = self._info(world)
         info["action_applied"] = action
         info["joint_speed_ratio"] = self._step_speed_ratio

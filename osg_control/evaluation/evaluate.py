@@ -25,6 +25,7 @@ from osg_control.domain.registry import get_domain
 from osg_control.domain.spec import nearest_start
 from osg_control.environment.arm_env import ArmEnv, EnvConfig
 from osg_control.evaluation.resume import resumable_map
+from osg_control.execution.executor import task_env_config
 from osg_control.parallel import LocalExecutor, TaskExecutor
 from osg_control.seeding import skill_seed
 
@@ -173,7 +174,7 @@ def cached_executor(
 
 @cache
 def _plain_env(domain: str, noise: float) -> ArmEnv:
-    return get_domain(domain).make_env(config=EnvConfig(obs_noise_std=noise))
+    return get_domain(domain).make_env(config=task_env_config(noise))
 
 
 @dataclass(frozen=True)

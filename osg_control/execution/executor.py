@@ -30,7 +30,7 @@ from osg_control.control.divergence import is_divergence
 from osg_control.control.estimator import TcpTracker
 from osg_control.domain.base import Domain
 from osg_control.domain.spec import SkillSpec, nearest_start
-from osg_control.environment.arm_env import GRIPPER_OPEN_CMD, ArmEnv
+from osg_control.environment.arm_env import GRIPPER_OPEN_CMD, ArmEnv, EnvConfig
 from osg_control.errors import SimulationError
 from osg_control.planning.api import graph_domain, plan_for_goal
 from osg_control.planning.graph import SkillGraph
@@ -94,6 +94,13 @@ class ExecutionResult:
     def to_dict(self) -> dict[str, Any]:
         """A JSON-ready dictionary (``schema_version`` first)."""
         return {"schema_version": RESULT_SCHEMA_VERSION, **asdict(self)}
+
+
+def task_env_config(noise: float) -> EnvConfig:
+    """The env options of a task execution: observation noise ``noise`` [m] and no episode
+    truncation, since the executor bounds every skill by its own budget (a domain whose env
+    has its own time limit, like FrankaKitchen-v1's, keeps it)."""
+    return EnvConfig(obs_noise_std=noise, max_steps=None)
 
 
 def node_at(domain: Domain, obs: np.ndarray, facts: Iterable[str]) -> str | None:

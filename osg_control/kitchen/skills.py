@@ -146,8 +146,17 @@ RELEASE_REACH = 0.03
 tolerance of the skill before it) plus the observation's slack, so the script opens the
 fingers on its first step wherever the release starts."""
 
+RELEASE_LIFT = (0.42, 0.54, 0.50)
+"""Where ``release-handle`` lifts the open hand to, clear of the handle, before it heads for
+``cabinet-front``."""
+VIA_REACH = 0.03
+"""A pass-through point counts as reached within 3 cm. Reached within the drawn threshold
+(about 8 mm), the script converged on the lift point from every side, its actions there
+averaged to zero and the learned release-handle came to rest on it at sigma = 0 (Table I
+0.00, 1.00 with noise); passing it at 3 cm, the data there all heads on."""
+
 SCRIPT_PARAMS: dict[str, ScriptParams] = {
-    "move-home-to-cube": ScriptParams(0.008, 0.003, 0.0, 0.005, 16),
+    "move-home-to-cube": ScriptParams(0.008, 0.003, 0.0, 0.0036, 16),
     "move-cube-to-home": ScriptParams(0.008, 0.003, 0.0, 0.005, 17),
     "move-home-to-door": ScriptParams(0.008, 0.003, 0.0, 0.005, 9),
     "move-door-to-home": ScriptParams(0.008, 0.003, 0.0, 0.0085, 9),
@@ -155,7 +164,7 @@ SCRIPT_PARAMS: dict[str, ScriptParams] = {
     "move-cabinet-to-home": ScriptParams(0.008, 0.003, 0.0, 0.007, 16),
     "grab-handle": ScriptParams(0.008, 0.003, 0.0, 0.005, 10),
     "slide-door-open": ScriptParams(0.008, 0.003, 0.0, 0.0055, 22),
-    "release-handle": ScriptParams(0.008, 0.003, 0.0, 0.00614, 19),
+    "release-handle": ScriptParams(0.008, 0.003, 0.0, 0.00614, 18),
     "grab-cube": ScriptParams(0.008, 0.003, 0.0, 0.0055, 5),
     "pick-up-cube": ScriptParams(0.008, 0.003, 0.0, 0.00798, 8),
     "move-cube-to-cabinet": ScriptParams(0.008, 0.003, 0.0, 0.00482, 24),
@@ -211,7 +220,7 @@ _UNTUNED_SKILLS: tuple[SkillSpec, ...] = (
         end="cabinet-front",
         waypoints=(
             _release_at("handle-open"),
-            _at((0.42, 0.54, 0.50), "open"),
+            Waypoint(RELEASE_LIFT, "open", reach=VIA_REACH),
             _wp("cabinet-front"),
         ),
         preconditions=frozenset({"holding-handle", "door-open"}),
