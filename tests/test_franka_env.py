@@ -10,14 +10,10 @@ pytest.importorskip("gymnasium_robotics")
 import gymnasium as gym  # noqa: E402
 
 from osg_control.errors import DomainError  # noqa: E402
+from osg_control.franka.arm import env_joint_limits, scale_to_action  # noqa: E402
 from osg_control.franka.compat import prepare  # noqa: E402
 from osg_control.franka.domain import make_franka_env  # noqa: E402
-from osg_control.franka.env import (  # noqa: E402
-    ACTION_BOUNDS,
-    FrankaKitchenAdapter,
-    env_joint_limits,
-    scale_to_action,
-)
+from osg_control.franka.env import ACTION_BOUNDS, FrankaKitchenAdapter  # noqa: E402
 
 
 @pytest.fixture()

@@ -28,6 +28,7 @@ from osg_control.classifier.metrics import EvaluationReport, evaluate_prediction
 from osg_control.data.datasets import OBS_DIM
 from osg_control.errors import CheckpointError
 from osg_control.io_safety import atomic_write
+from osg_control.json_files import read_json_object
 from osg_control.learning.checkpoints import check_finite, sha256_file
 
 WEIGHTS_FILE = "classifier.safetensors"
@@ -218,11 +219,8 @@ class StateClassifier:
         for path in (sidecar_path, weights_path):
             if not path.is_file():
                 raise CheckpointError(f"{path}: classifier checkpoint file not found")
-        try:
-            sidecar = json.loads(sidecar_path.read_text(encoding="utf-8"))
-        except (OSError, UnicodeDecodeError, json.JSONDecodeError) as err:
-            raise CheckpointError(f"{sidecar_path}: corrupt classifier sidecar ({err})") from err
-        if not isinstance(sidecar, dict) or sidecar.get("format") != CHECKPOINT_FORMAT:
+        sidecar = read_json_object(sidecar_path, "classifier sidecar", CheckpointError)
+        if sidecar.get("format") != CHECKPOINT_FORMAT:
             raise CheckpointError(f"{sidecar_path}: not a {CHECKPOINT_FORMAT} sidecar")
         missing = [key for key in _STRUCTURAL_KEYS if key not in sidecar]
         if missing:

@@ -10,6 +10,7 @@ from typing import TypeAlias
 from osg_control.commands import domain_of
 from osg_control.data.datasets import load_dataset
 from osg_control.errors import DatasetError
+from osg_control.json_files import read_json_object
 from osg_control.planning.graph import (
     SkillGraph,
     graph_from_specs,
@@ -24,11 +25,8 @@ Verbs: TypeAlias = "argparse._SubParsersAction[argparse.ArgumentParser]"
 def _read_rates(path: Path | None) -> dict[str, float] | None:
     if path is None:
         return None
-    try:
-        rates = json.loads(path.read_text())
-    except (OSError, json.JSONDecodeError) as err:
-        raise DatasetError(f"{path}: cannot read success rates ({err})") from err
-    if not isinstance(rates, dict) or not all(isinstance(v, int | float) for v in rates.values()):
+    rates = read_json_object(path, "success rates", DatasetError)
+    if not all(isinstance(v, int | float) for v in rates.values()):
         raise DatasetError(f"{path}: expected a JSON object of skill name -> success rate")
     return {str(k): float(v) for k, v in rates.items()}
 

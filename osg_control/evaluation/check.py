@@ -10,7 +10,6 @@ its table. Table II's accuracies count states, not episodes, and are compared th
 
 from __future__ import annotations
 
-import json
 import math
 from collections.abc import Iterator
 from dataclasses import dataclass
@@ -18,6 +17,7 @@ from pathlib import Path
 from typing import Any
 
 from osg_control.errors import DatasetError
+from osg_control.json_files import read_json_object
 
 FIGURES = "figures.json"
 Z = 2.576
@@ -111,10 +111,4 @@ def read_figures(path: Path) -> dict[str, Any]:
         DatasetError: missing or unreadable, naming the file.
     """
     path = path / FIGURES if path.is_dir() else path
-    try:
-        data = json.loads(path.read_text())
-    except (OSError, ValueError) as err:
-        raise DatasetError(f"{path}: cannot read reproduction figures ({err})") from err
-    if not isinstance(data, dict):
-        raise DatasetError(f"{path}: reproduction figures must be a JSON object")
-    return data
+    return read_json_object(path, "reproduction figures", DatasetError)

@@ -445,8 +445,9 @@ def make_franka_env(
     ``max_episode_steps``). ``config`` is a ``FrankaConfig``, or the core's ``EnvConfig``
     (as collection and evaluation pass it), whose observation noise is kept;
     ``step_limit``: the adapter's own limit, counted from the start (see the adapter)."""
+    from osg_control.franka.arm import FrankaConfig
     from osg_control.franka.compat import prepare
-    from osg_control.franka.env import FrankaConfig, FrankaKitchenAdapter
+    from osg_control.franka.env import FrankaKitchenAdapter
 
     if config is not None and not isinstance(config, FrankaConfig):
         config = FrankaConfig(obs_noise_std=float(getattr(config, "obs_noise_std", 0.0)))

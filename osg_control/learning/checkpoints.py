@@ -34,6 +34,7 @@ from osg_control.data.datasets import ACTION_DIM, OBS_DIM
 from osg_control.domain.spec import SkillSpec, skill_from_json
 from osg_control.errors import CheckpointError, SkillSpecError
 from osg_control.io_safety import atomic_write
+from osg_control.json_files import read_json_object
 
 FORMAT_VERSION = 1
 OBS_CLIP = 10.0
@@ -190,14 +191,7 @@ _SIDECAR_TYPES: dict[str, type | tuple[type, ...]] = {
 
 
 def _read_sidecar(path: Path, name: str) -> dict[str, Any]:
-    if not path.is_file():
-        raise CheckpointError(f"{path}: checkpoint sidecar not found")
-    try:
-        sidecar = json.loads(path.read_text())
-    except (OSError, UnicodeDecodeError, json.JSONDecodeError) as err:
-        raise CheckpointError(f"{path}: corrupt checkpoint sidecar ({err})") from err
-    if not isinstance(sidecar, dict):
-        raise CheckpointError(f"{path}: corrupt checkpoint sidecar (not a JSON object)")
+    sidecar = read_json_object(path, "checkpoint sidecar", CheckpointError)
     missing = [key for key in _SIDECAR_KEYS if key not in sidecar]
     if missing:
         raise CheckpointError(f"{path}: checkpoint sidecar lacks {', '.join(missing)}")

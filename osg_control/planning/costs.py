@@ -8,13 +8,13 @@ exported PDDL and in the executor. Reading them needs no model (no torch).
 
 from __future__ import annotations
 
-import json
 import math
 from pathlib import Path
 from typing import Any
 
 from osg_control.domain.base import Domain
 from osg_control.errors import CheckpointError
+from osg_control.json_files import read_json_object
 from osg_control.planning.graph import SkillGraph, graph_from_specs
 
 MANIFEST = "manifest.json"
@@ -38,13 +38,7 @@ def read_manifest(directory: Path) -> dict[str, Any]:
     path = Path(directory) / MANIFEST
     if not path.exists():
         return {}
-    try:
-        data = json.loads(path.read_text())
-    except (OSError, ValueError) as err:
-        raise CheckpointError(f"{path}: unreadable manifest ({err})") from err
-    if not isinstance(data, dict):
-        raise CheckpointError(f"{path}: manifest is not a JSON object")
-    return data
+    return read_json_object(path, "manifest", CheckpointError)
 
 
 def success_rates(manifest: dict[str, Any], path: Path, domain: Domain) -> dict[str, float]:

@@ -16,6 +16,7 @@ from typing import TYPE_CHECKING, Any
 from osg_control.domain.base import Domain
 from osg_control.domain.spec import SkillSpec
 from osg_control.errors import DatasetError, SkillSpecError
+from osg_control.json_files import read_json_object
 
 if TYPE_CHECKING:  # the data-set module (h5py) loads only with data
     pass
@@ -278,12 +279,5 @@ def load_graph(path: str | Path) -> SkillGraph:
         DatasetError: the file is missing, not JSON or not a skill graph; names the file.
     """
     path = Path(path)
-    try:
-        data = json.loads(path.read_text())
-    except FileNotFoundError:
-        raise DatasetError(f"{path}: skill graph file not found") from None
-    except (OSError, json.JSONDecodeError) as err:
-        raise DatasetError(f"{path}: not a readable JSON skill graph ({err})") from err
-    if not isinstance(data, dict):
-        raise DatasetError(f"{path}: expected a JSON object")
+    data = read_json_object(path, "skill graph file", DatasetError)
     return graph_from_dict(data, source=str(path))
