@@ -14,7 +14,8 @@ PACKAGE = Path(__file__).resolve().parents[1] / "osg_control"
 DOMAIN_PACKAGES = ("kitchen", "franka")
 """Sub-packages that are domains (the only places that may name their things)."""
 LAYERS: dict[str, int] = {
-    "errors": 0, "paths": 0, "seeding": 0, "registration": 0, "io_safety": 0, "__init__": 0,
+    "errors": 0, "paths": 0, "seeding": 0, "registration": 0, "io_safety": 0, "json_files": 0,
+    "__init__": 0,
     "control": 1, "domain": 1, "parallel": 1,
     "environment": 2,
     "data": 3,

@@ -9,13 +9,13 @@ relative actions commanded and blends in each new reading with gain ``g``::
     estimate  = predicted + g * (reading - predicted)
 
 The motion model is fitted by least squares to the offline data sets, whose observations
-are noise-free (``fit_motion_model``): the arm moves 0.682 of this step's command plus 0.259
-of the previous one (the speed-limited servos lag and carry velocity over), 0.94 times a
-steady command. The residual is about 5.5 mm per step per axis; with 2 cm reading noise the
-steady-state Kalman gain for that ratio is 0.24. The default stays 0.2, the gain for the
-4.5 mm residual before the speed limit: on Table I at 2 cm (200 episodes) the two gains
-gave the same rates within sampling noise (grab-cube 0.920 / 0.930, push-valve-open 0.955 /
-0.955, grab-handle 0.985 / 0.980, slide-door-open 0.985 / 0.990). For white reading noise of std sigma the estimate's
+are noise-free (``fit_motion_model``), on the steps that command less than 1 cm (the
+precision phases; ``PRECISION_COMMAND``): the arm moves 0.862 of this step's command plus
+0.223 of the previous one (the servos carry velocity over). The residual is about 3.5 mm
+per step and axis there; with 2 cm reading noise the steady-state Kalman gain for that ratio
+is 0.16. The default gain stays 0.2 (the Kalman gain for the 4.5 mm residual before the
+joint-speed limit): on Table I at 2 cm, 200 episodes, gains 0.2 and 0.24 gave the same
+rates within sampling noise. For white reading noise of std sigma the estimate's
 std is ``sigma * sqrt(g / (2 - g))`` (0.33 sigma at g = 0.2). The filter uses nothing but
 what the policy already sees and does: no joint readings. Orientation and gripper features
 pass through unchanged (they carry no noise in this project's noise model).
@@ -31,10 +31,18 @@ DEFAULT_GAIN = 0.2
 """Blend of each new reading: about the steady-state Kalman gain for the motion model's
 residual against 2 cm reading noise (0.2 for 4.5 mm, 0.24 for 5.5 mm; see the module
 docstring and docs/results.md)."""
-MOTION_MODEL = (0.682, 0.259)
+MOTION_MODEL = (0.862, 0.223)
 """TCP displacement per step = ``k_now * command_t + k_prev * command_{t-1}``, fitted with
-``fit_motion_model`` on the nineteen default data sets (seed 0, 300 episodes each), with
-the speed-limited servo (``control.servo``; before it: 0.875 and 0.24)."""
+``fit_motion_model`` on the steps under ``PRECISION_COMMAND`` of the nineteen default data
+sets (seed 0, 300 episodes each), with the speed-limited servo (``control.servo``; before
+it, on every step: 0.875 and 0.24)."""
+PRECISION_COMMAND = 0.01
+"""The motion model is fitted on steps that command less than 1 cm: the approaches and
+grasps, where the filtered estimate decides where to close. Longer commands are slowed by
+the joint-speed limit (fitted alone, 1-2 cm steps give k_now 0.77 and 2-5 cm steps 0.64,
+against 0.86 below 1 cm); a model fitted on every step (0.682, 0.259) made the filter lag
+the slow phases, and open-pick-up fell from 0.934 to 0.866 (Tables IV/V, 2 cm, 800
+episodes)."""
 
 
 def fit_motion_model(
@@ -42,6 +50,7 @@ def fit_motion_model(
     actions: np.ndarray,
     next_observations: np.ndarray,
     episode_starts: np.ndarray,
+    max_command: float = PRECISION_COMMAND,
 ) -> tuple[float, float]:
     """Least-squares ``(k_now, k_prev)`` of TCP displacement on this and the last command.
 
@@ -49,6 +58,8 @@ def fit_motion_model(
         observations, actions, next_observations: (N, 10), (N, 7), (N, 10) noise-free
             transitions, episodes concatenated.
         episode_starts: indices of each episode's first transition (no previous command).
+        max_command: fit on the steps whose position command is shorter than this [m]
+            (see ``PRECISION_COMMAND``).
 
     Returns:
         The two coefficients, shared by the three axes.
@@ -57,8 +68,9 @@ def fit_motion_model(
     previous = np.vstack([np.zeros((1, 3)), command[:-1]])
     previous[np.asarray(episode_starts, dtype=int)] = 0.0
     displacement = np.asarray(next_observations)[:, :3] - np.asarray(observations)[:, :3]
-    design = np.stack([command.ravel(), previous.ravel()], axis=1)
-    (k_now, k_prev), *_ = np.linalg.lstsq(design, displacement.ravel(), rcond=None)
+    small = np.linalg.norm(command, axis=1) < max_command
+    design = np.stack([command[small].ravel(), previous[small].ravel()], axis=1)
+    (k_now, k_prev), *_ = np.linalg.lstsq(design, displacement[small].ravel(), rcond=None)
     return float(k_now), float(k_prev)
 
 
