@@ -21,8 +21,10 @@ import numpy as np
 
 SPEED_MARGIN = 0.8
 """The servo's velocity set-point cap as a fraction of the URDF limit: the arm's inertial
-coupling makes a joint overshoot its set-point by up to about 20 % (at 1.0 the shipped
-skills peaked at 1.23x the limit, at 0.8 at 0.99x; ``tools/joint_speeds.py``)."""
+coupling makes a joint overshoot its set-point (the skills shipped before the limit peaked
+at 1.23x the limit with a cap of 1.0 and at 0.99x with 0.8; the skills trained with it peak
+at 0.80-0.95x, push-valve-open, pushing the valve lever, at 1.034x;
+``tools/joint_speeds.py``)."""
 
 
 def servo_speed_band(
