@@ -14,7 +14,7 @@ from osg_control.data.collect import LocalExecutor
 from osg_control.domain.registry import get_domain
 from osg_control.evaluation import evaluate
 from osg_control.evaluation.evaluate import reach_table, skill_table, task_table
-from osg_control.evaluation.resume import CHUNK_JOBS, resumable_map
+from osg_control.evaluation.resume import CHUNK_JOBS, resumable_map, source_fingerprint
 
 KITCHEN = get_domain("kitchen")
 KITCHEN_DEFAULTS = KITCHEN.defaults_dir
@@ -93,6 +93,19 @@ def test_resumable_map_keeps_finished_chunks_and_resumes(tmp_path: Path) -> None
     assert resumable_map(LocalExecutor(1), counting, jobs, tmp_path) == [x * x for x in jobs]
     assert calls == jobs[2 * CHUNK_JOBS :]  # only the unfinished episodes ran again
     assert not list(tmp_path.glob("chunk-*.json"))  # cleaned up when complete
+
+
+def test_the_cache_folder_changes_with_the_code(tmp_path: Path) -> None:
+    """An interrupted evaluation resumed after an upgrade starts afresh: the cache folder's
+    name carries a hash of the package's sources."""
+    (tmp_path / "sub").mkdir()
+    (tmp_path / "a.py").write_text("x = 1\n")
+    (tmp_path / "sub" / "b.py").write_text("y = 2\n")
+    before = source_fingerprint.__wrapped__(tmp_path)
+    assert source_fingerprint.__wrapped__(tmp_path) == before
+    (tmp_path / "sub" / "b.py").write_text("y = 3\n")
+    assert source_fingerprint.__wrapped__(tmp_path) != before
+    assert len(source_fingerprint()) == 12
 
 
 def test_resumable_map_discards_foreign_chunks(tmp_path: Path, caplog) -> None:

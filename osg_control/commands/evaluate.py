@@ -12,6 +12,7 @@ from typing import Any
 from osg_control.commands import add_backend_arguments, add_filter_argument, domain_of
 from osg_control.domain.base import Domain
 from osg_control.evaluation.evaluate import format_task_table, task_table
+from osg_control.evaluation.resume import source_fingerprint
 from osg_control.execution.defaults import describe_models, models_fingerprint, models_in_use
 from osg_control.io_safety import check_output_dir
 from osg_control.parallel import open_executor
@@ -133,7 +134,7 @@ def run_tasks(args: argparse.Namespace) -> int:
 def evaluation_cache(domain: Domain, kind: str, models: Path | None) -> Path:
     """Where an evaluation of ``kind`` over a defaults directory keeps finished episodes
     (resume), checked writable before the work."""
-    fingerprint = models_fingerprint(domain, models)
+    fingerprint = f"{models_fingerprint(domain, models)}-{source_fingerprint()}"
     return check_output_dir(
         cache_dir() / domain.name / "evaluation" / f"{kind}-{fingerprint}", "evaluation cache"
     )

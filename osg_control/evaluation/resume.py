@@ -5,7 +5,9 @@ Each chunk of ``CHUNK_JOBS`` jobs is written atomically to ``<dir>/chunk-<hash>.
 with the keys of its jobs (``repr`` of each job: the cell, its seed and episode index,
 models, noise, budget...). A chunk file is used only when its keys are exactly the
 chunk's; a foreign or corrupt file is discarded with a warning and recomputed. When every
-chunk is done the files are removed.
+chunk is done the files are removed. The folder's name carries ``source_fingerprint``, so an
+interrupted evaluation resumed after the package's code changed starts afresh instead of
+mixing in episodes the old code ran.
 """
 
 from __future__ import annotations
@@ -14,15 +16,27 @@ import hashlib
 import json
 import logging
 from collections.abc import Callable, Sequence
-from functools import partial
+from functools import cache, partial
 from pathlib import Path
 from typing import Any, TypeVar
 
 from osg_control.io_safety import atomic_write
+from osg_control.paths import PACKAGE_DIR
 
 CHUNK_JOBS = 10
 LOGGER = logging.getLogger(__name__)
 T = TypeVar("T")
+
+
+@cache
+def source_fingerprint(root: Path = PACKAGE_DIR) -> str:
+    """A short hash of every Python source under ``root`` (paths and contents): the code
+    that ran an evaluation's episodes."""
+    digest = hashlib.sha256()
+    for path in sorted(root.rglob("*.py")):
+        digest.update(path.relative_to(root).as_posix().encode() + b"\0")
+        digest.update(path.read_bytes() + b"\0")
+    return digest.hexdigest()[:12]
 
 
 def _run_all(fn: Callable[[T], Any], jobs: Sequence[T]) -> list[Any]:
