@@ -35,7 +35,8 @@ import numpy as np
 
 from osg_control.control.ik import DiffIKController, IKConfig, rotation_step
 from osg_control.control.robot import HOME_Q
-from osg_control.kitchen.env import ACTION_BOUNDS, KitchenEnv
+from osg_control.environment.arm_env import ACTION_BOUNDS
+from osg_control.kitchen.env import KitchenEnv
 
 COMBINATIONS: tuple[tuple[str, str], ...] = (
     ("mink", "daqp"),

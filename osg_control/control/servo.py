@@ -28,7 +28,7 @@ at 0.80-0.95x, push-valve-open, pushing the valve lever, at 1.034x;
 
 
 def servo_speed_band(
-    model: mujoco.MjModel, actuators: np.ndarray, velocity_limits: np.ndarray
+    model: mujoco.MjModel, actuators: np.ndarray | slice, velocity_limits: np.ndarray
 ) -> np.ndarray:
     """How far [rad] a position actuator's target may lead its joint (n,): the distance at
     which its velocity set-point reaches ``SPEED_MARGIN`` of the limit, ``kv / kp`` times it
@@ -38,5 +38,7 @@ def servo_speed_band(
 
 
 def velocity_limited_target(target: np.ndarray, joints: np.ndarray, band: np.ndarray) -> np.ndarray:
-    """``target`` clamped to within ``band`` of the measured ``joints`` (see the module doc)."""
-    return np.clip(target, joints - band, joints + band)
+    """``target`` clamped to within ``band`` of the measured ``joints`` (see the module doc);
+    ``np.clip``'s arithmetic without its wrapper's overhead, which on the physics loop's
+    7-vectors cost more than the clamp (2.9 against 1.9 us per substep)."""
+    return np.minimum(np.maximum(target, joints - band), joints + band)

@@ -100,6 +100,15 @@ class EnvConfig:
     limit_joint_speed: bool = True
 
 
+def _as_slice(indices: list[int]) -> slice | np.ndarray:
+    """Model indices as a slice when consecutive (numpy then indexes without copying; the
+    physics loop reads the arm's joints on every substep), else as an index array."""
+    first = indices[0]
+    if indices == list(range(first, first + len(indices))):
+        return slice(first, first + len(indices))
+    return np.array(indices)
+
+
 class ArmEnv(gym.Env):
     """The Panda driven by relative TCP commands in a domain's scene (see module docstring).
 
@@ -136,9 +145,9 @@ class ArmEnv(gym.Env):
         self.ik = DiffIKController(self.config.ik)
         self._reset_ik: DiffIKController | None = None
         self.n_substeps = round(1.0 / (CONTROL_HZ * self.model.opt.timestep))
-        self._arm_qpos = np.array([self.model.joint(j).qposadr[0] for j in ARM_JOINTS])
-        self._arm_dof = np.array([self.model.joint(j).dofadr[0] for j in ARM_JOINTS])
-        self._arm_act = np.array([self.model.actuator(j).id for j in ARM_JOINTS])
+        self._arm_qpos = _as_slice([self.model.joint(j).qposadr[0] for j in ARM_JOINTS])
+        self._arm_dof = _as_slice([self.model.joint(j).dofadr[0] for j in ARM_JOINTS])
+        self._arm_act = _as_slice([self.model.actuator(j).id for j in ARM_JOINTS])
         self._velocity_limits = urdf_velocity_limits()
         self._servo_band = servo_speed_band(self.model, self._arm_act, self._velocity_limits)
         self._step_speed_ratio = 0.0
@@ -385,7 +394,8 @@ class ArmEnv(gym.Env):
         """Run the physics substeps toward ``arm_target`` (speed-limited, see
         ``control.servo``); return a failure reason if the simulation diverged."""
         watch = DivergenceWatch(self.data)
-        peak = 0.0
+        fastest = np.zeros(len(ARM_JOINTS))  # per joint, over the substeps: max and min qvel
+        slowest = np.zeros(len(ARM_JOINTS))
         for _ in range(self.n_substeps):
             if self.config.limit_joint_speed:
                 self.data.ctrl[self._arm_act] = velocity_limited_target(
@@ -394,8 +404,10 @@ class ArmEnv(gym.Env):
             else:
                 self.data.ctrl[self._arm_act] = arm_target
             mujoco.mj_step(self.model, self.data)
-            speeds = np.abs(self.data.qvel[self._arm_dof]) / self._velocity_limits
-            peak = max(peak, float(np.max(speeds)))
+            velocity = self.data.qvel[self._arm_dof]
+            np.maximum(fastest, velocity, out=fastest)
+            np.minimum(slowest, velocity, out=slowest)
+        peak = float(np.max(np.maximum(fastest, -slowest) / self._velocity_limits))
         self.peak_joint_speed_ratio = max(self.peak_joint_speed_ratio, peak)
         self._step_speed_ratio = peak
         return watch.check()
