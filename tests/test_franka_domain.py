@@ -50,15 +50,10 @@ def test_reset_world_facts() -> None:
     env.close()
 
 
-@pytest.mark.parametrize("task", sorted(SUBTASK_CHAINS))
-def test_noise_free_scripted_skills_complete_their_task(task: str) -> None:
-    """From the env's reset, driven to the subtask's first start node, its skills' scripts
-    one after another: each reaches its end node and the env itself records the task."""
-    domain = franka_domain()
-    chain = [domain.skill(name) for name in SUBTASK_CHAINS[task]]
-    env = make_franka_env(tasks=[task, "microwave" if task != "microwave" else "kettle"])
-    obs, info = env.reset(seed=0, options={"node": chain[0].start})
-    assert np.linalg.norm(obs[:3] - env.nodes[chain[0].start].position) < 0.02
+def _run_noise_free(env, chain: list, obs: np.ndarray) -> tuple[dict, int]:
+    """Run each skill's noise-free script in turn through the env's own steps, asserting
+    that none is cut by the env's time limit and that each reaches its end node; the last
+    step's info and the steps taken."""
     steps = 0
     for skill in chain:
         policy = ScriptedPolicy(skill, np.random.default_rng(0), NOISE_FREE, env.action_bounds)
@@ -68,6 +63,19 @@ def test_noise_free_scripted_skills_complete_their_task(task: str) -> None:
             steps += 1
             assert not truncated
         assert env.skill_success(skill), f"{skill.name} ended at {obs[:3]}, not {skill.end}"
+    return info, steps
+
+
+@pytest.mark.parametrize("task", sorted(SUBTASK_CHAINS))
+def test_noise_free_scripted_skills_complete_their_task(task: str) -> None:
+    """From the env's reset, driven to the subtask's first start node, its skills' scripts
+    one after another: each reaches its end node and the env itself records the task."""
+    domain = franka_domain()
+    chain = [domain.skill(name) for name in SUBTASK_CHAINS[task]]
+    env = make_franka_env(tasks=[task, "microwave" if task != "microwave" else "kettle"])
+    obs, _ = env.reset(seed=0, options={"node": chain[0].start})
+    assert np.linalg.norm(obs[:3] - env.nodes[chain[0].start].position) < 0.02
+    info, steps = _run_noise_free(env, chain, obs)
     # The env's own bookkeeping says the task is done, and our fact (its rule) agrees.
     assert info["episode_task_completions"] == [task]
     assert TASK_FACTS[task][0] in facts_of(info["world"])
@@ -105,17 +113,9 @@ def test_kettle_skills_chain_from_reset_and_leave_it_upright() -> None:
     reaches its end node, the kettle task is done and the kettle stands upright."""
     domain = franka_domain()
     env = make_franka_env(tasks=["kettle", "microwave"])
-    obs, info = env.reset(seed=0)
-    total = 0
-    for name in ("move-home-to-kettle", "push-kettle", "move-kettle-to-home"):
-        skill = domain.skill(name)
-        policy = ScriptedPolicy(skill, np.random.default_rng(0), NOISE_FREE, env.action_bounds)
-        policy.reset()
-        while not (policy.done or env.skill_success(skill)):
-            obs, _, _, truncated, info = env.step(policy(obs))
-            total += 1
-            assert not truncated
-        assert env.skill_success(skill), f"{name} ended at {obs[:3]}, not at {skill.end}"
+    obs, _ = env.reset(seed=0)
+    names = ("move-home-to-kettle", "push-kettle", "move-kettle-to-home")
+    info, total = _run_noise_free(env, [domain.skill(name) for name in names], obs)
     assert info["episode_task_completions"] == ["kettle"]
     assert "kettle-moved" in facts_of(info["world"])
     assert _kettle_tilt(info["world"]) < 0.05
