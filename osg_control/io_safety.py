@@ -11,6 +11,8 @@ from __future__ import annotations
 
 import contextlib
 import os
+import re
+import shutil
 import tempfile
 from collections.abc import Callable, Iterator
 from pathlib import Path
@@ -56,7 +58,8 @@ def atomic_write(path: str | Path, write: Callable[[Path], object]) -> Path:
     """Create ``path`` by calling ``write(tmp)`` on a temporary sibling, then renaming it.
 
     The file gets the umask's mode (``file_mode``), not ``mkstemp``'s 0600; the folder is
-    created if missing.
+    created if missing. The temporary name ends in ``path``'s suffix, so writers that pick
+    their format from the extension (matplotlib, imageio) write the right one.
 
     Raises:
         OutputError: the folder or file cannot be written, or lies inside the package
@@ -66,7 +69,9 @@ def atomic_write(path: str | Path, write: Callable[[Path], object]) -> Path:
     refuse_package(path)
     with output_errors(path):
         path.parent.mkdir(parents=True, exist_ok=True)
-        fd, name = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
+        fd, name = tempfile.mkstemp(
+            prefix=f".{path.name}.", suffix=f".tmp{path.suffix}", dir=path.parent
+        )
         os.close(fd)
     tmp = Path(name)
     try:
@@ -79,11 +84,19 @@ def atomic_write(path: str | Path, write: Callable[[Path], object]) -> Path:
     return path
 
 
-def check_output_dir(path: str | Path, what: str = "output folder") -> Path:
-    """Make sure files can be created in folder ``path`` (creating it), before long work.
+MIN_FREE_BYTES = 16 * 2**20
+"""Free space a long job's output folder must have when its output size is not known."""
+
+
+def check_output_dir(
+    path: str | Path, what: str = "output folder", min_free: int = MIN_FREE_BYTES
+) -> Path:
+    """Make sure files can be created in folder ``path`` (creating it) and that it has
+    ``min_free`` bytes free, before long work.
 
     Raises:
-        OutputError: the folder cannot be created or written, or is a file; names the path.
+        OutputError: the folder cannot be created or written, is a file, or has less than
+            ``min_free`` bytes free; names the path.
     """
     path = Path(path).expanduser()
     refuse_package(path)
@@ -94,4 +107,49 @@ def check_output_dir(path: str | Path, what: str = "output folder") -> Path:
         fd, name = tempfile.mkstemp(prefix=".osg-write-check.", dir=path)
         os.close(fd)
         os.unlink(name)
+        free = shutil.disk_usage(path).free
+    if free < min_free:
+        raise OutputError(
+            f"{path}: not enough free space for the {what} "
+            f"({free / 2**20:.1f} MiB free, {min_free / 2**20:.1f} MiB needed)"
+        )
     return path
+
+
+def check_free_space(path: str | Path, needed: int, what: str) -> None:
+    """Refuse work whose output (about ``needed`` bytes) will not fit under folder ``path``.
+
+    The free space is read on the nearest existing folder at or above ``path``.
+
+    Raises:
+        OutputError: fewer than ``needed`` bytes free; names the path and both sizes.
+    """
+    path = Path(path).expanduser()
+    folder = next(p for p in (path, *path.parents) if p.is_dir())
+    with output_errors(path, "cannot read the free space"):
+        free = shutil.disk_usage(folder).free
+    if free < needed:
+        raise OutputError(
+            f"{path}: no space left for the {what}: it needs about {needed / 1e6:.2f} MB, "
+            f"{free / 1e6:.2f} MB free"
+        )
+
+
+_HDF5_ERRNO = re.compile(r"errno = (\d+)")
+"""How the HDF5 library reports a system call's errno inside an h5py error message."""
+
+
+@contextlib.contextmanager
+def hdf5_errors() -> Iterator[None]:
+    """Re-raise an h5py error that carries a system errno only in its message (an
+    ``OSError`` without ``errno``, or a ``RuntimeError`` from a failed close) as a plain
+    ``OSError`` with that errno, so ``output_errors`` gives the reason in one line
+    (``No space left on device``)."""
+    try:
+        yield
+    except (OSError, RuntimeError) as err:
+        found = _HDF5_ERRNO.search(str(err))
+        if found is None or (isinstance(err, OSError) and err.errno is not None):
+            raise
+        code = int(found.group(1))
+        raise OSError(code, os.strerror(code)) from err

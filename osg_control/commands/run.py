@@ -15,7 +15,7 @@ from osg_control.errors import UsageError
 from osg_control.evaluation.evaluate import format_skill_table, skill_table
 from osg_control.execution.defaults import defaults_root, describe_models, models_in_use
 from osg_control.execution.executor import load_executor, task_env_config
-from osg_control.io_safety import check_output_dir
+from osg_control.io_safety import atomic_write, check_output_dir
 from osg_control.parallel import open_executor
 
 
@@ -123,8 +123,7 @@ def run_task(args: argparse.Namespace) -> int:
 def _write_video(path: Path, frames: list[Any]) -> None:
     import imageio.v2 as imageio
 
-    path.parent.mkdir(parents=True, exist_ok=True)
-    imageio.mimwrite(path, frames, fps=20)
+    atomic_write(path, lambda tmp: imageio.mimwrite(tmp, frames, fps=20))
     print(f"video written to {path}")
 
 

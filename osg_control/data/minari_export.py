@@ -35,6 +35,7 @@ import numpy as np
 from osg_control import __version__
 from osg_control.data.datasets import Dataset, load_dataset
 from osg_control.errors import DatasetError
+from osg_control.io_safety import output_errors, refuse_package
 
 MINARI_FORMAT_VERSION = "0.5.0"
 """The Minari data-set version written: its HDF5 layout, read by minari 0.5.x."""
@@ -155,6 +156,7 @@ def export_minari(
     check_dataset_id(dataset_id)
     data = load_dataset(source)
     target = (root or minari_root()) / dataset_id
+    refuse_package(target)
     if target.exists() and not force:
         raise DatasetError(f"{target} exists; pass --force to replace it")
     target.parent.mkdir(parents=True, exist_ok=True)
@@ -165,9 +167,25 @@ def export_minari(
         metadata = _metadata(data, dataset_id, env_id)
         metadata["dataset_size"] = round((staging / DATA_DIR / MAIN_FILE).stat().st_size / 1e6, 1)
         (staging / DATA_DIR / METADATA_FILE).write_text(json.dumps(metadata, indent=2))
-        if target.exists():
-            shutil.rmtree(target)
-        staging.rename(target)
+        _replace_folder(staging, target)
     finally:
         shutil.rmtree(staging, ignore_errors=True)
     return target
+
+
+def _replace_folder(staging: Path, target: Path) -> None:
+    """Move the finished ``staging`` folder to ``target``; an old ``target`` is set aside
+    first and removed only once the new one is in place, so a failure keeps one of them."""
+    with output_errors(target):
+        if not target.exists():
+            staging.rename(target)
+            return
+        old = Path(tempfile.mkdtemp(prefix=f".{target.name}.old.", dir=target.parent))
+        old.rmdir()
+        target.rename(old)
+        try:
+            staging.rename(target)
+        except OSError:
+            old.rename(target)
+            raise
+        shutil.rmtree(old, ignore_errors=True)

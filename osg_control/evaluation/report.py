@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import json
 from collections.abc import Mapping
+from functools import partial
 from pathlib import Path
 from typing import Any
 
@@ -131,10 +132,8 @@ def bar_plots(figures: dict[str, Any], out_dir: Path) -> list[Path]:
         ax.axhline(0.95, color="tab:red", lw=0.8, ls="--")
         ax.set_ylabel("success rate")
         fig.tight_layout()
-        path = out_dir / name
-        fig.savefig(path, dpi=110)
+        written.append(atomic_write(out_dir / name, partial(fig.savefig, dpi=110)))
         plt.close(fig)
-        written.append(path)
     return written
 
 

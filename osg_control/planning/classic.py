@@ -11,6 +11,8 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 
+from osg_control.io_safety import atomic_write
+
 GRIPPER = """(define (domain gripper)
   (:requirements :strips :typing)
   (:types room ball gripper)
@@ -164,9 +166,9 @@ def write_classic(name: str, size: int, out_dir: str | Path, seed: int = 0) -> t
     """Write a classic domain and one of its problems; return the two paths."""
     domain = DOMAINS[name]
     out = Path(out_dir)
-    out.mkdir(parents=True, exist_ok=True)
-    domain_file = out / f"{name}-domain.pddl"
-    problem_file = out / f"{name}-{size}-{seed}.pddl"
-    domain_file.write_text(domain.text)
-    problem_file.write_text(domain.problem(size, seed))
+    problem_text = domain.problem(size, seed)
+    domain_file = atomic_write(out / f"{name}-domain.pddl", lambda tmp: tmp.write_text(domain.text))
+    problem_file = atomic_write(
+        out / f"{name}-{size}-{seed}.pddl", lambda tmp: tmp.write_text(problem_text)
+    )
     return domain_file, problem_file

@@ -16,6 +16,7 @@ from typing import TYPE_CHECKING, Any
 from osg_control.domain.base import Domain
 from osg_control.domain.spec import SkillSpec
 from osg_control.errors import DatasetError, SkillSpecError
+from osg_control.io_safety import atomic_write
 from osg_control.json_files import read_json_object
 
 if TYPE_CHECKING:  # the data-set module (h5py) loads only with data
@@ -267,9 +268,8 @@ def _check_references(
 
 def save_graph(graph: SkillGraph, path: str | Path) -> None:
     """Write the graph as JSON (sorted keys, indented, so diffs stay readable)."""
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    path.write_text(json.dumps(graph.to_dict(), indent=2, sort_keys=True) + "\n")
+    text = json.dumps(graph.to_dict(), indent=2, sort_keys=True) + "\n"
+    atomic_write(path, lambda tmp: tmp.write_text(text))
 
 
 def load_graph(path: str | Path) -> SkillGraph:

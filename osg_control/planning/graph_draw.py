@@ -8,6 +8,7 @@ import numpy as np
 from matplotlib.figure import Figure
 from matplotlib.patches import FancyArrowPatch
 
+from osg_control.io_safety import atomic_write
 from osg_control.planning.graph import SkillGraph
 
 PROJECTIONS: dict[str, tuple[int, int]] = {"xy": (0, 1), "xz": (0, 2), "yz": (1, 2)}
@@ -80,5 +81,4 @@ def draw_graph(graph: SkillGraph, path: str | Path, projection: str = "yz") -> N
     ax.margins(0.15)
     ax.set_title("Skill graph (blue: gripper open, orange: closed)")
     fig.tight_layout()
-    Path(path).parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(path, dpi=120)
+    atomic_write(path, lambda tmp: fig.savefig(tmp, dpi=120))

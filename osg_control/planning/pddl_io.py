@@ -28,6 +28,7 @@ from pddl.requirements import Requirements
 from osg_control.domain.base import Domain as OSGDomain
 from osg_control.domain.base import Task
 from osg_control.errors import PDDLError, PlanningError
+from osg_control.io_safety import atomic_write
 from osg_control.planning.graph import SkillGraph, graph_from_specs
 
 DOMAIN_PREFIX = "osg-"
@@ -234,9 +235,7 @@ def write_pddl(thing: Domain | Problem, path: str | Path, comment: str = "") -> 
     path = Path(path)
     text = domain_to_string(thing) if isinstance(thing, Domain) else problem_to_string(thing)
     header = "".join(f"; {line}\n" for line in comment.splitlines())
-    path.parent.mkdir(parents=True, exist_ok=True)
-    path.write_text(header + text + "\n")
-    return path
+    return atomic_write(path, lambda tmp: tmp.write_text(header + text + "\n"))
 
 
 def domain_comment(domain: OSGDomain) -> str:
