@@ -17,6 +17,7 @@ from osg_control import __version__
 from osg_control.commands import COMMAND_MODULES, DEFAULT_DOMAIN
 from osg_control.commands.checks import check_args
 from osg_control.commands.errors import handle_errors
+from osg_control.errors import UsageError, lookup
 
 VERBS: tuple[tuple[str, str, str], ...] = (
     ("collect", "collect", "record scripted noisy episodes (Algorithm 1), one HDF5 file per skill"),
@@ -101,6 +102,17 @@ def hoist_global_options(argv: Sequence[str]) -> list[str]:
     return hoisted + words
 
 
+def check_domain_name(name: str) -> None:
+    """``--domain`` (either form, any verb, ``domains`` too) names a known domain.
+
+    Raises:
+        UsageError: naming the option, the value and the known domains.
+    """
+    from osg_control.domain.registry import domain_names
+
+    lookup(dict.fromkeys(domain_names()), name, "domain", lambda m: UsageError(f"--domain: {m}"))
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     """Entry point; returns the process exit code (``errors.EXIT_CODES``: 0 success, 1 an
     osg-control error, 2 a bad command-line value, 3 no plan, 4 no answer within the
@@ -108,10 +120,11 @@ def main(argv: Sequence[str] | None = None) -> int:
     argv = hoist_global_options(sys.argv[1:] if argv is None else argv)
     parser = build_parser(_modules_for(argv))
     args = parser.parse_args(argv)
-    if not getattr(args, "func", None):
-        parser.print_help()
-        return 0
     with handle_errors(debug=args.debug or bool(os.environ.get("OSG_DEBUG"))) as outcome:
+        if not getattr(args, "func", None):
+            parser.print_help()
+            return 0
+        check_domain_name(args.domain)
         check_args(args)
         outcome.code = int(args.func(args) or 0)
     return outcome.code

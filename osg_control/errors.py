@@ -88,4 +88,5 @@ or unsupported PDDL; 130 interrupted (Ctrl-C or SIGTERM)."""
 
 
 class EnvOptionError(OSGError, ValueError):
-    """An env reset option is non-finite or out of range; the message names it."""
+    """An env reset option or configuration field is unknown, non-finite, out of range or
+    contradictory; the message names it."""

@@ -11,7 +11,6 @@ from __future__ import annotations
 
 import contextlib
 import os
-import re
 import shutil
 import tempfile
 from collections.abc import Callable, Iterator
@@ -114,42 +113,3 @@ def check_output_dir(
             f"({free / 2**20:.1f} MiB free, {min_free / 2**20:.1f} MiB needed)"
         )
     return path
-
-
-def check_free_space(path: str | Path, needed: int, what: str) -> None:
-    """Refuse work whose output (about ``needed`` bytes) will not fit under folder ``path``.
-
-    The free space is read on the nearest existing folder at or above ``path``.
-
-    Raises:
-        OutputError: fewer than ``needed`` bytes free; names the path and both sizes.
-    """
-    path = Path(path).expanduser()
-    folder = next(p for p in (path, *path.parents) if p.is_dir())
-    with output_errors(path, "cannot read the free space"):
-        free = shutil.disk_usage(folder).free
-    if free < needed:
-        raise OutputError(
-            f"{path}: no space left for the {what}: it needs about {needed / 1e6:.2f} MB, "
-            f"{free / 1e6:.2f} MB free"
-        )
-
-
-_HDF5_ERRNO = re.compile(r"errno = (\d+)")
-"""How the HDF5 library reports a system call's errno inside an h5py error message."""
-
-
-@contextlib.contextmanager
-def hdf5_errors() -> Iterator[None]:
-    """Re-raise an h5py error that carries a system errno only in its message (an
-    ``OSError`` without ``errno``, or a ``RuntimeError`` from a failed close) as a plain
-    ``OSError`` with that errno, so ``output_errors`` gives the reason in one line
-    (``No space left on device``)."""
-    try:
-        yield
-    except (OSError, RuntimeError) as err:
-        found = _HDF5_ERRNO.search(str(err))
-        if found is None or (isinstance(err, OSError) and err.errno is not None):
-            raise
-        code = int(found.group(1))
-        raise OSError(code, os.strerror(code)) from err

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import numpy as np
 
 from osg_control.data.datasets import ACTION_DIM, OBS_DIM, Episode, write_episodes
@@ -35,4 +37,20 @@ def write_synthetic_dataset(path, episodes: int = 3, skill: str = "grab-cube", s
         eps,
         {"skill": get_skill(skill).to_json(), "seed": seed, "world_fields": ",".join(WORLD_FIELDS)},
     )
+    return path
+
+
+def chained_dataset(path: Path) -> Path:
+    """A tiny data set whose next observations chain (what Minari's T+1 layout needs)."""
+    episodes = []
+    for index in range(2):
+        episode = synthetic_episode(5, success=index == 0, seed=index)
+        episode.next_observations[:-1] = episode.observations[1:]
+        episodes.append(episode)
+    attrs = {
+        "skill": get_skill("grab-cube").to_json(),
+        "seed": 0,
+        "world_fields": ",".join(WORLD_FIELDS),
+    }
+    write_episodes(path, episodes, attrs)
     return path

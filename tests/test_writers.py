@@ -14,12 +14,10 @@ from pathlib import Path
 import pytest
 
 from osg_control.cli import main
-from osg_control.data.datasets import write_episodes
 from osg_control.errors import EXIT_CODES
-from osg_control.kitchen.skills import get_skill
-from osg_control.kitchen.world import WORLD_FIELDS
 from osg_control.paths import PACKAGE_DIR
-from tests.datagen import synthetic_episode
+from tests.datagen import chained_dataset
+from tests.filesystems import tmpfs
 
 SHIPPED = PACKAGE_DIR / "kitchen" / "defaults"
 
@@ -32,25 +30,9 @@ def _tree_hashes(root: Path) -> dict[str, str]:
     }
 
 
-def _chained_dataset(path: Path) -> Path:
-    """A tiny data set whose next observations chain (what Minari's T+1 layout needs)."""
-    episodes = []
-    for index in range(2):
-        episode = synthetic_episode(5, success=index == 0, seed=index)
-        episode.next_observations[:-1] = episode.observations[1:]
-        episodes.append(episode)
-    attrs = {
-        "skill": get_skill("grab-cube").to_json(),
-        "seed": 0,
-        "world_fields": ",".join(WORLD_FIELDS),
-    }
-    write_episodes(path, episodes, attrs)
-    return path
-
-
 def _minari_source(tmp_path: Path) -> Path:
     """A Minari data set made from a tiny project data set (the import's input)."""
-    data = _chained_dataset(tmp_path / "src" / "grab-cube.h5")
+    data = chained_dataset(tmp_path / "src" / "grab-cube.h5")
     root = tmp_path / "minari"
     assert (
         main(["datasets", "minari", str(data), "--id", "osg/grab-cube-v0", "--out", str(root)]) == 0
@@ -65,7 +47,7 @@ WRITERS: dict[str, Callable[[Path, Path], list[str]]] = {
     "datasets minari": lambda dest, tmp: [
         "datasets",
         "minari",
-        str(_chained_dataset(tmp / "data" / "grab-cube.h5")),
+        str(chained_dataset(tmp / "data" / "grab-cube.h5")),
         "--id",
         "osg/x-v0",
         "--out",
@@ -105,23 +87,6 @@ WRITERS: dict[str, Callable[[Path, Path], list[str]]] = {
 
 
 @contextlib.contextmanager
-def _tmpfs(where: Path, options: str) -> Iterator[Path]:
-    """A tmpfs mounted at ``where`` with ``options`` (skips the test when mount is refused)."""
-    where.mkdir()
-    done = subprocess.run(
-        ["mount", "-t", "tmpfs", "-o", options, "tmpfs", str(where)],
-        check=False,
-        capture_output=True,
-    )
-    if done.returncode != 0:
-        pytest.skip(f"cannot mount a tmpfs here ({done.stderr.decode().strip()})")
-    try:
-        yield where
-    finally:
-        subprocess.run(["umount", "-l", str(where)], check=False)
-
-
-@contextlib.contextmanager
 def _destination(kind: str, tmp_path: Path) -> Iterator[Path]:
     """An output folder of the given kind, holding a file ``figures.json`` that must survive."""
     if kind == "package":
@@ -131,12 +96,12 @@ def _destination(kind: str, tmp_path: Path) -> Iterator[Path]:
         link.symlink_to(SHIPPED, target_is_directory=True)
         yield link
     elif kind == "read-only file system":
-        with _tmpfs(tmp_path / "ro", "size=1m") as mount:
+        with tmpfs(tmp_path / "ro", "size=1m") as mount:
             (mount / "figures.json").write_text('{"kept": true}\n')
             subprocess.run(["mount", "-o", "remount,ro", str(mount)], check=True)
             yield mount
     else:
-        with _tmpfs(tmp_path / "full", "size=64k") as mount:
+        with tmpfs(tmp_path / "full", "size=64k") as mount:
             (mount / "figures.json").write_text('{"kept": true}\n')
             filler = mount / "filler"
             with contextlib.suppress(OSError), filler.open("wb") as f:

@@ -2,9 +2,9 @@
 
 Usage: ``python tools/joint_speeds.py [--episodes N] [--skill NAME ...] [--unlimited]``.
 Runs each shipped kitchen policy from random starts (then the joint reset) and prints the
-largest |qvel| / limit over every physics substep and the successes
-(``evaluation.joint_speeds``);
-``--unlimited`` turns the servo's speed limit off (``EnvConfig(limit_joint_speed=False)``).
+largest |qvel| / limit over every physics substep and the successes, then the same peak
+under full-speed TCP commands along each axis from home (``evaluation.joint_speeds``);
+``--unlimited`` turns the speed limit off (``EnvConfig(limit_joint_speed=False)``).
 """
 
 from __future__ import annotations
@@ -13,12 +13,12 @@ import argparse
 
 from osg_control.domain.registry import get_domain
 from osg_control.environment.arm_env import EnvConfig
-from osg_control.evaluation.joint_speeds import peak_joint_speed
+from osg_control.evaluation.joint_speeds import DIRECTIONS, full_speed_peak, peak_joint_speed
 from osg_control.execution.defaults import load_defaults
 
 
 def main() -> None:
-    """Print the peak ratio per skill."""
+    """Print the peak ratio per skill and per full-speed direction."""
     kitchen = get_domain("kitchen")
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--episodes", type=int, default=3)
@@ -34,6 +34,9 @@ def main() -> None:
             f"{name:26s} peak |qvel|/limit {check.peak_ratio:.3f}  "
             f"successes {check.successes}/{args.episodes}"
         )
+    for direction in DIRECTIONS:
+        peak = full_speed_peak(kitchen.make_env(config=config), direction)
+        print(f"full speed {direction:15s} peak |qvel|/limit {peak:.3f}")
 
 
 if __name__ == "__main__":

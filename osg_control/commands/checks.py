@@ -10,9 +10,12 @@ from __future__ import annotations
 import argparse
 import math
 from collections.abc import Callable
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from osg_control.errors import UsageError
+
+if TYPE_CHECKING:
+    from osg_control.domain.base import Domain
 
 
 def _option(dest: str) -> str:
@@ -33,8 +36,10 @@ def _finite_range(low: float, high: float, low_open: bool = False) -> Callable[[
         for item in value if isinstance(value, list) else [value]:
             inside = (item > low if low_open else item >= low) and item <= high
             if not (math.isfinite(item) and inside):
-                bracket = "(" if low_open else "["
-                raise UsageError(f"{_option(dest)} must lie in {bracket}{low}, {high}], got {item}")
+                left, right = "(" if low_open else "[", "]" if math.isfinite(high) else ")"
+                raise UsageError(
+                    f"{_option(dest)} must lie in {left}{low}, {high}{right}, got {item}"
+                )
 
     return check
 
@@ -76,7 +81,9 @@ CHECKS: dict[str, Callable[[str, Any], None]] = {
     "seed": _at_least(0),
     "replans": _at_least(0),
     "max_replans": _at_least(0),
+    "max_states": _at_least(1),
     "noise": _finite_range(0.0, 1.0),
+    "time_limit": _finite_range(0.0, math.inf, low_open=True),
     "filter": _finite_range(0.0, 1.0, low_open=True),
     "video": _video,
 }
@@ -111,6 +118,27 @@ def _domain_values(args: argparse.Namespace) -> None:
                 f"{_option(dest)}: unknown facts {unknown} in domain {domain.name!r}; its facts: "
                 f"{', '.join(domain.facts)}"
             )
+    _models(args, domain)
+
+
+def _models(args: argparse.Namespace, domain: Domain) -> None:
+    """``--models DIR`` holds a checkpoint of every skill the command will run: DIR itself
+    for ``eval-skills`` (its ``--skill`` list), DIR's ``skills/`` for the verbs taking a
+    defaults folder.
+
+    Raises:
+        CheckpointError: naming the folder and every missing skill (exit 1: a file error).
+    """
+    from osg_control.learning.checkpoints import require_skills
+
+    models = getattr(args, "models", None)
+    if models is None:
+        return
+    if args.command == "eval-skills":
+        wanted = args.skill or list(domain.skills_by_name)
+        require_skills(models, [name for name in wanted if name in domain.skills_by_name])
+    else:
+        require_skills(models / "skills", list(domain.skills_by_name))
 
 
 def check_args(args: argparse.Namespace) -> None:

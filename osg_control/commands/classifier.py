@@ -186,7 +186,14 @@ def run_reach(args: argparse.Namespace) -> int:
     domain = domain_of(args)
     with open_executor(args.backend, args.workers, args.address) as executor:
         table = reach_table(
-            domain, models, args.episodes, args.seed, args.workers, args.noise, executor
+            domain,
+            models,
+            args.episodes,
+            args.seed,
+            args.workers,
+            args.noise,
+            executor,
+            progress=not args.json,
         )
     table["models"] = models_in_use(domain, models)
     _emit(args, table, f"{format_reach_table(table)}\n{describe_models(table['models'])}")

@@ -2,13 +2,16 @@
 code (``errors.EXIT_CODES``); ``--debug`` (or ``OSG_DEBUG=1``) adds the traceback.
 
 SIGTERM is handled like Ctrl-C in the main process: the work in progress stops the same
-way (finished chunks kept, exit 130).
+way (finished chunks kept, exit 130). A closed standard output (``osg ... | head``) ends
+the command quietly, as POSIX tools do: no message, exit 1 (the Python docs' recipe for
+SIGPIPE).
 """
 
 from __future__ import annotations
 
 import contextlib
 import os
+import select
 import signal
 import sys
 import threading
@@ -40,6 +43,23 @@ def _sigterm_as_interrupt(main_pid: int) -> None:
     signal.signal(signal.SIGTERM, handler)
 
 
+def _stdout_closed() -> bool:
+    """Whether standard output is a pipe whose reader has gone (then silence it: point it at
+    /dev/null, so that flushing it at exit raises nothing)."""
+    try:
+        descriptor = sys.stdout.fileno()
+    except (AttributeError, OSError, ValueError):  # replaced by a non-file (a test's capture)
+        return False
+    poller = select.poll()
+    poller.register(descriptor, 0)  # a pipe's write end reports POLLERR once its reader closed
+    if not any(events & select.POLLERR for _fd, events in poller.poll(0)):
+        return False
+    devnull = os.open(os.devnull, os.O_WRONLY)
+    os.dup2(devnull, descriptor)
+    os.close(devnull)
+    return True
+
+
 def _report(message: str, debug: bool) -> None:
     if debug:
         traceback.print_exc()
@@ -56,6 +76,11 @@ def handle_errors(debug: bool = False) -> Iterator[Outcome]:
         _sigterm_as_interrupt(os.getpid())
     try:
         yield outcome
+        sys.stdout.flush()  # a closed pipe shows here, not as a warning at exit
+    except BrokenPipeError as err:
+        if not _stdout_closed():
+            _report(f"broken pipe: {err}", debug)
+        outcome.code = EXIT_CODES["failure"]
     except UsageError as err:
         _report(str(err), debug)
         outcome.code = EXIT_CODES["usage"]

@@ -127,6 +127,7 @@ def run_tasks(args: argparse.Namespace) -> int:
             args.filter,
             executor,
             resume_dir=resume_dir,
+            progress=not args.json,
         )
     return print_result(domain, args, table, format_task_table)
 

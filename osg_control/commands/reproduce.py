@@ -24,6 +24,7 @@ from osg_control import __version__
 from osg_control.commands import add_filter_argument, domain_of
 from osg_control.domain.base import Domain
 from osg_control.domain.spec import SkillSpec
+from osg_control.errors import EXIT_CODES, OSGError
 from osg_control.io_safety import atomic_write, check_output_dir
 from osg_control.learning.checkpoints import sha256_file
 from osg_control.paths import PACKAGE_DIR
@@ -76,16 +77,24 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     parser.set_defaults(func=run)
 
 
-def check_against_shipped(domain: Domain, figures: dict[str, Any], as_json: bool) -> int:
-    """Compare figures with the domain's shipped ``figures.json``; print the verdict.
+def check_against_shipped(
+    domain: Domain, figures: dict[str, Any], source: Path, as_json: bool
+) -> int:
+    """Compare figures (read from ``source``) with the domain's shipped ``figures.json``;
+    print the verdict.
 
     Returns:
-        0 when every shared cell agrees, 1 otherwise.
+        0 when every cell of the shipped figures agrees, 1 otherwise.
+
+    Raises:
+        DatasetError: either side malformed, or a shipped cell missing from ``figures``
+            (``evaluation.check.compare``): a comparison that cannot be made never passes.
     """
     from osg_control.evaluation.check import FIGURES, compare, read_figures
     from osg_control.execution.defaults import defaults_root
 
-    compared, mismatches = compare(read_figures(defaults_root(domain) / FIGURES), figures)
+    shipped = defaults_root(domain) / FIGURES
+    compared, mismatches = compare(read_figures(shipped), figures, str(shipped), str(source))
     if as_json:
         print(json.dumps({"compared": compared, "mismatches": [m.__dict__ for m in mismatches]}))
     else:
@@ -115,9 +124,10 @@ def run(args: argparse.Namespace) -> int:
 
     domain = domain_of(args)
     if args.compare is not None:
-        from osg_control.evaluation.check import read_figures
+        from osg_control.evaluation.check import figures_file, read_figures
 
-        return check_against_shipped(domain, read_figures(args.compare), args.json)
+        report = figures_file(args.compare)
+        return check_against_shipped(domain, read_figures(report), report, args.json)
     scale = QUICK if args.quick else FULL
     commit = _git_commit()  # the code that runs, read before the work (HEAD may move)
     out: Path = check_output_dir(args.out, "reproduction folder")
@@ -136,8 +146,10 @@ def run(args: argparse.Namespace) -> int:
 
     def cli(*argv: str) -> int:
         code = osg(["--domain", domain.name, *argv])
+        if code == EXIT_CODES["interrupted"]:
+            raise KeyboardInterrupt
         if code:
-            raise SystemExit(f"osg reproduce: stage 'osg {' '.join(argv)}' exited {code}")
+            raise OSGError(f"osg reproduce: stage 'osg {' '.join(argv)}' exited {code}")
         return code
 
     stage(
@@ -237,7 +249,9 @@ def run(args: argparse.Namespace) -> int:
             print(f"{name:14s} {seconds:8.1f} s")
         print("report: " + ", ".join(map(str, written)))
     if args.check:
-        return check_against_shipped(domain, figures, args.json)
+        from osg_control.evaluation.check import FIGURES
+
+        return check_against_shipped(domain, figures, out / FIGURES, args.json)
     return 0
 
 

@@ -142,6 +142,7 @@ def run_eval_skills(args: argparse.Namespace) -> int:
             args.skill,
             filter_gain=args.filter,
             executor=executor,
+            progress=not args.json,
         )
     table["models"] = {"skills": str(models)}
     print(json.dumps(table, indent=2) if args.json else format_skill_table(table))

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import itertools
 import json
 import time
 from dataclasses import dataclass
@@ -14,7 +15,7 @@ import torch
 from tqdm import tqdm
 
 from osg_control.commands import domain_of
-from osg_control.data.datasets import load_dataset
+from osg_control.data.datasets import ACTION_DIM, OBS_DIM, load_dataset
 from osg_control.domain.base import Domain
 from osg_control.domain.spec import SkillSpec, skill_from_json
 from osg_control.errors import DatasetError, OSGError, SkillSpecError, TrainingError
@@ -125,6 +126,18 @@ def load_skill_input(
     return SkillInput(spec, data, path, sha256_file(path))
 
 
+SIDECAR_BYTES = 16 * 2**10
+"""Room allowed per checkpoint for its JSON sidecar and safetensors header (about 3 kB)."""
+
+
+def checkpoint_bytes(config: TD3BCConfig, skills: int) -> int:
+    """The disk space ``skills`` checkpoints take: the actor's float32 parameters (sized
+    from ``config``'s layers) plus ``SIDECAR_BYTES`` each, known before any training."""
+    sizes = (OBS_DIM, *config.hidden_sizes, ACTION_DIM)
+    params = sum(n_in * n_out + n_out for n_in, n_out in itertools.pairwise(sizes))
+    return skills * (4 * params + SIDECAR_BYTES)
+
+
 def check_finite_losses(logs: dict[str, torch.Tensor], step: int, names: list[str]) -> None:
     """Stop training when a loss is NaN or infinite (its weights are garbage from then on).
 
@@ -231,7 +244,9 @@ def run(args: argparse.Namespace) -> int:
     config = TD3BCConfig()
     data_dir = args.data or cache_dir() / domain.name / "data"
     out_dir = check_output_dir(
-        args.out or cache_dir() / domain.name / "skills", "checkpoint folder"
+        args.out or cache_dir() / domain.name / "skills",
+        "checkpoint folder",
+        checkpoint_bytes(config, len(names)),
     )
     bounds = np.asarray(domain.action_bounds, dtype=np.float32)
     inputs = [load_skill_input(data_dir, n, config, bounds) for n in names]

@@ -2,10 +2,15 @@
 
 MuJoCo resets the data (time back to 0) when it meets a bad qpos/qvel/qacc, so a
 divergence leaves a finite state behind: it shows in the warning counters and the clock.
-``DivergenceWatch`` records both before the steps and names what happened after them.
+``DivergenceWatch`` records both before the steps and names what happened after them;
+``non_finite_state`` names a joint whose state is NaN or infinite (e.g. set from outside
+between steps), which MuJoCo would answer with a reset on the next step, and which the
+IK must not read.
 """
 
 from __future__ import annotations
+
+import math
 
 import mujoco
 import numpy as np
@@ -34,9 +39,31 @@ class DivergenceWatch:
                 return f"{DIVERGED}: MuJoCo reported {warning.name} and reset the state"
         if self.data.time < self.time:
             return f"{DIVERGED}: MuJoCo reset the state"
-        if not (np.all(np.isfinite(self.data.qpos)) and np.all(np.isfinite(self.data.qvel))):
-            return f"{DIVERGED}: non-finite joint state"
-        return None
+        return non_finite_state(self.data)
+
+
+def non_finite_state(data: mujoco.MjData, fields: tuple[str, ...] = ("qpos", "qvel")) -> str | None:
+    """A message starting ``DIVERGED`` naming the first joint with a NaN or infinite value
+    in ``fields`` (``"qpos"``, ``"qvel"``); None when they are finite."""
+    model = data.model
+    for name in fields:
+        values = getattr(data, name)
+        # The fast path: a finite sum of squares means finite values (an overflow to inf,
+        # values beyond 1e154, falls through to the search, which then finds nothing).
+        if math.isfinite(values @ values):
+            continue
+        bad = np.flatnonzero(~np.isfinite(values))
+        if bad.size:
+            index = int(bad[0])
+            if name == "qpos":
+                joint = int(np.searchsorted(model.jnt_qposadr, index, side="right")) - 1
+            else:
+                joint = int(model.dof_jntid[index])
+            return (
+                f"{DIVERGED}: non-finite {name} of joint {model.joint(joint).name!r} "
+                f"({values[index]})"
+            )
+    return None
 
 
 def is_divergence(failure: str | None) -> bool:

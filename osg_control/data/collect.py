@@ -6,13 +6,18 @@ backend, and adding a skill to a domain changes no other skill's data. Workers r
 chunk's episodes and this process writes the chunk, atomically, under
 ``<out>/.parts/<skill>/``; an interrupted run keeps every finished chunk and the same
 command continues where it stopped. When all chunks exist they are merged
-into ``<out>/<skill>.h5`` (atomically) and the parts are removed.
+into ``<out>/<skill>.h5`` (atomically) and the parts are removed. Chunk jobs are made on
+demand (``parallel.lazy``): memory and the time to the first progress line do not grow
+with the number of episodes.
 """
 
 from __future__ import annotations
 
+import re
 import shutil
+from contextlib import closing
 from dataclasses import dataclass
+from itertools import tee
 from pathlib import Path
 from typing import Any
 
@@ -28,6 +33,7 @@ from osg_control.domain.registry import get_domain
 from osg_control.domain.spec import SkillSpec
 from osg_control.environment.arm_env import ArmEnv, EnvConfig
 from osg_control.parallel import LocalExecutor, TaskExecutor
+from osg_control.parallel.lazy import Jobs
 from osg_control.seeding import skill_seed
 
 DEFAULT_EPISODES = 300
@@ -138,6 +144,37 @@ def parts_dir(out: Path, skill: SkillSpec) -> Path:
     return out / ".parts" / skill.name
 
 
+def chunk_tasks(
+    domain: Domain, skill: SkillSpec, episodes: int, seed: int, out: Path, chunk_episodes: int
+) -> Jobs[ChunkTask]:
+    """The collection's chunks, ``chunk_episodes`` each (the last one the rest), on demand."""
+    parts = parts_dir(out, skill)
+
+    def chunk(k: int) -> ChunkTask:
+        start, stop = k * chunk_episodes, min((k + 1) * chunk_episodes, episodes)
+        path = parts / f"seed{seed}_{start:06d}_{stop:06d}.h5"
+        return ChunkTask(domain.name, skill, seed, start, stop, path)
+
+    return Jobs(-(-episodes // chunk_episodes), chunk)
+
+
+CHUNK_NAME = re.compile(r"seed\d+_(\d+)_\d+\.h5")
+
+
+def _kept_chunks(tasks: Jobs[ChunkTask], parts: Path, chunk_episodes: int) -> set[int]:
+    """The chunks an earlier run finished: files in ``parts`` that are one of ``tasks`` and
+    pass ``keep_chunk`` (found from the folder, not by asking about every chunk)."""
+    kept = set()
+    for path in sorted(parts.glob("*.h5")):
+        named = CHUNK_NAME.fullmatch(path.name)
+        if named is None:
+            continue
+        k = int(named.group(1)) // chunk_episodes
+        if k < len(tasks) and tasks[k].path == path and keep_chunk(path, _identity(tasks[k])):
+            kept.add(k)
+    return kept
+
+
 def collect_skill(
     domain: Domain,
     skill: SkillSpec | str,
@@ -164,25 +201,19 @@ def collect_skill(
         if existing.num_episodes == episodes and int(existing.attrs["seed"]) == seed and same_skill:
             return existing
     parts = parts_dir(out, skill)
-    tasks = []
-    for start in range(0, episodes, chunk_episodes):
-        stop = min(start + chunk_episodes, episodes)
-        path = parts / f"seed{seed}_{start:06d}_{stop:06d}.h5"
-        tasks.append(ChunkTask(domain.name, skill, seed, start, stop, path))
-    kept = {t.path for t in tasks if keep_chunk(t.path, _identity(t))}
-    todo = [t for t in tasks if t.path not in kept]
-    done_eps = sum(t.stop - t.start for t in tasks if t.path in kept)
-    successes = sum(
-        int(load_dataset(t.path).episode_successes.sum()) for t in tasks if t.path in kept
-    )
+    tasks = chunk_tasks(domain, skill, episodes, seed, out, chunk_episodes)
+    kept = _kept_chunks(tasks, parts, chunk_episodes)
+    done_eps = sum(tasks[k].stop - tasks[k].start for k in kept)
+    successes = sum(int(load_dataset(tasks[k].path).episode_successes.sum()) for k in kept)
     bar = tqdm(total=episodes, initial=done_eps, desc=skill.name, unit="ep", disable=not progress)
-    chunks = (executor or LocalExecutor()).map(_run_chunk, todo)
-    for task, chunk in zip(todo, chunks, strict=True):
-        write_episodes(task.path, chunk, {**_attrs(domain, skill, seed), **_identity(task)})
-        done_eps += len(chunk)
-        successes += sum(e.success for e in chunk)
-        bar.update(len(chunk))
-        bar.set_postfix(success=f"{successes / max(done_eps, 1):.2f}")
+    submitted, written = tee(t for k, t in enumerate(tasks) if k not in kept)
+    with closing((executor or LocalExecutor()).map(_run_chunk, submitted)) as chunks:
+        for task, chunk in zip(written, chunks, strict=True):
+            write_episodes(task.path, chunk, {**_attrs(domain, skill, seed), **_identity(task)})
+            done_eps += len(chunk)
+            successes += sum(e.success for e in chunk)
+            bar.update(len(chunk))
+            bar.set_postfix(success=f"{successes / max(done_eps, 1):.2f}")
     bar.close()
     merged = [load_dataset(t.path) for t in tasks]
     all_episodes = [d.episode(i) for d in merged for i in range(d.num_episodes)]

@@ -22,13 +22,16 @@ continues for ``collect.HOLD_STEPS`` steps with the script holding its last wayp
 Per-episode arrays (``E`` episodes): ``episode_starts`` (offset of the first step),
 ``episode_lengths``, ``episode_successes``. Attributes: ``skill`` (the spec as JSON),
 ``seed``, ``package_version``, ``format_version``, ``world_fields`` (comma-separated),
-``domain``.
+``domain``. Each of the arrays carries a ``sha256`` attribute, the hash of its bytes,
+checked on load (a flipped bit is a ``DatasetError``; files without it load unchecked).
 """
 
 from __future__ import annotations
 
+import hashlib
+import io
 import json
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -36,7 +39,12 @@ from typing import Any
 import h5py
 import numpy as np
 
-from osg_control.data.validation import check_attrs, check_episode_index, check_step_fields
+from osg_control.data.validation import (
+    PER_EPISODE_KINDS,
+    check_attrs,
+    check_episode_index,
+    check_step_fields,
+)
 from osg_control.errors import DatasetError
 from osg_control.io_safety import atomic_write
 
@@ -48,6 +56,9 @@ UNKNOWN = "unknown"
 e.g. imported from elsewhere): it trains a skill, but yields no effects for the graph."""
 WORLD_WIDTH = -1
 """Stands for the domain's world-state width in ``STEP_FIELDS`` (fixed per file)."""
+CHECKSUM_ATTR = "sha256"
+"""Attribute of every HDF5 data set of a data set file: the sha256 of the array's bytes,
+written at save and verified at load (files without it, from before, load unchecked)."""
 STEP_FIELDS: dict[str, tuple[tuple[int, ...], Any]] = {
     "observations": ((OBS_DIM,), np.float32),
     "next_observations": ((OBS_DIM,), np.float32),
@@ -143,39 +154,124 @@ class Dataset:
         )
 
 
-def write_episodes(path: Path, episodes: Sequence[Episode], attrs: dict[str, Any]) -> None:
-    """Write episodes to ``path`` atomically (a temp file renamed over the target).
+def _field_spec(world_width: int) -> dict[str, tuple[tuple[int, ...], Any]]:
+    """``STEP_FIELDS`` with the world-state width filled in."""
+    return {
+        key: ((world_width,), dtype) if shape == (WORLD_WIDTH,) else (shape, dtype)
+        for key, (shape, dtype) in STEP_FIELDS.items()
+    }
 
-    An interrupted write leaves the old file (or none), never a truncated one.
+
+def _unknown_fields(attrs: dict[str, Any]) -> frozenset[str]:
+    """The fields a file's attributes declare unrecorded (all NaN): world states or none."""
+    return frozenset({"world_states"}) if attrs.get("world_states") == UNKNOWN else frozenset()
+
+
+FILE_OVERHEAD = 16 * 2**10
+"""Bytes a data set file takes beyond its arrays: HDF5 headers and attributes (measured
+about 10 kB)."""
+
+
+def dataset_bytes(steps: int, episodes: int, world_width: int) -> int:
+    """The bytes a data set file of ``steps`` steps in ``episodes`` episodes takes on disk
+    (its arrays plus ``FILE_OVERHEAD``)."""
+    per_step = sum(
+        np.dtype(dtype).itemsize * int(np.prod(shape))
+        for shape, dtype in _field_spec(world_width).values()
+    )
+    return steps * per_step + episodes * (8 + 8 + 1) + FILE_OVERHEAD
+
+
+def content_sha256(array: np.ndarray) -> str:
+    """The sha256 of an array's bytes (C order): the ``CHECKSUM_ATTR`` of its HDF5 data set."""
+    return hashlib.sha256(np.ascontiguousarray(array).tobytes()).hexdigest()
+
+
+def _arrays(
+    episodes: Sequence[Episode], world_width: int
+) -> tuple[dict[str, np.ndarray], dict[str, np.ndarray]]:
+    """The flat step arrays and the per-episode arrays of ``episodes``, as they are stored."""
+    lengths = np.array([len(e) for e in episodes], dtype=np.int64)
+    arrays = {}
+    for key, (declared, dtype) in STEP_FIELDS.items():
+        shape = (world_width,) if declared == (WORLD_WIDTH,) else declared
+        if key == "episode_ids":
+            values = np.repeat(np.arange(len(episodes), dtype=np.int64), lengths)
+        elif episodes:
+            values = np.concatenate([getattr(e, key) for e in episodes]).astype(dtype)
+        else:
+            values = np.zeros((0, *shape), dtype=dtype)
+        arrays[key] = values.reshape((-1, *shape))
+    per_episode = {
+        "episode_starts": (np.cumsum(lengths) - lengths).astype(np.int64),
+        "episode_lengths": lengths,
+        "episode_successes": np.array([e.success for e in episodes], dtype=np.bool_),
+    }
+    return arrays, per_episode
+
+
+def write_episodes(path: Path, episodes: Sequence[Episode], attrs: dict[str, Any]) -> None:
+    """Validate episodes in memory, then write them to ``path`` atomically.
+
+    Every field is checked as ``load_dataset`` checks it before anything is written, so a
+    refused write leaves an existing ``path`` byte-identical; an interrupted write leaves
+    the old file (or none), never a truncated one. Each HDF5 data set gets the sha256 of
+    its bytes (``CHECKSUM_ATTR``), verified on load.
+
+    Raises:
+        DatasetError: a field that ``load_dataset`` would refuse, naming ``path`` and it.
+        OutputError: the file cannot be written (a full disk, a read-only folder); names it.
     """
     fields = attrs.get("world_fields")
     if not isinstance(fields, str) or not fields:
         raise DatasetError(f"{path}: attribute 'world_fields' (the world-state names) is required")
-    world_shape = (len(fields.split(",")),)
-    lengths = np.array([len(e) for e in episodes], dtype=np.int64)
-    starts = (np.cumsum(lengths) - lengths).astype(np.int64)
+    world_width = len(fields.split(","))
+    arrays, per_episode = _arrays(episodes, world_width)
+    check_step_fields(path, arrays, _field_spec(world_width), _unknown_fields(attrs))
+    check_episode_index(path, arrays, per_episode)
 
-    def write(tmp: Path) -> None:
-        with h5py.File(tmp, "w") as f:
-            for key, (declared, dtype) in STEP_FIELDS.items():
-                shape = world_shape if declared == (WORLD_WIDTH,) else declared
-                if key == "episode_ids":
-                    values = np.repeat(np.arange(len(episodes), dtype=np.int64), lengths)
-                elif episodes:
-                    values = np.concatenate([getattr(e, key) for e in episodes]).astype(dtype)
-                else:
-                    values = np.zeros((0, *shape), dtype=dtype)
-                f.create_dataset(key, data=values.reshape((-1, *shape)))
-            f.create_dataset("episode_starts", data=starts)
-            f.create_dataset("episode_lengths", data=lengths)
-            f.create_dataset(
-                "episode_successes", data=np.array([e.success for e in episodes], dtype=np.bool_)
-            )
-            f.attrs["format_version"] = FORMAT_VERSION
-            for key, value in attrs.items():
-                f.attrs[key] = value
+    def fill(f: h5py.File) -> None:
+        for key, values in {**arrays, **per_episode}.items():
+            f.create_dataset(key, data=values).attrs[CHECKSUM_ATTR] = content_sha256(values)
+        f.attrs["format_version"] = FORMAT_VERSION
+        for key, value in attrs.items():
+            f.attrs[key] = value
 
-    atomic_write(path, write)
+    data = hdf5_bytes(fill)
+    atomic_write(path, lambda tmp: tmp.write_bytes(data))
+
+
+def hdf5_bytes(fill: Callable[[h5py.File], object], **options: Any) -> bytes:
+    """The bytes of an HDF5 file built in memory by ``fill(file)`` (``options`` go to
+    ``h5py.File``, e.g. ``track_order``).
+
+    Written with one plain ``write_bytes``, a full disk is an ordinary ``OSError`` (named
+    by ``atomic_write``); h5py writing to a full disk fails in its close, keeps the file
+    open, prints tracebacks when the objects are freed and crashes the interpreter at exit.
+    """
+    buffer = io.BytesIO()
+    with h5py.File(buffer, "w", **options) as f:
+        fill(f)
+    return buffer.getvalue()
+
+
+def _read_field(f: h5py.File, key: str, path: Path) -> np.ndarray:
+    """Read data set ``key``, checking its content sha256 where the file stores one.
+
+    Raises:
+        DatasetError: the field is missing, or its bytes differ from the checksum written
+            with them (the file is corrupt); names the file and the field.
+    """
+    if key not in f:
+        raise DatasetError(f"{path}: missing field {key!r}")
+    array = np.asarray(f[key][()])
+    stored = f[key].attrs.get(CHECKSUM_ATTR)
+    if stored is not None and stored != content_sha256(array):
+        raise DatasetError(
+            f"{path}: field {key!r} does not match its sha256 content checksum: the file is "
+            "corrupt (re-collect or re-import it)"
+        )
+    return array
 
 
 def _world_width(f: h5py.File, path: Path) -> int:
@@ -199,29 +295,15 @@ def load_dataset(path: str | Path) -> Dataset:
         raise DatasetError(f"{path}: data set file not found")
     try:
         with h5py.File(path, "r") as f:
-            arrays: dict[str, np.ndarray] = {}
-            for key in STEP_FIELDS:
-                if key not in f:
-                    raise DatasetError(f"{path}: missing field {key!r}")
-                arrays[key] = np.asarray(f[key][()])
-            per_episode = {}
-            for key in ("episode_starts", "episode_lengths", "episode_successes"):
-                if key not in f:
-                    raise DatasetError(f"{path}: missing field {key!r}")
-                per_episode[key] = np.asarray(f[key][()])
+            arrays = {key: _read_field(f, key, path) for key in STEP_FIELDS}
+            per_episode = {key: _read_field(f, key, path) for key in PER_EPISODE_KINDS}
             attrs = dict(f.attrs)
-            fields = {
-                key: ((_world_width(f, path),), dtype)
-                if shape == (WORLD_WIDTH,)
-                else (shape, dtype)
-                for key, (shape, dtype) in STEP_FIELDS.items()
-            }
+            fields = _field_spec(_world_width(f, path))
     except DatasetError:
         raise
     except (OSError, KeyError, ValueError, TypeError) as err:
         raise DatasetError(f"{path}: not a readable HDF5 data set ({err})") from err
-    unknown = frozenset({"world_states"}) if attrs.get("world_states") == UNKNOWN else frozenset()
-    check_step_fields(path, arrays, fields, unknown)
+    check_step_fields(path, arrays, fields, _unknown_fields(attrs))
     check_episode_index(path, arrays, per_episode)
     check_attrs(path, attrs)
     lengths = per_episode["episode_lengths"]

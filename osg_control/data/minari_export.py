@@ -33,7 +33,7 @@ import h5py
 import numpy as np
 
 from osg_control import __version__
-from osg_control.data.datasets import Dataset, load_dataset
+from osg_control.data.datasets import Dataset, hdf5_bytes, load_dataset
 from osg_control.errors import DatasetError
 from osg_control.io_safety import output_errors, refuse_package
 
@@ -109,8 +109,14 @@ def _metadata(data: Dataset, dataset_id: str, env_id: str | None) -> dict[str, A
     }
 
 
-def _write_episodes(path: Path, data: Dataset) -> None:
-    with h5py.File(path, "w", track_order=True) as f:
+def _episodes_bytes(data: Dataset) -> bytes:
+    """Minari's ``main_data.hdf5`` of ``data``, built in memory (one group per episode).
+
+    Raises:
+        DatasetError: an episode's next observations do not chain with its observations.
+    """
+
+    def fill(f: h5py.File) -> None:
         for index in range(data.num_episodes):
             episode = data.episode(index)
             if not np.array_equal(episode.observations[1:], episode.next_observations[:-1]):
@@ -129,6 +135,8 @@ def _write_episodes(path: Path, data: Dataset) -> None:
             group["terminations"] = episode.terminations.astype(bool)
             group["truncations"] = episode.truncations.astype(bool)
             group.create_group("infos")["world_states"] = episode.world_states.astype(np.float32)
+
+    return hdf5_bytes(fill, track_order=True)
 
 
 def export_minari(
@@ -159,14 +167,17 @@ def export_minari(
     refuse_package(target)
     if target.exists() and not force:
         raise DatasetError(f"{target} exists; pass --force to replace it")
-    target.parent.mkdir(parents=True, exist_ok=True)
-    staging = Path(tempfile.mkdtemp(prefix=f".{target.name}.", dir=target.parent))
+    episodes = _episodes_bytes(data)
+    metadata = _metadata(data, dataset_id, env_id)
+    metadata["dataset_size"] = round(len(episodes) / 1e6, 1)
+    with output_errors(target):
+        target.parent.mkdir(parents=True, exist_ok=True)
+        staging = Path(tempfile.mkdtemp(prefix=f".{target.name}.", dir=target.parent))
     try:
-        (staging / DATA_DIR).mkdir()
-        _write_episodes(staging / DATA_DIR / MAIN_FILE, data)
-        metadata = _metadata(data, dataset_id, env_id)
-        metadata["dataset_size"] = round((staging / DATA_DIR / MAIN_FILE).stat().st_size / 1e6, 1)
-        (staging / DATA_DIR / METADATA_FILE).write_text(json.dumps(metadata, indent=2))
+        with output_errors(target):
+            (staging / DATA_DIR).mkdir()
+            (staging / DATA_DIR / MAIN_FILE).write_bytes(episodes)
+            (staging / DATA_DIR / METADATA_FILE).write_text(json.dumps(metadata, indent=2))
         _replace_folder(staging, target)
     finally:
         shutil.rmtree(staging, ignore_errors=True)

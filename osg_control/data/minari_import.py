@@ -10,6 +10,12 @@ rebuilt, comes from either
 
 World states absent from the source are stored as NaN (unknown): such data trains a skill,
 but a skill graph cannot read effects from it.
+
+Everything is checked before anything is written, each error naming the file and the field
+(with the episode and step for an array): ``metadata.json`` (a JSON object, Box spaces of
+the right shapes, a non-negative integer ``osg_seed``), every array's shape, dtype and
+finite values, every action within the domain's ``action_bounds``, and at least one
+episode. A refused import leaves the ``out`` file as it was.
 """
 
 from __future__ import annotations
@@ -31,6 +37,7 @@ from osg_control.data.datasets import (
     write_episodes,
 )
 from osg_control.data.minari_export import DATA_DIR, MAIN_FILE, METADATA_FILE, minari_root
+from osg_control.data.validation import check_step_fields
 from osg_control.domain.base import Domain
 from osg_control.domain.spec import SkillSpec
 from osg_control.environment.arm_env import success_holds
@@ -52,18 +59,49 @@ def resolve(source: str | Path) -> Path:
     )
 
 
+def _read_metadata(data_dir: Path) -> dict[str, Any]:
+    """The data set's ``metadata.json`` as a dict.
+
+    Raises:
+        DatasetError: the file cannot be read or is not a JSON object; names it.
+    """
+    path = data_dir / METADATA_FILE
+    try:
+        metadata = json.loads(path.read_text())
+    except (OSError, UnicodeDecodeError, ValueError) as err:
+        raise DatasetError(f"{path}: not a readable JSON file ({err})") from err
+    if not isinstance(metadata, dict):
+        raise DatasetError(f"{path}: must hold a JSON object, got {type(metadata).__name__}")
+    return metadata
+
+
 def _space_shape(metadata: dict[str, Any], key: str, path: Path) -> tuple[int, ...]:
+    """The shape of the Box space ``metadata[key]`` (a JSON string, as Minari writes it)."""
     try:
         space = json.loads(metadata[key])
+        if not isinstance(space, dict):
+            raise ValueError("not a JSON object")
+        kind, shape = space.get("type"), space.get("shape")
     except (KeyError, TypeError, ValueError) as err:
-        raise DatasetError(f"{path}: no readable {key} in {METADATA_FILE}") from err
-    if space.get("type") != "Box":
-        raise DatasetError(f"{path}: {key} is a {space.get('type')} space, expected a Box")
-    return tuple(space["shape"])
+        raise DatasetError(f"{path}: field {key!r} is no readable space ({err})") from err
+    if kind != "Box":
+        raise DatasetError(f"{path}: field {key!r} is a {kind} space, expected a Box")
+    if not isinstance(shape, list) or not all(type(n) is int for n in shape):
+        raise DatasetError(f"{path}: field {key!r} has shape {shape!r}, expected a list of ints")
+    return tuple(shape)
+
+
+def _seed(metadata: dict[str, Any], path: Path) -> int:
+    """The recorded ``osg_seed`` (0 when the data set has none)."""
+    seed = metadata.get("osg_seed", 0)
+    if type(seed) is not int or seed < 0:
+        raise DatasetError(f"{path}: field 'osg_seed' must be a non-negative integer, got {seed!r}")
+    return seed
 
 
 def check_layout(metadata: dict[str, Any], skill: SkillSpec, path: Path) -> None:
-    """Raise ``DatasetError`` naming both shapes if the spaces are not the skill's."""
+    """Raise ``DatasetError`` naming both shapes if the spaces are not the skill's
+    (``path``: the metadata file)."""
     for key, wanted in (("observation_space", (OBS_DIM,)), ("action_space", (ACTION_DIM,))):
         shape = _space_shape(metadata, key, path)
         if shape != wanted:
@@ -92,36 +130,75 @@ def _successes(
     )
 
 
-def _episode(domain: Domain, group: h5py.Group, skill: SkillSpec, how: str, where: str) -> Episode:
-    world_dim = len(domain.world_fields)
-    observations = group["observations"][()]
-    actions = group["actions"][()]
-    steps = len(actions)
-    if observations.shape != (steps + 1, OBS_DIM) or actions.shape != (steps, ACTION_DIM):
+SOURCE_FIELDS: dict[str, tuple[tuple[int, ...], Any]] = {
+    "actions": ((ACTION_DIM,), np.float32),
+    "rewards": ((), np.float32),
+    "truncations": ((), np.bool_),
+}
+"""The per-step arrays read from a Minari episode (shape after the step axis, dtype kind)."""
+
+
+def _check_actions(actions: np.ndarray, bounds: tuple[float, ...], where: str) -> None:
+    """Refuse an action outside the domain's per-step bounds (the env would never apply it).
+
+    Raises:
+        DatasetError: naming ``where``, the step, the component and the bound.
+    """
+    limit = np.asarray(bounds, dtype=np.float32)
+    outside = np.argwhere(np.abs(actions.astype(np.float32)) > limit)
+    if len(outside):
+        step, component = (int(i) for i in outside[0])
         raise DatasetError(
-            f"{where}: observations {observations.shape} and actions {actions.shape}; "
-            f"expected ({steps + 1}, {OBS_DIM}) and ({steps}, {ACTION_DIM})"
+            f"{where}: field 'actions' at step {step}, component {component}: "
+            f"{float(actions[step, component])!r} is outside the domain's action bounds "
+            f"[-{float(limit[component]):g}, {float(limit[component]):g}]"
         )
+
+
+def _episode(domain: Domain, group: h5py.Group, skill: SkillSpec, how: str, where: str) -> Episode:
+    """One Minari episode group as an ``Episode``, every array checked first.
+
+    Raises:
+        DatasetError: naming ``where`` (file and episode), the field and the step: a wrong
+            shape or dtype, a non-finite value, or an action outside the domain's bounds.
+    """
+    world_dim = len(domain.world_fields)
+    source = {key: np.asarray(group[key][()]) for key in SOURCE_FIELDS}
+    steps = check_step_fields(where, source, SOURCE_FIELDS)
+    if steps == 0:
+        raise DatasetError(f"{where}: the episode has no steps")
+    observations = np.asarray(group["observations"][()])
+    check_step_fields(
+        where, {"observations": observations}, {"observations": ((OBS_DIM,), np.float32)}
+    )
+    if len(observations) != steps + 1:
+        raise DatasetError(
+            f"{where}: field 'observations' has {len(observations)} rows for {steps} steps; "
+            f"expected {steps + 1} (the T states and the last next state)"
+        )
+    actions = source["actions"]
+    _check_actions(actions, domain.action_bounds, where)
     infos = group.get("infos")
     if infos is not None and "world_states" in infos:
-        worlds = infos["world_states"][()]
-        if worlds.shape != (steps, world_dim):
+        worlds = np.asarray(infos["world_states"][()])
+        spec = {"infos/world_states": ((world_dim,), np.float32)}
+        if check_step_fields(where, {"infos/world_states": worlds}, spec) != steps:
             raise DatasetError(
-                f"{where}: infos/world_states has shape {worlds.shape}, expected "
-                f"({steps}, {world_dim}) (domain {domain.name!r})"
+                f"{where}: field 'infos/world_states' has {len(worlds)} rows for {steps} steps "
+                f"(domain {domain.name!r})"
             )
     elif how == "predicate":
         raise DatasetError(f"{where}: no infos/world_states, so --success predicate cannot run")
     else:
         worlds = np.full((steps, world_dim), np.nan)
-    success = _successes(domain, skill, observations[1:], group["rewards"][()], worlds, how)
+    success = _successes(domain, skill, observations[1:], source["rewards"], worlds, how)
     return Episode(
         observations=observations[:-1].astype(np.float32),
         next_observations=observations[1:].astype(np.float32),
         actions=actions.astype(np.float32),
         rewards=success.astype(np.float32),
         terminations=success,
-        truncations=group["truncations"][()].astype(bool),
+        truncations=source["truncations"].astype(bool),
         world_states=worlds.astype(np.float32),
     )
 
@@ -144,20 +221,23 @@ def import_minari(
         raise DatasetError(f"unknown success source {success!r}; known: rewards, predicate")
     skill = domain.skill(skill) if isinstance(skill, str) else skill
     data_dir = resolve(source)
-    metadata = json.loads((data_dir / METADATA_FILE).read_text())
-    check_layout(metadata, skill, data_dir)
+    metadata = _read_metadata(data_dir)
+    check_layout(metadata, skill, data_dir / METADATA_FILE)
+    seed = _seed(metadata, data_dir / METADATA_FILE)
     main = data_dir / MAIN_FILE
     try:
         with h5py.File(main, "r") as f:
             names = sorted(f, key=lambda name: int(name.rsplit("_", 1)[1]))
             episodes = [_episode(domain, f[n], skill, success, f"{main}:{n}") for n in names]
-    except (OSError, KeyError, ValueError, IndexError) as err:
+    except (OSError, KeyError, ValueError, IndexError, TypeError) as err:
         raise DatasetError(f"{main}: not a readable Minari HDF5 file ({err})") from err
+    if not episodes:
+        raise DatasetError(f"{main}: holds no episodes; nothing to import")
     attrs = {
         "domain": domain.name,
         "world_fields": ",".join(domain.world_fields),
         "skill": skill.to_json(),
-        "seed": max(int(metadata.get("osg_seed", 0)), 0),
+        "seed": seed,
         "collector": f"imported from Minari data set {metadata.get('dataset_id', source)}",
         "success_from": success,
     }

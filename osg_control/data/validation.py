@@ -1,9 +1,10 @@
 """Validation of a data set's fields: dtypes, shapes, finite values and the episode index.
 
-``load_dataset`` calls ``validate_fields`` on what it read, so a data set that would train
-into garbage (one NaN in ``rewards``, a success flag that disagrees with the rewards, an
-episode index that does not tile the steps) is refused with a ``DatasetError`` naming the
-file and the field, before any training.
+``load_dataset`` runs these checks on what it read and ``write_episodes`` on what it is
+about to write, so a data set that would train into garbage (one NaN in ``rewards``, a
+success flag that disagrees with the rewards, an episode index that does not tile the
+steps) is refused with a ``DatasetError`` naming the file and the field, before any
+training and before an existing file is replaced.
 """
 
 from __future__ import annotations
@@ -31,7 +32,7 @@ def _kind_ok(array: np.ndarray, dtype: Any) -> bool:
 
 
 def check_step_fields(
-    path: Path,
+    path: Path | str,
     arrays: Mapping[str, np.ndarray],
     spec: Mapping[str, tuple[tuple[int, ...], Any]],
     unknown: frozenset[str] = frozenset(),
@@ -39,7 +40,8 @@ def check_step_fields(
     """Shapes, dtypes and finiteness of the flat step arrays; returns the step count N.
 
     ``unknown``: fields a file declares unrecorded (e.g. world states of an imported data
-    set): they must then be NaN throughout instead of finite.
+    set): they must then be NaN throughout instead of finite. ``path`` names the arrays'
+    source in messages (a file, or a file and an episode group).
 
     Raises:
         DatasetError: naming the file and the first bad field.

@@ -3,21 +3,38 @@ scaling that keeps a command's direction."""
 
 from __future__ import annotations
 
+from typing import Any
+
 import numpy as np
 
+REAL_KINDS = "iuf"
+"""numpy dtype kinds an action may have: signed and unsigned integers, floats (not bool,
+complex, strings or objects)."""
 
-def checked_action(action: np.ndarray, bounds: np.ndarray) -> np.ndarray:
-    """Validate an action (shape (7,), finite) and clip it to ``bounds``.
+
+def checked_action(action: Any, bounds: np.ndarray) -> np.ndarray:
+    """Validate an action (real numbers, shape (7,), finite) and clip it to ``bounds``.
 
     Raises:
-        ValueError: wrong shape or NaN/inf; nothing reaches the actuators.
+        ValueError: not real numbers, wrong shape or NaN/inf (the message names the
+            expected shape and bounds); nothing reaches the actuators.
     """
-    action = np.asarray(action, dtype=float)
-    if action.shape != (7,):
-        raise ValueError(f"action must have shape (7,), got {action.shape}")
-    if not np.all(np.isfinite(action)):
-        raise ValueError(f"action must be finite, got {action.tolist()}")
-    return np.clip(action, -bounds, bounds)
+    try:
+        array = np.asarray(action)
+    except ValueError:  # a ragged sequence
+        raise ValueError(_refusal(bounds, repr(action))) from None
+    if array.dtype.kind not in REAL_KINDS:
+        raise ValueError(_refusal(bounds, f"dtype {array.dtype}: {action!r}"))
+    if array.shape != (7,):
+        raise ValueError(_refusal(bounds, f"shape {array.shape}"))
+    if not np.all(np.isfinite(array)):
+        raise ValueError(_refusal(bounds, f"non-finite values {array.tolist()}"))
+    return np.clip(array, -bounds, bounds)  # float64 for every real kind
+
+
+def _refusal(bounds: np.ndarray, got: str) -> str:
+    """The message of a refused action."""
+    return f"action must be a finite real array of shape (7,) within +-{bounds.tolist()}, got {got}"
 
 
 def scale_into(vector: np.ndarray, bound: float) -> np.ndarray:

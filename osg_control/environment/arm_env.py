@@ -26,13 +26,13 @@ catalogue or scene object.
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import Any
+from typing import Any, ClassVar
 
 import gymnasium as gym
 import mujoco
 import numpy as np
 
-from osg_control.control.divergence import DivergenceWatch
+from osg_control.control.divergence import DivergenceWatch, non_finite_state
 from osg_control.control.ik import (
     DiffIKController,
     IKConfig,
@@ -48,13 +48,25 @@ from osg_control.control.robot import (
     HOME_Q,
     TCP_SITE,
 )
-from osg_control.control.servo import servo_speed_band, velocity_limited_target
+from osg_control.control.servo import (
+    saturate_joint_speeds,
+    servo_speed_band,
+    velocity_limited_target,
+)
 from osg_control.domain.spec import Node, SkillSpec
 from osg_control.environment.actions import checked_action
-from osg_control.environment.options import check_start_options
+from osg_control.environment.options import (
+    Bounds,
+    check_facts_hold,
+    check_fields,
+    check_names,
+    check_start_options,
+    choice_option,
+    facts_option,
+)
 from osg_control.environment.poses import canonical_quat, quat_rotation, sample_start_pose
 from osg_control.environment.success import GRIPPER_CLOSED_CMD, GRIPPER_OPEN_CMD, success_holds
-from osg_control.errors import SimulationError
+from osg_control.errors import EnvOptionError, SimulationError
 
 __all__ = [
     "ACTION_BOUNDS",
@@ -74,6 +86,9 @@ OBS_HIGH = np.array([2.0, 2.0, 2.0, 1.0, 1.0, 1.0, 1.0, 1.0, 70.0, 0.1])
 unit quaternion, the gripper command, its force (the actuator's 70 N force range) and the
 finger distance (0 to 8 cm, with slack for contact penetration)."""
 CONTROL_HZ = 20.0
+RESET_OPTIONS = ("node", "position", "radius", "angle", "gripper", "facts", "world", "holding")
+"""The options ``ArmEnv.reset`` knows; any other name is refused."""
+GRIPPER_STATES = ("open", "closed")
 
 
 @dataclass(frozen=True)
@@ -88,8 +103,12 @@ class EnvConfig:
         start_radius: default random-start radius around the start pose [m].
         start_angle: default random-start angle per axis [rad].
         limit_joint_speed: keep the simulated joint speeds within the URDF velocity limits
-            on every physics substep (``control.servo``); off only to compare with the
-            unlimited servo, which peaks at 2.7x the limits.
+            on every physics substep (``control.servo``: the servo's clamped target and the
+            drive's speed saturation); off only to compare with the unlimited servo, which
+            peaks at 2.7x the limits.
+
+    Raises:
+        EnvOptionError: a field of the wrong type or outside its range (``BOUNDS``), named.
     """
 
     obs_noise_std: float = 0.0
@@ -98,6 +117,23 @@ class EnvConfig:
     start_radius: float = 0.0
     start_angle: float = 0.0
     limit_joint_speed: bool = True
+
+    BOUNDS: ClassVar[dict[str, Bounds]] = {
+        "obs_noise_std": Bounds(),
+        "max_steps": Bounds(low=1, integer=True, optional=True),
+        "start_radius": Bounds(),
+        "start_angle": Bounds(),
+    }
+    """The range of each numeric field."""
+
+    def __post_init__(self) -> None:
+        check_fields(self, self.BOUNDS)
+        if not isinstance(self.limit_joint_speed, bool):
+            raise EnvOptionError(
+                f"EnvConfig.limit_joint_speed must be a bool, got {self.limit_joint_speed!r}"
+            )
+        if not isinstance(self.ik, IKConfig):
+            raise EnvOptionError(f"EnvConfig.ik must be an IKConfig, got {self.ik!r}")
 
 
 def _as_slice(indices: list[int]) -> slice | np.ndarray:
@@ -112,8 +148,9 @@ def _as_slice(indices: list[int]) -> slice | np.ndarray:
 class ArmEnv(gym.Env):
     """The Panda driven by relative TCP commands in a domain's scene (see module docstring).
 
-    Subclasses implement ``build_model``, ``read_world``, ``facts_of`` and may override
-    ``place_world``, ``snap_start``, ``held_geoms`` and ``finger_opening``.
+    Subclasses implement ``build_model``, ``read_world``, ``facts_of``, may override
+    ``check_world``, ``place_world``, ``snap_start``, ``held_geoms`` and ``finger_opening``,
+    and declare ``world_facts``, ``world_options`` and ``holdable``.
 
     Args:
         nodes: the domain's nodes (start poses and skills' termination poses).
@@ -126,6 +163,13 @@ class ArmEnv(gym.Env):
     metadata = {"render_modes": ["rgb_array"], "render_fps": int(CONTROL_HZ)}
     camera = "overview"
     """The model camera ``render`` uses."""
+    world_facts: tuple[str, ...] = ()
+    """The facts ``facts_of`` can give: the ``facts`` reset option may name only these
+    (empty: not declared; a fact the start world lacks is refused all the same)."""
+    world_options: tuple[str, ...] = ()
+    """The entries the ``world`` reset option may have (``check_world`` checks the values)."""
+    holdable: tuple[str, ...] = ()
+    """What a start may hold (the ``holding`` reset option)."""
 
     def __init__(
         self,
@@ -149,6 +193,8 @@ class ArmEnv(gym.Env):
         self._arm_dof = _as_slice([self.model.joint(j).dofadr[0] for j in ARM_JOINTS])
         self._arm_act = _as_slice([self.model.actuator(j).id for j in ARM_JOINTS])
         self._velocity_limits = urdf_velocity_limits()
+        self._inverse_limits = 1.0 / self._velocity_limits
+        self._speeds = np.zeros(len(ARM_JOINTS))  # the physics loop's |qvel| / limit
         self._servo_band = servo_speed_band(self.model, self._arm_act, self._velocity_limits)
         self._step_speed_ratio = 0.0
         self.peak_joint_speed_ratio = 0.0
@@ -180,8 +226,9 @@ class ArmEnv(gym.Env):
         """The domain's facts that hold in a world-state vector."""
         raise NotImplementedError
 
-    def check_world(self, world: dict[str, Any]) -> None:
-        """Refuse explicit ``world`` reset options that mean nothing (e.g. non-finite).
+    def check_world(self, world: dict[str, Any], holding: str | None) -> None:
+        """Refuse explicit ``world`` reset options (their names are ``world_options``) that
+        mean nothing (e.g. non-finite) or contradict ``holding``.
 
         Raises:
             EnvOptionError: naming the option and its value.
@@ -266,21 +313,40 @@ class ArmEnv(gym.Env):
                 default: the skill's ``start_facts``), ``world`` (the scene's own explicit
                 options, see the domain's env), ``holding`` (an object name or ``None``;
                 default: the skill's ``holding``).
+
+        Raises:
+            EnvOptionError: an unknown option name or ``world`` entry (the known ones
+                listed), a value out of its domain, or options that contradict each other
+                (``facts`` that do not hold in the start world the other options give, an
+                open ``gripper`` while ``holding``); nothing is simulated.
+            SimulationError: no collision-free start, or the physics diverged placing it.
         """
         super().reset(seed=seed)
         options = dict(options or {})
-        node = self.nodes[options.get("node") or (self.skill.start if self.skill else self.home)]
-        centre = np.asarray(options.get("position", node.position), dtype=float)
-        radius = float(options.get("radius", self.config.start_radius))
-        angle = float(options.get("angle", self.config.start_angle))
-        gripper = options.get("gripper", node.gripper)
+        check_names(options, RESET_OPTIONS, "reset option")
+        node_name = options.get("node") or (self.skill.start if self.skill else self.home)
+        node = self.nodes[choice_option("node", node_name, self.nodes)]
+        centre, radius, angle = check_start_options(
+            options.get("position", node.position),
+            options.get("radius", self.config.start_radius),
+            options.get("angle", self.config.start_angle),
+        )
+        gripper = choice_option("gripper", options.get("gripper", node.gripper), GRIPPER_STATES)
         holding = options.get("holding", self.skill.holding if self.skill else None)
-        world = dict(options.get("world", {}))
-        default_facts = self.skill.start_facts if self.skill else ()
-        facts = frozenset(options.get("facts", default_facts))
+        choice_option("holding", holding, (None, *self.holdable))
+        if holding is not None and options.get("gripper") == "open":
+            raise EnvOptionError(
+                f"reset options contradict each other: gripper 'open' while holding {holding!r}"
+            )
+        world = options.get("world", {})
+        if not isinstance(world, dict):
+            raise EnvOptionError(f"reset option world must be a dict, got {world!r}")
+        check_names(world, self.world_options, "world reset option")
+        self.check_world(world, holding)
+        asked = options.get("facts")
+        default_facts = self.skill.start_facts if self.skill else frozenset()
+        facts = default_facts if asked is None else facts_option(asked, self.world_facts)
         orientation = quat_rotation(node.orientation)
-        check_start_options(centre, radius, angle)
-        self.check_world(world)
         for _attempt in range(50):
             pos, rot = sample_start_pose(self.np_random, centre, radius, angle, orientation)
             pos, rot = self.snap_start(pos, rot, holding, world, facts)
@@ -290,6 +356,9 @@ class ArmEnv(gym.Env):
             raise SimulationError(
                 f"no collision-free start found within {radius} m of {centre.tolist()}"
             )
+        if asked is not None:
+            given = {k: options[k] for k in ("world", "holding", "gripper") if k in options}
+            check_facts_hold(facts, self.facts(), f"the options {given}")
         self._steps = 0
         self._succeeded = False
         self.peak_joint_speed_ratio = 0.0
@@ -359,17 +428,30 @@ class ArmEnv(gym.Env):
         return checked_action(action, ACTION_BOUNDS)
 
     def step(self, action: np.ndarray) -> tuple[np.ndarray, float, bool, bool, dict[str, Any]]:
-        """Apply one 50 ms control step (see module docstring)."""
+        """Apply one 50 ms control step (see module docstring).
+
+        A non-finite joint position (set from outside since the last step) ends the
+        episode as a divergence: ``terminated``, ``info["failure"]`` naming the joint,
+        nothing simulated and nothing sent to the actuators (a non-finite velocity MuJoCo
+        reports itself, as ``BADQVEL``).
+
+        Raises:
+            ValueError: a malformed action (``check_action``).
+        """
         action = self.check_action(action)
-        if action[6] < -0.5:
-            self._gripper_cmd = GRIPPER_CLOSED_CMD
-        elif action[6] > 0.5:
-            self._gripper_cmd = GRIPPER_OPEN_CMD
-        q_target = self.ik.relative_step(self.arm_q, action[:6])
-        self.data.ctrl[self._gripper_act] = (
-            FINGER_OPEN if self._gripper_cmd == GRIPPER_OPEN_CMD else 0.0
-        )
-        failure = self._simulate(q_target)
+        failure = non_finite_state(self.data, ("qpos",))  # MuJoCo answers a bad qvel itself
+        if failure is None:
+            if action[6] < -0.5:
+                self._gripper_cmd = GRIPPER_CLOSED_CMD
+            elif action[6] > 0.5:
+                self._gripper_cmd = GRIPPER_OPEN_CMD
+            q_target = self.ik.relative_step(self.arm_q, action[:6])
+            self.data.ctrl[self._gripper_act] = (
+                FINGER_OPEN if self._gripper_cmd == GRIPPER_OPEN_CMD else 0.0
+            )
+            failure = self._simulate(q_target)
+        else:
+            self._step_speed_ratio = 0.0  # nothing simulated
         self._steps += 1
         world = self.world_state()
         reward = 0.0
@@ -392,24 +474,31 @@ class ArmEnv(gym.Env):
 
     def _simulate(self, arm_target: np.ndarray) -> str | None:
         """Run the physics substeps toward ``arm_target`` (speed-limited, see
-        ``control.servo``); return a failure reason if the simulation diverged."""
+        ``control.servo``: the servo's target clamped before each substep, the speeds
+        saturated after one in which a joint exceeded its limit); return a failure reason
+        if the simulation diverged."""
         watch = DivergenceWatch(self.data)
-        fastest = np.zeros(len(ARM_JOINTS))  # per joint, over the substeps: max and min qvel
-        slowest = np.zeros(len(ARM_JOINTS))
+        limited = self.config.limit_joint_speed
+        limits, inverse_limits, speeds = self._velocity_limits, self._inverse_limits, self._speeds
+        peak = 0.0
         for _ in range(self.n_substeps):
-            if self.config.limit_joint_speed:
+            if limited:
                 self.data.ctrl[self._arm_act] = velocity_limited_target(
                     arm_target, self.data.qpos[self._arm_qpos], self._servo_band
                 )
             else:
                 self.data.ctrl[self._arm_act] = arm_target
             mujoco.mj_step(self.model, self.data)
-            velocity = self.data.qvel[self._arm_dof]
-            np.maximum(fastest, velocity, out=fastest)
-            np.minimum(slowest, velocity, out=slowest)
-        peak = float(np.max(np.maximum(fastest, -slowest) / self._velocity_limits))
-        self.peak_joint_speed_ratio = max(self.peak_joint_speed_ratio, peak)
-        self._step_speed_ratio = peak
+            np.abs(self.data.qvel[self._arm_dof], out=speeds)
+            fastest = np.multiply(speeds, inverse_limits, out=speeds).max()
+            if limited and fastest > 1.0:
+                saturate_joint_speeds(
+                    self.data, self._arm_qpos, self._arm_dof, limits, self.model.opt.timestep
+                )
+                fastest = np.max(np.abs(self.data.qvel[self._arm_dof]) * inverse_limits)
+            peak = max(peak, fastest)
+        self.peak_joint_speed_ratio = max(self.peak_joint_speed_ratio, float(peak))
+        self._step_speed_ratio = float(peak)
         return watch.check()
 
     def skill_success(
@@ -449,6 +538,9 @@ class ArmEnv(gym.Env):
 
         Returns:
             The number of control steps used.
+
+        Raises:
+            SimulationError: the physics diverged (or the joint state is non-finite).
         """
         if self._reset_ik is None:
             self._reset_ik = joint_reset_controller(self.config.ik)
@@ -460,8 +552,11 @@ class ArmEnv(gym.Env):
             if error < tolerance or error > previous - 1e-4:
                 return step
             previous = error
-            if self._simulate(self._reset_ik.reset_step(self.arm_q, pos, rot)) is not None:
-                raise SimulationError("physics diverged during joint reset")
+            diverged = non_finite_state(self.data, ("qpos",))
+            if diverged is None:
+                diverged = self._simulate(self._reset_ik.reset_step(self.arm_q, pos, rot))
+            if diverged is not None:
+                raise SimulationError(f"{diverged} during joint reset")
         return max_steps
 
     # ----------------------------------------------------------------- render

@@ -6,10 +6,16 @@ between CPUs), so across machines the claim is statistical: every success rate o
 reproduction must agree with the shipped figure of the same cell. Two rates agree when
 their Wilson score intervals at ``CONFIDENCE`` overlap; each cell's episode count comes from
 its table. Table II's accuracies count states, not episodes, and are compared the same way.
+
+Both sides are validated before anything is compared: a rate must be a finite number in
+[0, 1], a trial count a positive integer, every table, row and axis of the expected shape,
+and every cell of the shipped figures must be in the reproduction. A comparison that cannot
+be made is a ``DatasetError`` naming the file and the cell or key, never a pass.
 """
 
 from __future__ import annotations
 
+import json
 import math
 from collections.abc import Iterator
 from dataclasses import dataclass
@@ -56,52 +62,202 @@ def wilson_interval(rate: float, trials: int, z: float = Z) -> tuple[float, floa
     return max(0.0, centre - half), min(1.0, centre + half)
 
 
-def cells(figures: dict[str, Any]) -> Iterator[Cell]:
-    """Every success rate of a report's figures, with its trial count."""
-    if "table_i" in figures:
-        table = figures["table_i"]
-        for row in table["rows"]:
-            for noise, rate in zip(table["noise"], row["rates"], strict=True):
-                yield Cell(f"Table I {row['skill']} sigma={noise}", rate, table["episodes"])
-    if "table_ii" in figures:
-        table = figures["table_ii"]
-        for key in ("accuracy", "corrected_accuracy"):
-            yield Cell(f"Table II {key}", table[key], table["num_states"])
-    if "table_iii" in figures:
-        table = figures["table_iii"]
-        for row in table["rows"]:
-            yield Cell(f"Table III {row['start']}", row["success"], table["episodes"])
-    if "tables_iv_v" in figures:
-        table = figures["tables_iv_v"]
-        for k, budget in enumerate(table["replans"]):
-            for t, task in enumerate(table["tasks"]):
-                for r, region in enumerate(table["regions"]):
-                    yield Cell(
-                        f"Tables IV/V replans={budget} {task} {region}",
-                        table["rates"][k][t][r],
-                        table["episodes"],
-                    )
+class _Fields:
+    """Typed access to one report's figures: every malformed value is a ``DatasetError``
+    naming the report and the key or cell."""
+
+    def __init__(self, source: str) -> None:
+        """Name errors after ``source`` (the file, or what the figures are)."""
+        self.source = source
+
+    def fail(self, where: str, message: str) -> DatasetError:
+        """The error for a malformed value at ``where``."""
+        return DatasetError(f"{self.source}: {where}: {message}")
+
+    def field(self, mapping: dict[str, Any], key: str, where: str) -> Any:
+        """``mapping[key]``, which must be there."""
+        if key not in mapping:
+            raise self.fail(where, f"{key!r} is missing")
+        return mapping[key]
+
+    def get(self, mapping: dict[str, Any], key: str, kind: type, where: str) -> Any:
+        """``mapping[key]``, which must be a ``kind`` (a dict or a list)."""
+        value = self.field(mapping, key, where)
+        if not isinstance(value, kind):
+            raise self.fail(where, f"{key!r} must be a {_JSON_NAMES[kind]}, got {_shown(value)}")
+        return value
+
+    def table(self, figures: dict[str, Any], key: str) -> dict[str, Any] | None:
+        """The table ``key`` if the figures have it (it must be an object)."""
+        if key not in figures:
+            return None
+        return self.get(figures, key, dict, TABLE_NAMES[key])  # type: ignore[no-any-return]
+
+    def sized(self, value: Any, where: str, length: int | None = None) -> list[Any]:
+        """``value`` as a list, of ``length`` entries when given."""
+        if not isinstance(value, list) or length is not None and len(value) != length:
+            entries = "a list" if length is None else f"a list of {length} entries"
+            raise self.fail(where, f"must be {entries}, got {_shown(value)}")
+        return value
+
+    def rows(self, table: dict[str, Any], key: str, where: str, length: int | None) -> list[Any]:
+        """The list ``table[key]``, of ``length`` entries when given."""
+        return self.sized(self.field(table, key, where), f"{where} {key!r}", length)
+
+    def records(self, table: dict[str, Any], where: str) -> Iterator[tuple[str, dict[str, Any]]]:
+        """Each row of ``table['rows']`` (a JSON object), with where it is."""
+        for i, row in enumerate(self.rows(table, "rows", where, None)):
+            at = f"{where} row {i + 1}"
+            if not isinstance(row, dict):
+                raise self.fail(at, f"must be a JSON object, got {_shown(row)}")
+            yield at, row
+
+    def label(self, value: Any, where: str) -> str:
+        """A row or column label (a name, or a number such as a noise level)."""
+        if isinstance(value, str) or _is_number(value) and math.isfinite(value):
+            return str(value)
+        raise self.fail(where, f"a label must be a string or a finite number, got {_shown(value)}")
+
+    def trials(self, table: dict[str, Any], key: str, where: str) -> int:
+        """A table's trial count ``table[key]``: a positive integer."""
+        value = self.field(table, key, where)
+        if isinstance(value, bool) or not isinstance(value, int) or value <= 0:
+            raise self.fail(where, f"{key!r} must be a positive integer, got {_shown(value)}")
+        return value
+
+    def cell(self, where: str, value: Any, trials: int) -> Cell:
+        """The cell at ``where``: its rate must be a finite number in [0, 1]."""
+        if not (_is_number(value) and math.isfinite(value) and 0.0 <= value <= 1.0):
+            raise self.fail(where, f"rate must be a finite number in [0, 1], got {_shown(value)}")
+        return Cell(where, float(value), trials)
 
 
-def compare(shipped: dict[str, Any], reproduced: dict[str, Any]) -> tuple[int, list[Mismatch]]:
-    """Compare every cell both reports have; returns (cells compared, mismatches).
+_JSON_NAMES: dict[type, str] = {dict: "JSON object", list: "JSON list"}
+TABLE_NAMES = {
+    "table_i": "Table I",
+    "table_ii": "Table II",
+    "table_iii": "Table III",
+    "tables_iv_v": "Tables IV/V",
+}
+"""The tables whose success rates are compared, by their key in ``figures.json``."""
+
+
+def _is_number(value: Any) -> bool:
+    return isinstance(value, int | float) and not isinstance(value, bool)
+
+
+def _shown(value: Any) -> str:
+    text = json.dumps(value, default=repr)
+    return text if len(text) <= 40 else text[:37] + "..."
+
+
+def cells(figures: Any, source: str = "figures") -> Iterator[Cell]:
+    """Every success rate of a report's figures, with its trial count.
 
     Raises:
-        DatasetError: the reports share no cell (different tables or scales).
+        DatasetError: a table, row, label, rate or trial count is malformed (a rate not a
+            finite number in [0, 1], a trial count not a positive integer), naming
+            ``source`` and the key or cell.
     """
-    reference = {cell.where: cell for cell in cells(shipped)}
-    compared, mismatches = 0, []
-    for cell in cells(reproduced):
-        if cell.where not in reference:
-            continue
-        compared += 1
-        ref = reference[cell.where]
+    fields = _Fields(source)
+    if not isinstance(figures, dict):
+        raise fields.fail("figures", f"must be a JSON object, got {_shown(figures)}")
+    if (table := fields.table(figures, "table_i")) is not None:
+        trials = fields.trials(table, "episodes", "Table I")
+        noise = [
+            fields.label(n, "Table I 'noise'") for n in fields.rows(table, "noise", "Table I", None)
+        ]
+        for at, row in fields.records(table, "Table I"):
+            skill = fields.label(fields.field(row, "skill", at), f"{at} 'skill'")
+            rates = fields.rows(row, "rates", f"Table I {skill}", len(noise))
+            for sigma, rate in zip(noise, rates, strict=True):
+                yield fields.cell(f"Table I {skill} sigma={sigma}", rate, trials)
+    if (table := fields.table(figures, "table_ii")) is not None:
+        trials = fields.trials(table, "num_states", "Table II")
+        for key in ("accuracy", "corrected_accuracy"):
+            yield fields.cell(f"Table II {key}", fields.field(table, key, "Table II"), trials)
+    if (table := fields.table(figures, "table_iii")) is not None:
+        trials = fields.trials(table, "episodes", "Table III")
+        for at, row in fields.records(table, "Table III"):
+            start = fields.label(fields.field(row, "start", at), f"{at} 'start'")
+            where = f"Table III {start}"
+            yield fields.cell(where, fields.field(row, "success", where), trials)
+    if (table := fields.table(figures, "tables_iv_v")) is not None:
+        yield from _task_cells(fields, table)
+
+
+def _task_cells(fields: _Fields, table: dict[str, Any]) -> Iterator[Cell]:
+    """Tables IV/V's cells: ``rates[budget][task][region]``, each axis labelled."""
+    trials = fields.trials(table, "episodes", "Tables IV/V")
+    axes = [
+        [
+            fields.label(x, f"Tables IV/V {key!r}")
+            for x in fields.rows(table, key, "Tables IV/V", None)
+        ]
+        for key in ("replans", "tasks", "regions")
+    ]
+    budgets, tasks, regions = axes
+    by_budget = fields.rows(table, "rates", "Tables IV/V", len(budgets))
+    for budget, by_task in zip(budgets, by_budget, strict=True):
+        at = f"Tables IV/V replans={budget}"
+        for task, by_region in zip(tasks, fields.sized(by_task, at, len(tasks)), strict=True):
+            rates = fields.sized(by_region, f"{at} {task}", len(regions))
+            for region, rate in zip(regions, rates, strict=True):
+                yield fields.cell(f"{at} {task} {region}", rate, trials)
+
+
+def _cells_by_place(figures: Any, source: str) -> dict[str, Cell]:
+    """The cells of ``figures`` by where they are; a place given twice is an error."""
+    found: dict[str, Cell] = {}
+    for cell in cells(figures, source):
+        if cell.where in found:
+            raise DatasetError(f"{source}: {cell.where}: the cell appears twice")
+        found[cell.where] = cell
+    return found
+
+
+def compare(
+    shipped: Any,
+    reproduced: Any,
+    shipped_source: str = "shipped figures",
+    reproduced_source: str = "reproduction",
+) -> tuple[int, list[Mismatch]]:
+    """Compare every cell of the shipped figures with the reproduction's; returns (cells
+    compared, mismatches). Cells only the reproduction has are not compared.
+
+    Raises:
+        DatasetError: either side is malformed (see ``cells``), the reproduction lacks cells
+            the shipped figures have, or the two share no cell; named after the sources.
+    """
+    reference = _cells_by_place(shipped, shipped_source)
+    found = _cells_by_place(reproduced, reproduced_source)
+    shared = [where for where in reference if where in found]
+    if not shared:
+        raise DatasetError(
+            f"{reproduced_source}: the reproduction and the shipped figures ({shipped_source}) "
+            "share no table cell"
+        )
+    missing = [where for where in reference if where not in found]
+    if missing:
+        listed = ", ".join(missing[:5]) + (
+            f" and {len(missing) - 5} more" if len(missing) > 5 else ""
+        )
+        raise DatasetError(
+            f"{reproduced_source}: lacks {len(missing)} of the {len(reference)} cells of the "
+            f"shipped figures ({shipped_source}): {listed}"
+        )
+    mismatches = []
+    for where in shared:
+        ref, cell = reference[where], found[where]
         a, b = wilson_interval(ref.rate, ref.trials), wilson_interval(cell.rate, cell.trials)
         if a[1] < b[0] or b[1] < a[0]:
-            mismatches.append(Mismatch(cell.where, ref.rate, cell.rate, a, b))
-    if not compared:
-        raise DatasetError("the reproduction and the shipped figures share no table cell")
-    return compared, mismatches
+            mismatches.append(Mismatch(where, ref.rate, cell.rate, a, b))
+    return len(shared), mismatches
+
+
+def figures_file(path: Path) -> Path:
+    """A report's ``figures.json``: ``path`` itself, or the file in the folder ``path``."""
+    return path / FIGURES if path.is_dir() else path
 
 
 def read_figures(path: Path) -> dict[str, Any]:
@@ -110,5 +266,4 @@ def read_figures(path: Path) -> dict[str, Any]:
     Raises:
         DatasetError: missing or unreadable, naming the file.
     """
-    path = path / FIGURES if path.is_dir() else path
-    return read_json_object(path, "reproduction figures", DatasetError)
+    return read_json_object(figures_file(path), "reproduction figures", DatasetError)

@@ -5,18 +5,21 @@ Episodes run in parallel workers; episode ``i`` of a cell draws its start from
 ``SeedSequence([skill_seed(seed, NAME), k, i])`` where NAME is the cell's skill or task and
 ``k`` its noise level or start region, so the tables depend neither on the number of
 workers nor on which other skills or tasks a domain has. Workers find the domain by name
-(``osg_control.domain.registry``).
+(``osg_control.domain.registry``). Episodes are made on demand (``parallel.lazy.grid``) and
+their outcomes summed per cell as they arrive, so memory does not grow with the number of
+episodes.
 """
 
 from __future__ import annotations
 
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Iterable, Sequence
 from dataclasses import dataclass
 from functools import cache
 from pathlib import Path
 from typing import Any
 
 import numpy as np
+from tqdm import tqdm
 
 from osg_control.control.estimator import FilteredPolicy
 from osg_control.data.collect import run_scripted_episode
@@ -24,9 +27,11 @@ from osg_control.domain.base import Domain
 from osg_control.domain.registry import get_domain
 from osg_control.domain.spec import nearest_start
 from osg_control.environment.arm_env import ArmEnv, EnvConfig
-from osg_control.evaluation.resume import resumable_map
+from osg_control.evaluation.resume import resumable_results
 from osg_control.execution.executor import task_env_config
+from osg_control.learning.checkpoints import require_skills
 from osg_control.parallel import LocalExecutor, TaskExecutor
+from osg_control.parallel.lazy import grid
 from osg_control.seeding import skill_seed
 
 
@@ -35,11 +40,28 @@ def episode_rng(seed: int, name: str, cell: int, index: int) -> np.random.Genera
     return np.random.default_rng(np.random.SeedSequence([skill_seed(seed, name), cell, index]))
 
 
-@cache
-def _policies(directory: str) -> dict[str, Any]:
-    from osg_control.learning.policy import load_policies
+def cell_means(
+    results: Iterable[Any], cells: int, per_cell: int, desc: str, progress: bool
+) -> np.ndarray:
+    """The mean of each cell's ``per_cell`` consecutive outcomes (booleans, or tuples of
+    them), summed as they arrive (one progress bar over them, on stderr)."""
+    sums: np.ndarray | None = None
+    bar = tqdm(results, total=cells * per_cell, desc=desc, unit="ep", disable=not progress)
+    for j, outcome in enumerate(bar):
+        value = np.asarray(outcome, dtype=float)
+        if sums is None:
+            sums = np.zeros((cells, *value.shape))
+        sums[j // per_cell] += value
+    assert sums is not None  # every cell has at least one episode
+    return sums / per_cell
 
-    return load_policies(directory)
+
+@cache
+def _policy(domain: str, directory: str, skill: str) -> Any:
+    """A skill's policy, loaded once per worker and checked against its domain."""
+    from osg_control.execution.defaults import load_skill_policies
+
+    return load_skill_policies(get_domain(domain), directory, [skill])[skill]
 
 
 @cache
@@ -65,7 +87,7 @@ class SkillEpisode:
 def run_skill_episode(task: SkillEpisode) -> bool:
     """Run a learned skill from a random start in its initiation region; True on success."""
     skill = get_domain(task.domain).skill(task.skill)
-    policy: Callable[[np.ndarray], np.ndarray] = _policies(task.policy_dir)[task.skill]
+    policy: Callable[[np.ndarray], np.ndarray] = _policy(task.domain, task.policy_dir, task.skill)
     if task.filter_gain is not None:
         policy = FilteredPolicy(policy, task.filter_gain)
     env = _env(task.domain, task.skill, task.noise)
@@ -97,6 +119,7 @@ def skill_table(
     scripted_episodes: int = 100,
     filter_gain: float | None = None,
     executor: TaskExecutor | None = None,
+    progress: bool = False,
 ) -> dict[str, Any]:
     """Table I: success rate of every learned skill at each observation-noise level.
 
@@ -104,6 +127,7 @@ def skill_table(
         filter_gain: run the policies on ``estimator.TcpFilter`` estimates with this gain;
             None (the paper's protocol) feeds them the raw noisy observation.
         executor: where the episodes run (default: a local pool of ``workers``).
+        progress: show progress bars on stderr.
 
     Returns:
         ``{"noise": [...], "episodes": N, "filter_gain": g, "rows": [{"skill",
@@ -112,20 +136,21 @@ def skill_table(
     names = list(skills or domain.skills_by_name)
     for name in names:
         domain.skill(name)
+    require_skills(policy_dir, names)
     executor = executor or LocalExecutor(workers)
-    tasks = [
-        SkillEpisode(domain.name, name, str(policy_dir), float(noise), seed, k, i, filter_gain)
-        for name in names
-        for k, noise in enumerate(noise_levels)
-        for i in range(episodes)
-    ]
-    outcomes = np.array(list(executor.map(run_skill_episode, tasks)), dtype=float)
-    rates = outcomes.reshape(len(names), len(noise_levels), episodes).mean(axis=2)
-    scripted_tasks = [
-        (domain.name, n, seed + 1, i) for n in names for i in range(scripted_episodes)
-    ]
-    scripted = np.array(list(executor.map(_scripted_success, scripted_tasks)), dtype=float)
-    scripted_rates = scripted.reshape(len(names), scripted_episodes).mean(axis=1)
+    cells = [(name, k, float(noise)) for name in names for k, noise in enumerate(noise_levels)]
+
+    def job(cell: tuple[str, int, float], i: int) -> SkillEpisode:
+        name, k, noise = cell
+        return SkillEpisode(domain.name, name, str(policy_dir), noise, seed, k, i, filter_gain)
+
+    tasks = grid(cells, episodes, job)
+    outcomes = executor.map(run_skill_episode, tasks)
+    rates = cell_means(outcomes, len(cells), episodes, "learned", progress)
+    rates = rates.reshape(len(names), len(noise_levels))
+    scripted_tasks = grid(names, scripted_episodes, lambda n, i: (domain.name, n, seed + 1, i))
+    scripted = executor.map(_scripted_success, scripted_tasks)
+    scripted_rates = cell_means(scripted, len(names), scripted_episodes, "scripted", progress)
     return {
         "noise": list(noise_levels),
         "episodes": episodes,
@@ -248,20 +273,22 @@ def reach_table(
     workers: int = 2,
     noise: float = 0.0,
     executor: TaskExecutor | None = None,
+    progress: bool = False,
 ) -> dict[str, Any]:
     """Table III: entry-skill success from random starts around the domain's start regions.
 
-    ``executor``: where the episodes run (default: a local pool of ``workers``).
+    ``executor``: where the episodes run (default: a local pool of ``workers``);
+    ``progress``: show a progress bar on stderr.
     """
     regions = domain.start_regions
-    tasks = [
-        StartEpisode(domain.name, "reach", models, r, noise, seed, r, i)
-        for r in range(len(regions))
-        for i in range(episodes)
-    ]
+    tasks = grid(
+        range(len(regions)),
+        episodes,
+        lambda r, i: StartEpisode(domain.name, "reach", models, r, noise, seed, r, i),
+    )
     executor = executor or LocalExecutor(workers)
-    results = np.array(list(executor.map(run_reach_episode, tasks)), dtype=float)
-    results = results.reshape(len(regions), episodes, 3).mean(axis=1)
+    outcomes = executor.map(run_reach_episode, tasks)
+    results = cell_means(outcomes, len(regions), episodes, "reach", progress)
     rows = [
         {
             "start": region.name,
@@ -331,25 +358,29 @@ def task_table(
     filter_gain: float | None = None,
     executor: TaskExecutor | None = None,
     resume_dir: Path | None = None,
+    progress: bool = False,
 ) -> dict[str, Any]:
     """Tables IV and V: task success per start region, without and with replanning.
 
     ``tasks``: task names (default: all the domain's); ``filter_gain``: the executor's
     ``TcpFilter`` gain (None: raw observations); ``executor``: where the episodes run
     (default: a local pool of ``workers``); ``resume_dir``: keep finished episodes there and
-    resume from them (``resume``).
+    resume from them (``resume``); ``progress``: show a progress bar on stderr.
     """
     regions = domain.start_regions
     tasks = [domain.task(t).name for t in (tasks or [t.name for t in domain.tasks])]
     cells = [(t, r, k) for k in replans for t in tasks for r in range(len(regions))]
-    jobs = [
-        TaskEpisode(StartEpisode(domain.name, t, models, r, noise, seed, r, i), t, k, filter_gain)
-        for (t, r, k) in cells
-        for i in range(episodes)
-    ]
-    results = resumable_map(executor or LocalExecutor(workers), run_task_episode, jobs, resume_dir)
-    outcomes = np.array(results, dtype=float)
-    rates = outcomes.reshape(len(replans), len(tasks), len(regions), episodes).mean(axis=3)
+
+    def job(cell: tuple[str, int, int], i: int) -> TaskEpisode:
+        t, r, k = cell
+        return TaskEpisode(
+            StartEpisode(domain.name, t, models, r, noise, seed, r, i), t, k, filter_gain
+        )
+
+    executor = executor or LocalExecutor(workers)
+    results = resumable_results(executor, run_task_episode, grid(cells, episodes, job), resume_dir)
+    rates = cell_means(results, len(cells), episodes, "tasks", progress)
+    rates = rates.reshape(len(replans), len(tasks), len(regions))
     return {
         "episodes": episodes,
         "seed": seed,

@@ -1,8 +1,9 @@
 """Peak simulated joint speed relative to the URDF limits over a skill's episodes.
 
-The check behind ``tests/test_joint_speeds.py`` and ``tools/joint_speeds.py``: run a policy
-from random starts, then the joint reset, and read the env's peak ``|qvel| / limit`` over
-every physics substep (``ArmEnv.peak_joint_speed_ratio``).
+The checks behind ``tests/test_joint_speeds.py`` and ``tools/joint_speeds.py``: run a policy
+from random starts, then the joint reset, or full-speed TCP commands along an axis (the
+hardest case for the servo), and read the env's peak ``|qvel| / limit`` over every physics
+substep (``ArmEnv.peak_joint_speed_ratio``).
 """
 
 from __future__ import annotations
@@ -12,10 +13,13 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from osg_control.environment.arm_env import ArmEnv
+from osg_control.environment.arm_env import ACTION_BOUNDS, ArmEnv
 
 START = {"radius": 0.05, "angle": 0.1}
 """Random starts within 5 cm and 0.1 rad of the skill's start node."""
+FULL_SPEED_STEPS = 40
+"""Control steps of a full-speed probe (2 s: the arm reaches and holds its top speed)."""
+DIRECTIONS = ("+x", "-x", "+y", "-y", "+z", "-z")
 
 
 @dataclass(frozen=True)
@@ -51,3 +55,21 @@ def peak_joint_speed(
         env.joint_reset()
         peak = max(peak, env.peak_joint_speed_ratio)
     return SpeedCheck(peak, successes)
+
+
+def full_speed_peak(env: ArmEnv, direction: str, steps: int = FULL_SPEED_STEPS) -> float:
+    """The peak ``|qvel| / limit`` under ``steps`` TCP commands at the action bound along
+    ``direction`` (one of ``DIRECTIONS``) from the env's home node (seed 0).
+
+    Raises:
+        ValueError: an unknown direction.
+    """
+    if direction not in DIRECTIONS:
+        raise ValueError(f"unknown direction {direction!r}; known directions: {DIRECTIONS}")
+    axis = "xyz".index(direction[1])
+    action = np.zeros(7)
+    action[axis] = ACTION_BOUNDS[axis] * (1.0 if direction[0] == "+" else -1.0)
+    env.reset(seed=0, options={"node": env.home})
+    for _ in range(steps):
+        env.step(action)
+    return env.peak_joint_speed_ratio

@@ -7,7 +7,8 @@ models, noise, budget...). A chunk file is used only when its keys are exactly t
 chunk's; a foreign or corrupt file is discarded with a warning and recomputed. When every
 chunk is done the files are removed. The folder's name carries ``source_fingerprint``, so an
 interrupted evaluation resumed after the package's code changed starts afresh instead of
-mixing in episodes the old code ran.
+mixing in episodes the old code ran. Chunks are made, checked and submitted one by one as
+the work goes (``resumable_results``): memory does not grow with the number of jobs.
 """
 
 from __future__ import annotations
@@ -15,8 +16,10 @@ from __future__ import annotations
 import hashlib
 import json
 import logging
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Iterator, Sequence
+from contextlib import closing
 from functools import cache, partial
+from itertools import tee
 from pathlib import Path
 from typing import Any, TypeVar
 
@@ -65,24 +68,46 @@ def _read_chunk(path: Path, keys: list[str]) -> list[Any] | None:
     return None
 
 
+def _chunks(jobs: Sequence[T], directory: Path) -> Iterator[tuple[Path, list[str], list[T]]]:
+    """Each chunk's file, keys and jobs, made as they are asked for."""
+    for start in range(0, len(jobs), CHUNK_JOBS):
+        chunk = list(jobs[start : start + CHUNK_JOBS])
+        keys = [repr(job) for job in chunk]
+        yield _chunk_path(directory, keys), keys, chunk
+
+
+def resumable_results(
+    mapper: Any, fn: Callable[[T], Any], jobs: Sequence[T], directory: Path | None
+) -> Iterator[Any]:
+    """``fn(job)`` for each job, in order, through ``mapper.map`` (a ``TaskExecutor``),
+    resuming from and saving to chunk files under ``directory`` (None: no resume).
+
+    ``jobs`` may be a lazy sequence (``parallel.lazy.Jobs``): it is walked once for the
+    work and once more, at the end, to remove the chunk files.
+    """
+    if directory is None:
+        yield from mapper.map(fn, jobs)
+        return
+    directory = Path(directory)
+    stored = (
+        (path, keys, chunk, _read_chunk(path, keys))
+        for path, keys, chunk in _chunks(jobs, directory)
+    )
+    stream, ahead = tee(stored)
+    todo = (chunk for _path, _keys, chunk, results in ahead if results is None)
+    with closing(mapper.map(partial(_run_all, fn), todo)) as done:
+        for path, keys, _chunk, kept in stream:
+            results = next(done) if kept is None else kept
+            if kept is None:
+                payload = json.dumps({"keys": keys, "results": results})
+                atomic_write(path, partial(Path.write_text, data=payload))
+            yield from results
+    for path, _keys, _chunk in _chunks(jobs, directory):
+        path.unlink(missing_ok=True)
+
+
 def resumable_map(
     mapper: Any, fn: Callable[[T], Any], jobs: Sequence[T], directory: Path | None
 ) -> list[Any]:
-    """``[fn(job) for job in jobs]`` through ``mapper.map`` (a ``TaskExecutor``), resuming
-    from and saving to chunk files under ``directory`` (None: no resume)."""
-    if directory is None:
-        return list(mapper.map(fn, jobs))
-    directory = Path(directory)
-    chunks = [list(jobs[i : i + CHUNK_JOBS]) for i in range(0, len(jobs), CHUNK_JOBS)]
-    keys = [[repr(job) for job in chunk] for chunk in chunks]
-    paths = [_chunk_path(directory, k) for k in keys]
-    results: list[list[Any] | None] = [_read_chunk(p, k) for p, k in zip(paths, keys, strict=True)]
-    todo = [i for i, r in enumerate(results) if r is None]
-    done = mapper.map(partial(_run_all, fn), [chunks[i] for i in todo])
-    for index, chunk_results in zip(todo, done, strict=True):
-        payload = json.dumps({"keys": keys[index], "results": chunk_results})
-        atomic_write(paths[index], partial(Path.write_text, data=payload))
-        results[index] = chunk_results
-    for path in paths:
-        path.unlink(missing_ok=True)
-    return [result for chunk_results in results for result in chunk_results or []]
+    """``resumable_results`` as a list."""
+    return list(resumable_results(mapper, fn, jobs, directory))

@@ -10,6 +10,7 @@ reproduce`` writes a directory of the same layout.
 from __future__ import annotations
 
 import hashlib
+from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -18,11 +19,19 @@ from osg_control.classifier.data import movement_classes
 from osg_control.classifier.model import StateClassifier
 from osg_control.domain.base import Domain
 from osg_control.errors import CheckpointError
-from osg_control.learning.policy import SkillPolicy, load_policies
+from osg_control.learning.checkpoints import check_action_scale, checkpoint_paths, require_skills
+from osg_control.learning.policy import SkillPolicy
 from osg_control.planning.costs import MANIFEST, read_manifest, success_rates
 from osg_control.planning.graph import SkillGraph, graph_from_specs
 
-__all__ = ["MANIFEST", "Defaults", "defaults_root", "load_defaults", "read_manifest"]
+__all__ = [
+    "MANIFEST",
+    "Defaults",
+    "defaults_root",
+    "load_defaults",
+    "load_skill_policies",
+    "read_manifest",
+]
 
 
 @dataclass(frozen=True)
@@ -71,11 +80,31 @@ def load_defaults(domain: Domain, directory: str | Path | None = None) -> Defaul
     rates = success_rates(manifest, root / MANIFEST, domain)
     return Defaults(
         directory=root,
-        policies=load_policies(root / "skills"),
+        policies=load_skill_policies(domain, root / "skills"),
         classifier=StateClassifier.load(root / "classifier", movement_classes(domain)),
         graph=graph_from_specs(domain, success_rates=rates),
         manifest=manifest,
     )
+
+
+def load_skill_policies(
+    domain: Domain, directory: str | Path, names: Sequence[str] | None = None
+) -> dict[str, SkillPolicy]:
+    """The policies of ``names`` (default: every skill of the domain) from a skill
+    checkpoint folder, each checked against the domain.
+
+    Raises:
+        CheckpointError: the folder lacks skills (all of them named), or a checkpoint is
+            missing, corrupt, another skill's, or its ``action_scale`` is not the domain's
+            ``action_bounds`` (the file named).
+    """
+    names = list(domain.skills_by_name if names is None else names)
+    require_skills(directory, names)
+    policies = {name: SkillPolicy.load(directory, name) for name in names}
+    for name, policy in policies.items():
+        sidecar = checkpoint_paths(directory, name)[1]
+        check_action_scale(sidecar, policy.checkpoint.action_scale, domain.action_bounds)
+    return policies
 
 
 def models_in_use(domain: Domain, directory: str | Path | None = None) -> dict[str, str]:

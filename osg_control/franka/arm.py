@@ -8,11 +8,12 @@ from __future__ import annotations
 import os
 import warnings
 from dataclasses import dataclass
-from typing import Any
+from typing import Any, ClassVar
 
 import mujoco
 import numpy as np
 
+from osg_control.environment.options import Bounds, check_fields
 from osg_control.errors import DomainError
 
 ARM_JOINTS = tuple(f"robot:panda0_joint{i}" for i in range(1, 8))
@@ -34,6 +35,9 @@ class FrankaConfig:
         posture_cost: weight of the posture task toward the env's reset posture.
         limit_gain: mink configuration-limit gain.
         obs_noise_std: Gaussian noise on the observed TCP position [m].
+
+    Raises:
+        EnvOptionError: a field outside its range (``BOUNDS``), named.
     """
 
     position_cost: float = 1.0
@@ -41,6 +45,18 @@ class FrankaConfig:
     posture_cost: float = 1e-3
     limit_gain: float = 0.5
     obs_noise_std: float = 0.0
+
+    BOUNDS: ClassVar[dict[str, Bounds]] = {
+        "position_cost": Bounds(),
+        "orientation_cost": Bounds(),
+        "posture_cost": Bounds(),
+        "limit_gain": Bounds(high=1.0, open_low=True),
+        "obs_noise_std": Bounds(),
+    }
+    """The range of each field."""
+
+    def __post_init__(self) -> None:
+        check_fields(self, self.BOUNDS)
 
 
 def model_path() -> str:

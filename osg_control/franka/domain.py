@@ -487,6 +487,7 @@ def make_franka_env(
         config=config,
         step_limit=step_limit,
         setups=SETUPS,
+        world_facts=FACTS,
     )
 
 

@@ -35,9 +35,16 @@ import gymnasium as gym
 import mujoco
 import numpy as np
 
+from osg_control.control.divergence import DivergenceWatch, non_finite_state
 from osg_control.domain.spec import Node, ScriptParams, SkillSpec
 from osg_control.environment.actions import checked_action, scale_into
-from osg_control.environment.options import check_start_options
+from osg_control.environment.options import (
+    check_facts_hold,
+    check_names,
+    check_start_options,
+    choice_option,
+    facts_option,
+)
 from osg_control.environment.poses import quat_rotation, sample_start_pose
 from osg_control.environment.success import (
     GRIPPER_CLOSED_CMD,
@@ -45,7 +52,7 @@ from osg_control.environment.success import (
     effects_hold,
     success_holds,
 )
-from osg_control.errors import DomainError, SimulationError
+from osg_control.errors import DomainError, EnvOptionError, SimulationError
 from osg_control.franka import poses
 from osg_control.franka.arm import (
     ARM_JOINTS,
@@ -69,6 +76,9 @@ NOISE_FREE = ScriptParams(threshold_std=0.0, noise_std=0.0)
 SETUP_ATTEMPTS = 5
 """How often ``reset`` retries a skill's set-up (a noisy script) before giving up."""
 FINGER_BODIES = ("panda0_leftfinger", "panda0_rightfinger")
+RESET_OPTIONS = ("node", "position", "radius", "angle", "max_steps", "gripper", "facts")
+"""The options ``FrankaKitchenAdapter.reset`` knows; any other name is refused."""
+GRIPPER_STATES = ("open", "closed")
 
 
 def check_kitchen(env: Any) -> Any:
@@ -105,6 +115,8 @@ class FrankaKitchenAdapter(gym.Env):
         setups: node -> the skills whose scripts bring the env from its reset to that
             node in the world a skill starting there needs (e.g. the microwave opened),
             run by ``reset``: the env's world changes only through its own steps.
+        world_facts: the facts ``facts_of`` can give (the ``facts`` reset option may name
+            only these; empty: not declared).
     """
 
     metadata = {"render_modes": ["rgb_array"], "render_fps": 12}
@@ -120,8 +132,10 @@ class FrankaKitchenAdapter(gym.Env):
         step_limit: int | None = None,
         home: str = "home",
         setups: Mapping[str, tuple[SkillSpec, ...]] | None = None,
+        world_facts: tuple[str, ...] = (),
     ) -> None:
         self.env = env
+        self.world_facts = world_facts
         self.setups = dict(setups or {})
         self.step_limit = step_limit
         self.home = home
@@ -252,8 +266,37 @@ class FrankaKitchenAdapter(gym.Env):
         ``position`` moves the centre, with the ``home`` node's orientation unless ``node``
         is given) through the env's own steps (they count toward the env's own limit, not
         toward ``steps`` or ``step_limit``). ``max_steps`` bounds the drive (default 40).
-        The world is the env's own: other options of the core (``facts``, ``gripper``) are
-        not used."""
+        The world is the env's own: ``facts`` and ``gripper``, the core's options, are
+        accepted only if they hold in the start it gives.
+
+        Raises:
+            EnvOptionError: an unknown option name (the known ones listed), a value out of
+                its domain (checked before anything runs), or ``facts``/``gripper`` that do
+                not hold at the start.
+        """
+        options = dict(options or {})
+        check_names(options, RESET_OPTIONS, "reset option")
+        node_name = options.get("node") or (self.skill.start if self.skill else None)
+        if node_name is None and "position" in options:
+            node_name = self.home
+        node = self.nodes[choice_option("node", node_name or self.home, self.nodes)]
+        centre, radius, angle = check_start_options(
+            options.get("position", node.position),
+            options.get("radius", 0.0),
+            options.get("angle", 0.0),
+        )
+        max_steps = options.get("max_steps", 40)
+        if isinstance(max_steps, bool) or not isinstance(max_steps, int) or max_steps < 0:
+            raise EnvOptionError(f"reset option max_steps must be an int >= 0, got {max_steps!r}")
+        start_gripper = node.gripper if node_name is not None else "open"
+        gripper = choice_option("gripper", options.get("gripper", start_gripper), GRIPPER_STATES)
+        asked = options.get("facts")
+        facts = frozenset() if asked is None else facts_option(asked, self.world_facts)
+        if gripper != start_gripper:
+            raise EnvOptionError(
+                f"reset options contradict each other: gripper {gripper!r}, but the start "
+                f"{node_name or 'of the env'} has the gripper {start_gripper}"
+            )
         super().reset(seed=seed)
         self._rng = np.random.default_rng(seed)
         _obs, env_info = self.env.reset(seed=seed)
@@ -261,27 +304,18 @@ class FrankaKitchenAdapter(gym.Env):
         self._gripper_cmd = GRIPPER_OPEN_CMD
         self._succeeded = False
         self._steps = 0
-        options = dict(options or {})
         if self.skill is not None and self.skill.start in self.setups:
             self._set_up(self.skill.start, seed)
-        node_name = options.get("node") or (self.skill.start if self.skill else None)
-        if node_name is None and "position" in options:
-            node_name = self.home
         if node_name is not None:
-            node = self.nodes[node_name]
-            radius = float(options.get("radius", 0.0))
-            angle = float(options.get("angle", 0.0))
-            centre = np.asarray(options.get("position", node.position), dtype=float)
-            check_start_options(centre, radius, angle)
             position, rotation = sample_start_pose(
                 self.np_random, centre, radius, angle, quat_rotation(node.orientation)
             )
             with self._outside_the_skill():  # the drive is not the skill's episode
-                self.drive_to(
-                    position, rotation, node.gripper, max_steps=int(options.get("max_steps", 40))
-                )
+                self.drive_to(position, rotation, gripper, max_steps=max_steps)
         self._steps = 0
-        return self.observe(), self._info(self.world_state())
+        world = self.world_state()
+        check_facts_hold(facts, self.facts_of(world), "the env's own reset")
+        return self.observe(), self._info(world)
 
     def _set_up(self, node: str, seed: int | None) -> None:
         """Bring the env from its reset to ``node`` in the world a skill starting there
@@ -393,26 +427,35 @@ class FrankaKitchenAdapter(gym.Env):
         return np.concatenate([scale_to_action(offset, self.dt), [finger, finger]])
 
     def step(self, action: np.ndarray) -> tuple[np.ndarray, float, bool, bool, dict[str, Any]]:
-        """One 80 ms step of the env with the IK's action (see module docstring)."""
+        """One 80 ms step of the env with the IK's action (see module docstring); a
+        non-finite joint position (set from outside since the last step) ends the episode
+        as a divergence (``info["failure"]`` naming the joint), the env not stepped."""
         action = self.check_action(action)
         if action[6] < -0.5:
             self._gripper_cmd = GRIPPER_CLOSED_CMD
         elif action[6] > 0.5:
             self._gripper_cmd = GRIPPER_OPEN_CMD
+        if non_finite_state(self.data, ("qpos",)) is not None:
+            return self._env_step(None, action)
         return self._env_step(self.env_action(action), action)
 
     def _env_step(
-        self, env_action: np.ndarray, applied: np.ndarray
+        self, env_action: np.ndarray | None, applied: np.ndarray
     ) -> tuple[np.ndarray, float, bool, bool, dict[str, Any]]:
-        _obs, env_reward, terminated, truncated, env_info = self.env.step(env_action)
+        """Step the env with ``env_action`` (None: a non-finite state, not stepped) and
+        report it in the adapter's terms."""
+        if env_action is None:
+            env_reward, terminated, truncated = 0.0, True, False
+            failure = non_finite_state(self.data, ("qpos",))
+        else:
+            watch = DivergenceWatch(self.data)
+            _obs, env_reward, terminated, truncated, env_info = self.env.step(env_action)
+            self.last_env_info = dict(env_info)
+            failure = watch.check()
+            terminated = terminated or failure is not None
         reward = float(env_reward)
-        self.last_env_info = dict(env_info)
         self._steps += 1
         world = self.world_state()
-        failure = None
-        if not np.all(np.isfinite(self.data.qpos)):
-            failure = "physics diverged (non-finite qpos)"
-            terminated = True
         if self.skill is not None:
             reward = 0.0  # with a skill, its sparse reward: 1 on the step beta first holds
             if failure is None and not self._succeeded and self.skill_success(world=world):
@@ -441,8 +484,10 @@ class FrankaKitchenAdapter(gym.Env):
             if error < tolerance or error > previous - 1e-4:
                 return step
             previous = error
-            velocity = self.ik.velocity(self.arm_q, pos, rot, self.dt, posture_cost=0.05)
-            action = self._arm_action(velocity)
+            action = None
+            if non_finite_state(self.data, ("qpos",)) is None:
+                velocity = self.ik.velocity(self.arm_q, pos, rot, self.dt, posture_cost=0.05)
+                action = self._arm_action(velocity)
             *_, terminated, truncated, info = self._env_step(action, np.zeros(7))
             if "failure" in info:
                 raise SimulationError(f"joint reset: {info['failure']}")

@@ -17,9 +17,9 @@ import numpy as np
 from osg_control.domain.spec import SkillSpec
 from osg_control.environment.arm_env import ArmEnv, EnvConfig
 from osg_control.errors import SkillSpecError, lookup
-from osg_control.kitchen.options import check_world_options
+from osg_control.kitchen.options import WORLD_OPTIONS, check_world_options
 from osg_control.kitchen.scene import SceneIndex, build_kitchen_model
-from osg_control.kitchen.skills import DOOR_OPENED, NODES, SKILLS_BY_NAME
+from osg_control.kitchen.skills import DOOR_OPENED, NODES, SKILLS_BY_NAME, WORLD_FACTS
 from osg_control.kitchen.world import (
     CUBE_HALF_SIZE,
     WorldState,
@@ -42,6 +42,10 @@ class KitchenEnv(ArmEnv):
         >>> obs, info = env.reset(seed=0)
         >>> obs, reward, terminated, truncated, info = env.step(env.action_space.sample())
     """
+
+    world_facts = WORLD_FACTS
+    world_options = WORLD_OPTIONS
+    holdable = tuple(_FINGER_ON)
 
     def __init__(
         self,
@@ -73,9 +77,10 @@ class KitchenEnv(ArmEnv):
         """``world.world_facts`` of a world-state vector."""
         return world_facts(world_state_from_array(world))
 
-    def check_world(self, world: dict[str, Any]) -> None:
-        """Refuse a non-finite or out-of-range ``door_opening`` or ``cube_pos``."""
-        check_world_options(world)
+    def check_world(self, world: dict[str, Any], holding: str | None) -> None:
+        """Refuse a non-finite or out-of-range ``door_opening`` or ``cube_pos``
+        (``options.check_world_options``)."""
+        check_world_options(world, holding)
 
     def place_world(
         self, world: dict[str, Any], facts: frozenset[str], holding: str | None

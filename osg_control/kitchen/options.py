@@ -1,18 +1,47 @@
-"""Validation of the kitchen's ``world`` reset options (door travel, cube position)."""
+"""Validation of the kitchen's ``world`` reset options (door travel, cube position).
+
+A cube position must be one where the cube rests and the arm can reach it: on the counter's
+top, clear of the cabinet's plinth and the valve, or on the cabinet's floor, and within the
+Panda's reach of its shoulder. The scene's dimensions are ``robots/kitchen.xml``'s.
+"""
 
 from __future__ import annotations
 
 from typing import Any
 
+import numpy as np
+
 from osg_control.environment.options import finite_option
 from osg_control.errors import EnvOptionError
+from osg_control.kitchen.world import CABINET_INTERIOR_HIGH, CABINET_INTERIOR_LOW, CUBE_HALF_SIZE
 
 DOOR_TRAVEL = 0.45
 """The door slide's range [m] (``robots/kitchen.xml``)."""
+WORLD_OPTIONS = ("door_opening", "cube_pos")
+"""The kitchen's ``world`` reset options."""
+CUBE_RESTS = {
+    "the counter": ((-0.35, -0.70, 0.0), (1.05, 0.90)),
+    "the cabinet's floor": (
+        (CABINET_INTERIOR_LOW[0], CABINET_INTERIOR_LOW[1], 0.10),
+        (CABINET_INTERIOR_HIGH[0], CABINET_INTERIOR_HIGH[1]),
+    ),
+}
+"""Where the cube may rest: each surface's lower corner (x, y, top z) and upper (x, y) [m]."""
+COUNTER_OBSTACLES = {
+    "the cabinet's plinth": ((0.50, 0.08), (0.86, 0.58)),
+    "the valve": ((0.31, -0.49), (0.44, -0.41)),
+}
+"""Footprints (x, y) [m] on the counter's top that the cube would cut into."""
+REST_TOLERANCE = 0.005
+"""How far [m] above its surface a cube position may lie (it settles in the start's 0.1 s)."""
+SHOULDER = np.array([0.0, 0.0, 0.333])
+REACH = 0.855
+"""The Panda's reach [m] from its shoulder (joint 2)."""
 
 
-def check_world_options(world: dict[str, Any]) -> None:
-    """Refuse a non-finite or out-of-range door opening or cube position.
+def check_world_options(world: dict[str, Any], holding: str | None) -> None:
+    """Refuse a non-finite or out-of-range door opening or cube position, or a cube position
+    with the cube held.
 
     Raises:
         EnvOptionError: naming the option and its value.
@@ -23,4 +52,40 @@ def check_world_options(world: dict[str, Any]) -> None:
             f"reset option world.door_opening must lie in [0, {DOOR_TRAVEL}] m, got {door}"
         )
     if world.get("cube_pos") is not None:
-        finite_option("world.cube_pos", world["cube_pos"], (3,))
+        if holding == "cube":
+            raise EnvOptionError(
+                "reset options contradict each other: world.cube_pos while holding 'cube' "
+                "(a held cube is placed in the fingers)"
+            )
+        check_cube_position(finite_option("world.cube_pos", world["cube_pos"], (3,)))
+
+
+def check_cube_position(pos: np.ndarray) -> None:
+    """Refuse a cube position where it does not rest on a surface or out of reach.
+
+    Raises:
+        EnvOptionError: naming the option, the value and the rule broken.
+    """
+    where = f"reset option world.cube_pos {pos.tolist()}"
+    if np.linalg.norm(pos - SHOULDER) > REACH:
+        raise EnvOptionError(f"{where} is out of the arm's reach ({REACH} m from its shoulder)")
+    surface = _resting_surface(pos)
+    if surface is None:
+        raise EnvOptionError(
+            f"{where} does not rest on {' or '.join(CUBE_RESTS)} (its centre "
+            f"{CUBE_HALF_SIZE} m above, within {REST_TOLERANCE} m, clear of the edges)"
+        )
+    if surface == "the counter":
+        for obstacle, (low, high) in COUNTER_OBSTACLES.items():
+            if all(low[i] - CUBE_HALF_SIZE < pos[i] < high[i] + CUBE_HALF_SIZE for i in (0, 1)):
+                raise EnvOptionError(f"{where} cuts into {obstacle}")
+
+
+def _resting_surface(pos: np.ndarray) -> str | None:
+    """The surface of ``CUBE_RESTS`` a cube at ``pos`` rests on, if any."""
+    h = CUBE_HALF_SIZE
+    for surface, (low, high) in CUBE_RESTS.items():
+        over = low[0] + h <= pos[0] <= high[0] - h and low[1] + h <= pos[1] <= high[1] - h
+        if over and low[2] + h <= pos[2] <= low[2] + h + REST_TOLERANCE:
+            return surface
+    return None

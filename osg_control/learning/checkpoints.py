@@ -20,6 +20,7 @@ from __future__ import annotations
 
 import hashlib
 import json
+from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -216,7 +217,15 @@ def _read_sidecar(path: Path, name: str) -> dict[str, Any]:
     return sidecar
 
 
-def _read_layers(path: Path, sidecar: dict[str, Any]) -> list[Layer]:
+def _weights_skill(data: bytes) -> str | None:
+    """The skill a safetensors file was saved for (its ``skill`` metadata), if recorded."""
+    size = int.from_bytes(data[:8], "little")
+    header = json.loads(data[8 : 8 + size])  # valid: the file has loaded
+    metadata = header.get("__metadata__") or {}
+    return metadata.get("skill")
+
+
+def _read_layers(path: Path, name: str, sidecar: dict[str, Any]) -> list[Layer]:
     if not path.is_file():
         raise CheckpointError(f"{path}: checkpoint weights not found")
     data = path.read_bytes()
@@ -228,6 +237,12 @@ def _read_layers(path: Path, sidecar: dict[str, Any]) -> list[Layer]:
         tensors = load_safetensors(data)
     except SafetensorError as err:
         raise CheckpointError(f"{path}: corrupt safetensors file ({err})") from err
+    weights_skill = _weights_skill(data)
+    if weights_skill != name:
+        raise CheckpointError(
+            f"{path}: the weights were saved for skill {weights_skill!r} (safetensors "
+            f"metadata), but skill {name!r} was requested"
+        )
     check_finite(path, tensors)
     sizes = [sidecar["obs_dim"], *sidecar["hidden_sizes"], sidecar["action_dim"]]
     layers = []
@@ -276,9 +291,9 @@ def load_checkpoint(
         The checkpoint.
 
     Raises:
-        CheckpointError: naming the file, if a file is missing or corrupt, the sidecar is
-            for another skill (both names given), or its dimensions differ from
-            ``(obs_dim, action_dim)`` (both shapes given).
+        CheckpointError: naming the file, if a file is missing or corrupt, the sidecar or
+            the weights are for another skill (both names given), or its dimensions differ
+            from ``(obs_dim, action_dim)`` (both shapes given).
     """
     weights_path, sidecar_path = checkpoint_paths(directory, name)
     sidecar = _read_sidecar(sidecar_path, name)
@@ -288,7 +303,7 @@ def load_checkpoint(
             f"{sidecar_path}: checkpoint (obs_dim, action_dim) = {shape}, expected "
             f"{(obs_dim, action_dim)}"
         )
-    layers = _read_layers(weights_path, sidecar)
+    layers = _read_layers(weights_path, name, sidecar)
     try:
         skill = skill_from_json(sidecar["skill_spec"])
     except SkillSpecError as err:
@@ -305,6 +320,48 @@ def load_checkpoint(
         dataset_sha256=str(sidecar["dataset_sha256"]),
         package_version=str(sidecar["package_version"]),
     )
+
+
+def require_skills(directory: str | Path, names: Sequence[str]) -> None:
+    """Check that ``directory`` holds both checkpoint files of every skill in ``names``.
+
+    Raises:
+        CheckpointError: the folder is missing, or lacks skills (naming the folder and
+            every missing skill).
+    """
+    directory = Path(directory).expanduser()
+    if not directory.is_dir():
+        raise CheckpointError(f"{directory}: checkpoint directory not found")
+    missing = [
+        name for name in names if not all(p.is_file() for p in checkpoint_paths(directory, name))
+    ]
+    if missing:
+        raise CheckpointError(
+            f"{directory}: no checkpoint of skill(s) {', '.join(missing)} (each needs "
+            f"NAME{WEIGHTS_SUFFIX} and NAME{SIDECAR_SUFFIX}); train them with `osg train`"
+        )
+
+
+ACTION_SCALE_RTOL = 1e-4
+"""How far a checkpoint's ``action_scale`` may be from its domain's action bounds (relative):
+float32 rounding, nothing more."""
+
+
+def check_action_scale(path: Path, action_scale: np.ndarray, bounds: Sequence[float]) -> None:
+    """Check that a checkpoint's ``action_scale`` is its domain's ``action_bounds``.
+
+    Raises:
+        CheckpointError: naming the sidecar ``path``, both vectors given.
+    """
+    expected = np.asarray(bounds, dtype=float)
+    scale = np.asarray(action_scale, dtype=float)
+    if scale.shape != expected.shape or not np.allclose(
+        scale, expected, rtol=ACTION_SCALE_RTOL, atol=0.0
+    ):
+        raise CheckpointError(
+            f"{path}: action_scale {scale.round(6).tolist()} is not the domain's action "
+            f"bounds {expected.round(6).tolist()} (trained for another domain, or edited)"
+        )
 
 
 def normalise_observations(

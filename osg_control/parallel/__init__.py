@@ -2,12 +2,13 @@
 
 Work is split by seed, never by arrival order: every item carries its own seed, and each
 backend returns the results in the items' order, so the same items give the same results
-on any backend and any number of workers or nodes.
+on any backend and any number of workers or nodes. Both backends draw the items lazily and
+keep a bounded number in flight (``parallel.lazy``), so a job list may be as long as asked.
 """
 
 from __future__ import annotations
 
-from collections.abc import Callable, Iterable, Iterator
+from collections.abc import Callable, Generator, Iterable, Iterator
 from contextlib import contextmanager
 from typing import Protocol, TypeVar
 
@@ -23,8 +24,9 @@ R = TypeVar("R")
 class TaskExecutor(Protocol):
     """Maps a function over items, yielding results in order (local pool, Ray, ...)."""
 
-    def map(self, fn: Callable[[T], R], items: Iterable[T]) -> Iterator[R]:
-        """Apply ``fn`` to every item; results come back in the items' order."""
+    def map(self, fn: Callable[[T], R], items: Iterable[T]) -> Generator[R, None, None]:
+        """Apply ``fn`` to every item; results come back in the items' order; closing the
+        generator early stops the work in flight."""
         ...
 
 

@@ -1,4 +1,8 @@
-"""The local backend: this process, or a process pool whose workers die with their parent."""
+"""The local backend: this process, or a process pool whose workers die with their parent.
+
+Pool workers ignore SIGINT: Ctrl-C reaches the whole process group, and only ``osg`` (the
+parent) handles it, terminating the pool, so no worker prints a traceback.
+"""
 
 from __future__ import annotations
 
@@ -8,9 +12,11 @@ import signal
 import sys
 import threading
 import time
-from collections.abc import Callable, Iterable, Iterator
-from concurrent.futures import ProcessPoolExecutor
-from typing import TypeVar
+from collections.abc import Callable, Generator, Iterable
+from concurrent.futures import Future, ProcessPoolExecutor
+from typing import Any, TypeVar
+
+from osg_control.parallel.lazy import IN_FLIGHT_PER_WORKER, windowed
 
 T = TypeVar("T")
 R = TypeVar("R")
@@ -40,6 +46,22 @@ def die_with_parent(parent: int) -> None:
     threading.Thread(target=_watch_parent, args=(parent,), daemon=True).start()
 
 
+def _init_worker(parent: int) -> None:
+    """Pool initializer: leave Ctrl-C to the parent, die with it."""
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+    die_with_parent(parent)
+
+
+def _terminate(pool: ProcessPoolExecutor) -> None:
+    """Drop the pool's queued jobs and SIGKILL its workers now (running jobs are abandoned;
+    a signal handler inherited from the parent, e.g. Ray's, must not run in them)."""
+    # CPython < 3.14 has no public handle on the workers (3.14: terminate_workers).
+    processes: dict[int, Any] = dict(getattr(pool, "_processes", None) or {})
+    pool.shutdown(wait=False, cancel_futures=True)
+    for process in processes.values():
+        process.kill()
+
+
 class LocalExecutor:
     """Runs tasks in this process (``workers=1``) or a local process pool."""
 
@@ -48,12 +70,29 @@ class LocalExecutor:
             raise ValueError(f"workers must be >= 1, got {workers}")
         self.workers = workers
 
-    def map(self, fn: Callable[[T], R], items: Iterable[T]) -> Iterator[R]:
-        """Apply ``fn`` to every item; results come back in the items' order."""
+    def map(self, fn: Callable[[T], R], items: Iterable[T]) -> Generator[R, None, None]:
+        """Apply ``fn`` to every item; results come back in the items' order.
+
+        Items are drawn lazily, ``IN_FLIGHT_PER_WORKER`` per worker ahead; leaving early
+        (an error, Ctrl-C, closing the generator) terminates the pool.
+        """
         if self.workers == 1:
             yield from map(fn, items)
             return
-        with ProcessPoolExecutor(
-            max_workers=self.workers, initializer=die_with_parent, initargs=(os.getpid(),)
-        ) as pool:
-            yield from pool.map(fn, items)
+        pool = ProcessPoolExecutor(
+            max_workers=self.workers, initializer=_init_worker, initargs=(os.getpid(),)
+        )
+        finished = False
+        try:
+            window = IN_FLIGHT_PER_WORKER * self.workers
+
+            def submit(item: T) -> Future[R]:
+                return pool.submit(fn, item)
+
+            yield from windowed(submit, Future.result, Future.cancel, items, window)
+            finished = True
+        finally:
+            if finished:
+                pool.shutdown()
+            else:
+                _terminate(pool)

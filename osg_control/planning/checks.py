@@ -10,6 +10,7 @@ functions initialised in the problem).
 
 from __future__ import annotations
 
+import re
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 
@@ -26,6 +27,8 @@ KNOWN_REQUIREMENTS = frozenset(
 TYPING_IMPLIED_BY = frozenset({":typing", ":adl"})
 OBJECT = "object"
 TOTAL_COST = "total-cost"
+_INTEGER_COST = re.compile(r"[0-9]+(\.0*)?")
+"""A cost as a PDDL number with an integer value: digits, and at most a zero fraction."""
 
 _UNSUPPORTED = {
     "or": ":disjunctive-preconditions",
@@ -195,10 +198,10 @@ class FormulaChecker:
         """The amount of ``(increase (total-cost) amount)``: a number or a function term."""
         if isinstance(item, Atom):
             try:
-                value = float(item.text)
+                float(item.text)
             except ValueError:
                 raise self.c.fail(item, f"expected a cost, got '{item.spelled}'") from None
-            if value < 0 or value != int(value):
+            if not _INTEGER_COST.fullmatch(item.text):  # no sign, exponent, nan or inf
                 raise self.c.fail(item, f"action cost {item.spelled} is not a non-negative integer")
         elif item.head() in self.decl.functions and item.head() != TOTAL_COST:
             self.terms(item, scope, self.decl.functions, "function")

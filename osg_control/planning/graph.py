@@ -242,10 +242,14 @@ def graph_from_dict(data: Mapping[str, Any], source: str = "<graph>") -> SkillGr
         )
         facts = tuple(data["facts"])
         disagreements = tuple(Disagreement(**d) for d in data.get("disagreements", ()))
-    except (KeyError, TypeError, IndexError, ValueError) as err:
+    except (KeyError, TypeError, IndexError, ValueError, OverflowError) as err:
         raise DatasetError(f"{source}: missing or malformed field: {err!r}") from err
     _check_references(nodes, edges, facts, source)
     return SkillGraph(nodes=nodes, edges=edges, facts=facts, disagreements=disagreements)
+
+
+def _is_number(value: object) -> bool:
+    return isinstance(value, int | float) and not isinstance(value, bool)
 
 
 def _check_references(
@@ -260,7 +264,7 @@ def _check_references(
         if unknown:
             raise DatasetError(f"{source}: skill {edge.name!r} names unknown facts {unknown}")
         rate = edge.success_rate
-        if rate is not None and not 0.0 <= rate <= 1.0:
+        if rate is not None and not (_is_number(rate) and 0.0 <= rate <= 1.0):
             raise DatasetError(f"{source}: skill {edge.name!r} success rate {rate} not in [0, 1]")
         if edge.step_cost < 0:
             raise DatasetError(f"{source}: skill {edge.name!r} step cost {edge.step_cost} < 0")

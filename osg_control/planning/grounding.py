@@ -9,6 +9,7 @@ checked with lines before (``planning.reader``); this covers domains built in co
 
 from __future__ import annotations
 
+import math
 from collections import deque
 from collections.abc import Iterator, Mapping, Sequence
 from dataclasses import dataclass, replace
@@ -135,16 +136,23 @@ class _Schema:
     cost: Cost
 
 
+def _integer_cost(value: float | None) -> int | None:
+    """``value`` as an action cost (a finite non-negative integer), else None."""
+    if value is None or not math.isfinite(value) or value < 0 or value != int(value):
+        return None
+    return int(value)
+
+
 def _cost(effect: Increase, where: str) -> Cost:
     target, amount = effect.operands
     if not isinstance(target, NumericFunction) or norm(target.name) != TOTAL_COST:
         raise PDDLError(f"{where}: only (increase (total-cost) n) is supported, got {effect}")
     if isinstance(amount, NumericFunction):
         return _Atom(norm(amount.name), _term_names(amount.terms))
-    value = amount.value if isinstance(amount, NumericValue) else -1
-    if value < 0 or value != int(value):
+    value = _integer_cost(amount.value if isinstance(amount, NumericValue) else None)
+    if value is None:
         raise PDDLError(f"{where}: action cost {amount} is not a non-negative integer")
-    return int(value)
+    return value
 
 
 def _schema(action: Action) -> _Schema:
@@ -336,13 +344,14 @@ def _operator_cost(
         return schema.cost
     term = schema.cost.ground(binding)
     value = values.get(term)
-    if value is None or value < 0 or value != int(value):
+    cost = _integer_cost(value)
+    if cost is None:
         got = "no value in :init" if value is None else f"value {value}"
         raise PDDLError(
             f"action {schema.name!r}: cost {term} has {got}; an action cost must be a "
             "non-negative integer"
         )
-    return int(value)
+    return cost
 
 
 def ground(domain: Domain, problem: Problem) -> Task:

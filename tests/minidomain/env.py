@@ -8,7 +8,7 @@ from typing import Any
 import mujoco
 import numpy as np
 
-from minidomain.domain import NODES, SKILLS, facts_of
+from minidomain.domain import FACTS, NODES, SKILLS, facts_of
 from osg_control.control.scene_model import home_keyed_model, with_panda
 from osg_control.domain.spec import SkillSpec
 from osg_control.environment.arm_env import ArmEnv, EnvConfig
@@ -26,6 +26,9 @@ def build_model() -> mujoco.MjModel:
 
 class MiniEnv(ArmEnv):
     """The minimal domain's env: world state ``[button_depth]``, facts ``domain.facts_of``."""
+
+    world_facts = FACTS
+    world_options = ("button_depth",)
 
     def __init__(
         self,
