@@ -10,7 +10,13 @@ pytest.importorskip("gymnasium_robotics")
 from osg_control.cli import main as osg  # noqa: E402
 from osg_control.domain.registry import get_domain  # noqa: E402
 from osg_control.errors import DomainError  # noqa: E402
-from osg_control.evaluation.benchmark import run_benchmark  # noqa: E402
+from osg_control.evaluation.benchmark import (  # noqa: E402
+    BenchmarkEpisode,
+    _benchmark_env,
+    benchmark_of,
+    run_benchmark,
+    run_benchmark_episode,
+)
 
 KITCHEN_COMPLETE = ("microwave", "kettle", "light switch", "slide cabinet")
 
@@ -32,3 +38,28 @@ def test_unknown_goal_set_and_task_are_named(capsys) -> None:
     code = osg(["--domain", "franka-kitchen", "evaluate", "benchmark", "--tasks", "toaster"])
     err = capsys.readouterr().err
     assert code == 1 and "unknown task(s) ['toaster']" in err and "'microwave'" in err
+
+
+@pytest.mark.parametrize("index", [0, 17, 68])
+def test_no_env_step_after_the_episode_is_over_and_never_past_280(index, monkeypatch) -> None:
+    """The env's protocol: no step after one came back terminated or truncated, at most
+    280 steps. Seed 0's episode 0 completes all four tasks (the env terminates mid-skill);
+    17 and 68 reach the limit at the end of a skill, where a joint reset or the next skill
+    used to take one or two steps more (281-282)."""
+    bench = benchmark_of(get_domain("franka-kitchen"))
+    tasks = bench.tasks_of(bench.default_set)
+    adapter = _benchmark_env("franka-kitchen", tasks, bench.step_limit, 0.0, 0)
+    ends: list[bool] = []
+    library_step = adapter.env.step
+
+    def recorded_step(action):
+        outcome = library_step(action)
+        ends.append(bool(outcome[2] or outcome[3]))
+        return outcome
+
+    monkeypatch.setattr(adapter.env, "step", recorded_step)
+    episode = BenchmarkEpisode("franka-kitchen", None, bench.default_set, tasks, 0, index)
+    result = run_benchmark_episode(episode)
+    assert len(ends) == result["steps"] <= 280
+    assert True not in ends[:-1], f"a step after the episode ended ({result})"
+    assert ends[-1] or result["failure"] is None

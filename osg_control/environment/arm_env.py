@@ -211,6 +211,7 @@ class ArmEnv(gym.Env):
         self._gripper_cmd = GRIPPER_OPEN_CMD
         self._steps = 0
         self._succeeded = False
+        self._episode_over = False
         self._renderer: mujoco.Renderer | None = None
 
     # ----------------------------------------------------------------- the scene
@@ -260,6 +261,12 @@ class ArmEnv(gym.Env):
         return 0.0
 
     # ----------------------------------------------------------------- state
+    @property
+    def episode_over(self) -> bool:
+        """Whether a step since the last reset came back terminated or truncated: the
+        episode is over and, by Gymnasium's protocol, takes no more steps."""
+        return self._episode_over
+
     @property
     def arm_q(self) -> np.ndarray:
         """Current arm joint positions [rad] (a copy)."""
@@ -361,6 +368,7 @@ class ArmEnv(gym.Env):
             check_facts_hold(facts, self.facts(), f"the options {given}")
         self._steps = 0
         self._succeeded = False
+        self._episode_over = False
         self.peak_joint_speed_ratio = 0.0
         return self.observe(), self._info()
 
@@ -465,6 +473,7 @@ class ArmEnv(gym.Env):
             terminated = True
         budget = self.skill.max_steps if self.skill else self.config.max_steps
         truncated = not terminated and budget is not None and self._steps >= budget
+        self._episode_over = self._episode_over or terminated or truncated
         info = self._info(world)
         info["action_applied"] = action
         info["joint_speed_ratio"] = self._step_speed_ratio

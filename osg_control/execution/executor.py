@@ -38,6 +38,11 @@ from osg_control.planning.graph import SkillGraph
 TIME_LIMIT = "the env's episode time limit was reached"
 """The failure of a skill whose env step came back truncated (e.g. a gymnasium
 ``TimeLimit``): the episode is over, so the execution ends without replanning."""
+EPISODE_ENDED = "the env ended its episode"
+"""The failure of a step sequence cut short because the env's episode is over
+(``env.episode_over``: a step came back terminated, e.g. FrankaKitchen's tasks all done, or
+truncated): by Gymnasium's protocol no further step is taken, so the execution ends there
+and succeeds if its goal facts hold."""
 
 RESULT_SCHEMA_VERSION = 1
 NODE_TOLERANCE = 0.02
@@ -277,7 +282,7 @@ class Executor:
             action = policy(seen)
             if tracker is not None:
                 tracker.acted(action)
-            obs, _reward, _terminated, truncated, info = env.step(action)
+            obs, _reward, terminated, truncated, info = env.step(action)
             if self.on_step is not None:
                 self.on_step(env)
             if "failure" in info:
@@ -286,9 +291,10 @@ class Executor:
                 ), obs
             if env.skill_success(skill):
                 return SkillOutcome(skill.name, True, step, time.perf_counter() - started), obs
-            if truncated:
+            if truncated or terminated:
+                ended = TIME_LIMIT if truncated else EPISODE_ENDED
                 return SkillOutcome(
-                    skill.name, False, step, time.perf_counter() - started, failure=TIME_LIMIT
+                    skill.name, False, step, time.perf_counter() - started, failure=ended
                 ), obs
             lost = watched - env.facts_of(info["world"]) if watched else set()
             lost_steps = lost_steps + 1 if lost else 0
@@ -345,8 +351,11 @@ class Executor:
                     )
                 break
             result.failure = failed
-            if is_divergence(failed) or TIME_LIMIT in failed:
-                break  # the world was reset, or the env's episode is over: never replan
+            if is_divergence(failed):
+                break  # the world was reset: never replan
+            if TIME_LIMIT in failed or EPISODE_ENDED in failed:
+                result.success = set(goal) <= facts  # the env's episode is over: no replan
+                break
             if attempt < self.max_replans:
                 result.replans += 1
         if result.success:
@@ -377,11 +386,15 @@ class Executor:
             result.outcomes.append(outcome)
             if not outcome.success:
                 return obs, f"{name}: {outcome.failure}"
+            if index < len(sequence) - 1 and env.episode_over:
+                return obs, f"after {name}: {EPISODE_ENDED}"
             if self.reset_joints and index < len(sequence) - 1:
                 try:
                     outcome.reset_steps = env.joint_reset()
                 except SimulationError as err:
                     return obs, f"joint reset after {name}: {err}"
+                if env.episode_over:
+                    return obs, f"joint reset after {name}: {EPISODE_ENDED}"
                 obs = env.observe()
                 if tracker is not None:
                     tracker.settle()

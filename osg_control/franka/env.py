@@ -167,6 +167,7 @@ class FrankaKitchenAdapter(gym.Env):
         self._gripper_cmd = GRIPPER_OPEN_CMD
         self._succeeded = False
         self._steps = 0
+        self._episode_over = False
         self.last_env_info: dict[str, Any] = {}
         self._rng = np.random.default_rng()
 
@@ -313,6 +314,7 @@ class FrankaKitchenAdapter(gym.Env):
             with self._outside_the_skill():  # the drive is not the skill's episode
                 self.drive_to(position, rotation, gripper, max_steps=max_steps)
         self._steps = 0
+        self._episode_over = False
         world = self.world_state()
         check_facts_hold(facts, self.facts_of(world), "the env's own reset")
         return self.observe(), self._info(world)
@@ -396,6 +398,12 @@ class FrankaKitchenAdapter(gym.Env):
         """Steps taken since the start (the end of ``reset``)."""
         return self._steps
 
+    @property
+    def episode_over(self) -> bool:
+        """Whether a step since the start came back terminated (the env's tasks done, or a
+        divergence) or truncated: by Gymnasium's protocol the episode takes no more steps."""
+        return self._episode_over
+
     def completed_tasks(self) -> list[str]:
         """The env's own record of the tasks completed this episode
         (``info["episode_task_completions"]``)."""
@@ -471,6 +479,7 @@ class FrankaKitchenAdapter(gym.Env):
             terminated = True
         if self.step_limit is not None and self._steps >= self.step_limit:
             truncated = True
+        self._episode_over = self._episode_over or terminated or truncated
         return self.observe(), float(reward), bool(terminated), bool(truncated), info
 
     # ----------------------------------------------------------------- joint reset

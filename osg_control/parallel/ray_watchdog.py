@@ -6,7 +6,10 @@ agents, once the raylet is gone, hang reporting to the dead GCS and outlive a SI
 ``OWNER_VARIABLE`` from the driver's environment) and runs this watchdog beside it: the
 watchdog reads its standard input, a pipe from ``osg``, until the pipe closes (``osg``
 closed it, exited or was killed), then kills every process carrying the mark (Linux:
-read from ``/proc``).
+read from ``/proc``). Ray's agents overwrite their environment with their process title
+(``setproctitle``), so their mark can vanish: while ``osg`` runs the watchdog also records
+the descendants of ``osg`` that are Ray's (``is_ray_process``) once a second (pid and start
+time, so a reused pid is spared) and kills those too.
 
 Run as ``python -m osg_control.parallel.ray_watchdog MARK``.
 """
@@ -14,6 +17,7 @@ Run as ``python -m osg_control.parallel.ray_watchdog MARK``.
 from __future__ import annotations
 
 import os
+import select
 import signal
 import sys
 import time
@@ -23,55 +27,108 @@ OWNER_VARIABLE = "OSG_RAY_OWNER"
 """The environment variable that marks the processes of a Ray instance ``osg`` started."""
 PASSES = 40
 """Scans of ``/proc`` at most, ``PAUSE_S`` apart: a process may be starting (a raylet's
-worker being spawned) while the others are killed, so the scans go on until two in a row
-find none."""
+worker or agent being spawned) while the others are killed, so the scans go on until
+``EMPTY_PASSES`` in a row find none."""
+EMPTY_PASSES = 4
 PAUSE_S = 0.25
 
 
-def marked_processes(mark: str, spared: int) -> list[int]:
-    """Live processes (other than this one and ``spared``) whose environment carries
-    ``mark``."""
-    wanted = f"{OWNER_VARIABLE}={mark}".encode()
-    found = []
-    for entry in Path("/proc").iterdir():
-        if not entry.name.isdigit() or int(entry.name) in (os.getpid(), spared):
-            continue
-        try:
-            marked = wanted in (entry / "environ").read_bytes().split(b"\0")
-            state = (entry / "stat").read_text().rsplit(")", 1)[1].split()[0]
-        except OSError:  # gone, or not ours to read
-            continue
-        if marked and state != "Z":
-            found.append(int(entry.name))
+SURVEY_S = 1.0
+"""How often the watchdog records the descendants of ``osg`` while it runs."""
+
+
+def _stat(pid: int) -> tuple[int, str, int] | None:
+    """``(parent pid, state, start time)`` of a live process, from ``/proc/PID/stat``."""
+    try:
+        fields = Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()
+    except OSError:  # gone
+        return None
+    return int(fields[1]), fields[0], int(fields[19])
+
+
+def _pids() -> list[int]:
+    return [int(entry.name) for entry in Path("/proc").iterdir() if entry.name.isdigit()]
+
+
+def is_ray_process(pid: int) -> bool:
+    """Whether ``pid`` runs Ray: a ``ray::`` title, or a program or script under a ``ray``
+    package folder (the GCS, the raylet, the dashboard and its agents)."""
+    try:
+        argv = Path(f"/proc/{pid}/cmdline").read_bytes().split(b"\0")
+    except OSError:
+        return False
+    return argv[0].startswith(b"ray::") or any(b"/ray/" in word for word in argv)
+
+
+def ray_descendants(root: int) -> set[tuple[int, int]]:
+    """The live descendants of ``root`` that run Ray, as ``(pid, start time)`` pairs."""
+    children: dict[int, list[tuple[int, int]]] = {}
+    for pid in _pids():
+        stat = _stat(pid)
+        if stat is not None:
+            children.setdefault(stat[0], []).append((pid, stat[2]))
+    found: set[tuple[int, int]] = set()
+    frontier = [root]
+    while frontier:
+        for child in children.get(frontier.pop(), []):
+            if is_ray_process(child[0]):
+                found.add(child)
+            frontier.append(child[0])
     return found
 
 
-def kill_marked(mark: str, spared: int) -> None:
-    """SIGKILL every process but ``spared`` carrying ``mark``, until two scans in a row find
-    none (``PASSES`` at most)."""
+def marked_processes(mark: str, spared: int, known: set[tuple[int, int]]) -> list[int]:
+    """Live processes (other than this one and ``spared``) whose environment carries
+    ``mark`` or that are in ``known`` (pid and start time)."""
+    wanted = f"{OWNER_VARIABLE}={mark}".encode()
+    found = []
+    for pid in _pids():
+        if pid in (os.getpid(), spared):
+            continue
+        stat = _stat(pid)
+        if stat is None or stat[1] == "Z":
+            continue
+        try:
+            marked = wanted in Path(f"/proc/{pid}/environ").read_bytes()
+        except OSError:  # gone, or not ours to read
+            marked = False
+        if marked or (pid, stat[2]) in known:
+            found.append(pid)
+    return found
+
+
+def kill_marked(mark: str, spared: int, known: set[tuple[int, int]] | None = None) -> None:
+    """SIGKILL every process but ``spared`` carrying ``mark`` (or in ``known``), until
+    ``EMPTY_PASSES`` scans in a row find none (``PASSES`` at most)."""
     empty = 0
     for _ in range(PASSES):
-        pids = marked_processes(mark, spared)
+        pids = marked_processes(mark, spared, known or set())
         for pid in pids:
             try:
                 os.kill(pid, signal.SIGKILL)
             except ProcessLookupError:
                 pass
         empty = 0 if pids else empty + 1
-        if empty == 2:
+        if empty == EMPTY_PASSES:
             return
         time.sleep(PAUSE_S)
 
 
 def main(mark: str) -> None:
-    """Wait for standard input to close, then kill the marked processes (never ``osg``,
-    the parent it started with, should it still run)."""
+    """Wait for standard input to close, recording the descendants of ``osg`` meanwhile,
+    then kill the marked and recorded processes (never ``osg``, the parent it started with,
+    should it still run)."""
     signal.signal(signal.SIGINT, signal.SIG_IGN)  # Ctrl-C is for osg; the pipe says when
     signal.signal(signal.SIGTERM, signal.SIG_IGN)
     driver = os.getppid()
-    while sys.stdin.buffer.read(4096):
-        pass
-    kill_marked(mark, driver)
+    known: set[tuple[int, int]] = set()
+    stdin = sys.stdin.buffer.fileno()
+    while True:
+        ready, _, _ = select.select([stdin], [], [], SURVEY_S)
+        if ready and not os.read(stdin, 4096):
+            break
+        known |= ray_descendants(driver)
+    kill_marked(mark, driver, known)
 
 
 if __name__ == "__main__":  # pragma: no cover
