@@ -26,3 +26,9 @@ def read_json_object(path: Path, what: str, error: type[OSGError]) -> dict[str, 
     if not isinstance(data, dict):
         raise error(f"{path}: corrupt {what} (not a JSON object)")
     return data
+
+
+def is_json_number(value: object) -> bool:
+    """Whether a value read from JSON is a number (an int or a float; ``true`` and
+    ``false`` read as bools, which Python counts as ints, are not)."""
+    return isinstance(value, int | float) and not isinstance(value, bool)

@@ -14,6 +14,7 @@ import pytest
 from osg_control.cli import main
 from osg_control.errors import BackendError
 from osg_control.parallel import LocalExecutor, open_executor
+from osg_control.parallel.processes import descendants, process_stat
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -23,32 +24,13 @@ def _square(x: int) -> int:
 
 
 def _children(pid: int) -> list[int]:
-    """Every live descendant of ``pid`` (read from /proc)."""
-    parents: dict[int, int] = {}
-    for entry in Path("/proc").iterdir():
-        if entry.name.isdigit():
-            try:
-                stat = (entry / "stat").read_text()
-            except OSError:
-                continue
-            fields = stat.rsplit(")", 1)[1].split()
-            if fields[0] != "Z":
-                parents[int(entry.name)] = int(fields[1])
-    found, frontier = [], [pid]
-    while frontier:
-        parent = frontier.pop()
-        kids = [p for p, pp in parents.items() if pp == parent]
-        found += kids
-        frontier += kids
-    return found
+    """Every live descendant of ``pid``."""
+    return [child for child, _start in descendants(pid)]
 
 
 def _alive(pid: int) -> bool:
-    try:
-        state = Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()[0]
-    except OSError:
-        return False
-    return state != "Z"
+    stat = process_stat(pid)
+    return stat is not None and stat.state != "Z"
 
 
 def test_local_pool_returns_results_in_order() -> None:

@@ -27,6 +27,7 @@ from osg_control import cli
 from osg_control.errors import EXIT_CODES, BackendError
 from osg_control.parallel import LocalExecutor, open_executor
 from osg_control.parallel.lazy import IN_FLIGHT_PER_WORKER
+from osg_control.parallel.processes import descendants
 
 ray = pytest.importorskip("ray")
 ROOT = Path(__file__).resolve().parents[1]
@@ -237,22 +238,14 @@ def test_a_sigkilled_ray_collect_leaves_no_ray_process(tmp_path: Path) -> None:
 
 def _tree_rss_kb(pid: int) -> int:
     """The resident memory of ``pid`` and its descendants, kB (from /proc)."""
-    children: dict[int, list[int]] = {}
-    rss: dict[int, int] = {}
-    for entry in Path("/proc").iterdir():
-        if entry.name.isdigit():
-            try:
-                status = (entry / "status").read_text()
-            except OSError:
-                continue
-            fields = dict(line.split(":", 1) for line in status.splitlines() if ":" in line)
-            children.setdefault(int(fields["PPid"]), []).append(int(entry.name))
-            rss[int(entry.name)] = int(fields.get("VmRSS", "0 kB").split()[0])
-    total, frontier = 0, [pid]
-    while frontier:
-        current = frontier.pop()
-        total += rss.get(current, 0)
-        frontier += children.get(current, [])
+    total = 0
+    for member in [pid, *(child for child, _start in descendants(pid))]:
+        try:
+            status = Path(f"/proc/{member}/status").read_text()
+        except OSError:  # gone meanwhile
+            continue
+        fields = dict(line.split(":", 1) for line in status.splitlines() if ":" in line)
+        total += int(fields.get("VmRSS", "0 kB").split()[0])
     return total
 
 

@@ -31,7 +31,7 @@ from __future__ import annotations
 import hashlib
 import io
 import json
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -193,8 +193,7 @@ def _arrays(
     """The flat step arrays and the per-episode arrays of ``episodes``, as they are stored."""
     lengths = np.array([len(e) for e in episodes], dtype=np.int64)
     arrays = {}
-    for key, (declared, dtype) in STEP_FIELDS.items():
-        shape = (world_width,) if declared == (WORLD_WIDTH,) else declared
+    for key, (shape, dtype) in _field_spec(world_width).items():
         if key == "episode_ids":
             values = np.repeat(np.arange(len(episodes), dtype=np.int64), lengths)
         elif episodes:
@@ -222,10 +221,7 @@ def write_episodes(path: Path, episodes: Sequence[Episode], attrs: dict[str, Any
         DatasetError: a field that ``load_dataset`` would refuse, naming ``path`` and it.
         OutputError: the file cannot be written (a full disk, a read-only folder); names it.
     """
-    fields = attrs.get("world_fields")
-    if not isinstance(fields, str) or not fields:
-        raise DatasetError(f"{path}: attribute 'world_fields' (the world-state names) is required")
-    world_width = len(fields.split(","))
+    world_width = _world_width(attrs, path)
     arrays, per_episode = _arrays(episodes, world_width)
     check_step_fields(path, arrays, _field_spec(world_width), _unknown_fields(attrs))
     check_episode_index(path, arrays, per_episode)
@@ -274,11 +270,16 @@ def _read_field(f: h5py.File, key: str, path: Path) -> np.ndarray:
     return array
 
 
-def _world_width(f: h5py.File, path: Path) -> int:
-    """The world-state width a file declares (its ``world_fields`` attribute)."""
-    fields = f.attrs.get("world_fields")
+def _world_width(attrs: Mapping[str, Any], path: Path) -> int:
+    """The world-state width a file's attributes declare (``world_fields``, the
+    comma-separated world-state names).
+
+    Raises:
+        DatasetError: the attribute is missing or empty; names the file.
+    """
+    fields = attrs.get("world_fields")
     if not isinstance(fields, str) or not fields:
-        raise DatasetError(f"{path}: missing attribute 'world_fields'")
+        raise DatasetError(f"{path}: missing attribute 'world_fields' (the world-state names)")
     return len(fields.split(","))
 
 
@@ -298,7 +299,7 @@ def load_dataset(path: str | Path) -> Dataset:
             arrays = {key: _read_field(f, key, path) for key in STEP_FIELDS}
             per_episode = {key: _read_field(f, key, path) for key in PER_EPISODE_KINDS}
             attrs = dict(f.attrs)
-            fields = _field_spec(_world_width(f, path))
+            fields = _field_spec(_world_width(f.attrs, path))
     except DatasetError:
         raise
     except (OSError, KeyError, ValueError, TypeError) as err:

@@ -56,6 +56,7 @@ from osg_control.control.servo import (
 from osg_control.domain.spec import Node, SkillSpec
 from osg_control.environment.actions import checked_action
 from osg_control.environment.options import (
+    GRIPPER_STATES,
     Bounds,
     check_facts_hold,
     check_fields,
@@ -88,7 +89,6 @@ finger distance (0 to 8 cm, with slack for contact penetration)."""
 CONTROL_HZ = 20.0
 RESET_OPTIONS = ("node", "position", "radius", "angle", "gripper", "facts", "world", "holding")
 """The options ``ArmEnv.reset`` knows; any other name is refused."""
-GRIPPER_STATES = ("open", "closed")
 
 
 @dataclass(frozen=True)

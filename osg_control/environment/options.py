@@ -17,7 +17,7 @@ from typing import Any
 
 import numpy as np
 
-from osg_control.errors import EnvOptionError
+from osg_control.errors import EnvOptionError, lookup
 
 
 def finite_option(name: str, value: Any, shape: tuple[int, ...] = ()) -> np.ndarray:
@@ -30,6 +30,10 @@ def finite_option(name: str, value: Any, shape: tuple[int, ...] = ()) -> np.ndar
     if array.shape != shape or not np.all(np.isfinite(array)):
         raise EnvOptionError(message)
     return array
+
+
+GRIPPER_STATES = ("open", "closed")
+"""The values of the ``gripper`` reset option (every domain's)."""
 
 
 def check_start_options(centre: Any, radius: Any, angle: Any) -> tuple[np.ndarray, float, float]:
@@ -54,10 +58,9 @@ def check_names(given: Iterable[str], known: Iterable[str], what: str) -> None:
     Raises:
         EnvOptionError: ``unknown <what> 'x'; known <what>s: a, b``.
     """
-    known = tuple(known)
-    unknown = [name for name in given if name not in known]
-    if unknown:
-        raise EnvOptionError(f"unknown {what} {unknown[0]!r}; known {what}s: {', '.join(known)}")
+    table = dict.fromkeys(known)
+    for name in given:
+        lookup(table, name, what, EnvOptionError)
 
 
 def choice_option(name: str, value: Any, choices: Iterable[Any]) -> Any:

@@ -23,7 +23,7 @@ from pathlib import Path
 from typing import Any
 
 from osg_control.errors import DatasetError
-from osg_control.json_files import read_json_object
+from osg_control.json_files import is_json_number, read_json_object
 
 FIGURES = "figures.json"
 Z = 2.576
@@ -114,7 +114,7 @@ class _Fields:
 
     def label(self, value: Any, where: str) -> str:
         """A row or column label (a name, or a number such as a noise level)."""
-        if isinstance(value, str) or _is_number(value) and math.isfinite(value):
+        if isinstance(value, str) or is_json_number(value) and math.isfinite(value):
             return str(value)
         raise self.fail(where, f"a label must be a string or a finite number, got {_shown(value)}")
 
@@ -127,7 +127,7 @@ class _Fields:
 
     def cell(self, where: str, value: Any, trials: int) -> Cell:
         """The cell at ``where``: its rate must be a finite number in [0, 1]."""
-        if not (_is_number(value) and math.isfinite(value) and 0.0 <= value <= 1.0):
+        if not (is_json_number(value) and math.isfinite(value) and 0.0 <= value <= 1.0):
             raise self.fail(where, f"rate must be a finite number in [0, 1], got {_shown(value)}")
         return Cell(where, float(value), trials)
 
@@ -140,10 +140,6 @@ TABLE_NAMES = {
     "tables_iv_v": "Tables IV/V",
 }
 """The tables whose success rates are compared, by their key in ``figures.json``."""
-
-
-def _is_number(value: Any) -> bool:
-    return isinstance(value, int | float) and not isinstance(value, bool)
 
 
 def _shown(value: Any) -> str:

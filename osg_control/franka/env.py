@@ -39,6 +39,8 @@ from osg_control.control.divergence import DivergenceWatch, non_finite_state
 from osg_control.domain.spec import Node, ScriptParams, SkillSpec
 from osg_control.environment.actions import checked_action, scale_into
 from osg_control.environment.options import (
+    GRIPPER_STATES,
+    Bounds,
     check_facts_hold,
     check_names,
     check_start_options,
@@ -78,7 +80,8 @@ SETUP_ATTEMPTS = 5
 FINGER_BODIES = ("panda0_leftfinger", "panda0_rightfinger")
 RESET_OPTIONS = ("node", "position", "radius", "angle", "max_steps", "gripper", "facts")
 """The options ``FrankaKitchenAdapter.reset`` knows; any other name is refused."""
-GRIPPER_STATES = ("open", "closed")
+DRIVE_STEPS = Bounds(integer=True)
+"""The range of the ``max_steps`` reset option (an integer >= 0)."""
 
 
 def check_kitchen(env: Any) -> Any:
@@ -287,8 +290,10 @@ class FrankaKitchenAdapter(gym.Env):
             options.get("angle", 0.0),
         )
         max_steps = options.get("max_steps", 40)
-        if isinstance(max_steps, bool) or not isinstance(max_steps, int) or max_steps < 0:
-            raise EnvOptionError(f"reset option max_steps must be an int >= 0, got {max_steps!r}")
+        if not DRIVE_STEPS.admits(max_steps):
+            raise EnvOptionError(
+                f"reset option max_steps must be {DRIVE_STEPS.describe()}, got {max_steps!r}"
+            )
         start_gripper = node.gripper if node_name is not None else "open"
         gripper = choice_option("gripper", options.get("gripper", start_gripper), GRIPPER_STATES)
         asked = options.get("facts")

@@ -23,6 +23,8 @@ import sys
 import time
 from pathlib import Path
 
+from osg_control.parallel.processes import descendants, live_pids, process_stat
+
 OWNER_VARIABLE = "OSG_RAY_OWNER"
 """The environment variable that marks the processes of a Ray instance ``osg`` started."""
 PASSES = 40
@@ -37,19 +39,6 @@ SURVEY_S = 1.0
 """How often the watchdog records the descendants of ``osg`` while it runs."""
 
 
-def _stat(pid: int) -> tuple[int, str, int] | None:
-    """``(parent pid, state, start time)`` of a live process, from ``/proc/PID/stat``."""
-    try:
-        fields = Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()
-    except OSError:  # gone
-        return None
-    return int(fields[1]), fields[0], int(fields[19])
-
-
-def _pids() -> list[int]:
-    return [int(entry.name) for entry in Path("/proc").iterdir() if entry.name.isdigit()]
-
-
 def is_ray_process(pid: int) -> bool:
     """Whether ``pid`` runs Ray: a ``ray::`` title, or a program or script under a ``ray``
     package folder (the GCS, the raylet, the dashboard and its agents)."""
@@ -62,19 +51,7 @@ def is_ray_process(pid: int) -> bool:
 
 def ray_descendants(root: int) -> set[tuple[int, int]]:
     """The live descendants of ``root`` that run Ray, as ``(pid, start time)`` pairs."""
-    children: dict[int, list[tuple[int, int]]] = {}
-    for pid in _pids():
-        stat = _stat(pid)
-        if stat is not None:
-            children.setdefault(stat[0], []).append((pid, stat[2]))
-    found: set[tuple[int, int]] = set()
-    frontier = [root]
-    while frontier:
-        for child in children.get(frontier.pop(), []):
-            if is_ray_process(child[0]):
-                found.add(child)
-            frontier.append(child[0])
-    return found
+    return {(pid, start) for pid, start in descendants(root) if is_ray_process(pid)}
 
 
 def marked_processes(mark: str, spared: int, known: set[tuple[int, int]]) -> list[int]:
@@ -82,17 +59,17 @@ def marked_processes(mark: str, spared: int, known: set[tuple[int, int]]) -> lis
     ``mark`` or that are in ``known`` (pid and start time)."""
     wanted = f"{OWNER_VARIABLE}={mark}".encode()
     found = []
-    for pid in _pids():
+    for pid in live_pids():
         if pid in (os.getpid(), spared):
             continue
-        stat = _stat(pid)
-        if stat is None or stat[1] == "Z":
+        stat = process_stat(pid)
+        if stat is None or stat.state == "Z":
             continue
         try:
             marked = wanted in Path(f"/proc/{pid}/environ").read_bytes()
         except OSError:  # gone, or not ours to read
             marked = False
-        if marked or (pid, stat[2]) in known:
+        if marked or (pid, stat.start) in known:
             found.append(pid)
     return found
 

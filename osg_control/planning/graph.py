@@ -17,7 +17,7 @@ from osg_control.domain.base import Domain
 from osg_control.domain.spec import SkillSpec
 from osg_control.errors import DatasetError, SkillSpecError
 from osg_control.io_safety import atomic_write
-from osg_control.json_files import read_json_object
+from osg_control.json_files import is_json_number, read_json_object
 
 if TYPE_CHECKING:  # the data-set module (h5py) loads only with data
     pass
@@ -248,10 +248,6 @@ def graph_from_dict(data: Mapping[str, Any], source: str = "<graph>") -> SkillGr
     return SkillGraph(nodes=nodes, edges=edges, facts=facts, disagreements=disagreements)
 
 
-def _is_number(value: object) -> bool:
-    return isinstance(value, int | float) and not isinstance(value, bool)
-
-
 def _check_references(
     nodes: Sequence[GraphNode], edges: Sequence[SkillEdge], facts: Sequence[str], source: str
 ) -> None:
@@ -264,7 +260,7 @@ def _check_references(
         if unknown:
             raise DatasetError(f"{source}: skill {edge.name!r} names unknown facts {unknown}")
         rate = edge.success_rate
-        if rate is not None and not (_is_number(rate) and 0.0 <= rate <= 1.0):
+        if rate is not None and not (is_json_number(rate) and 0.0 <= rate <= 1.0):
             raise DatasetError(f"{source}: skill {edge.name!r} success rate {rate} not in [0, 1]")
         if edge.step_cost < 0:
             raise DatasetError(f"{source}: skill {edge.name!r} step cost {edge.step_cost} < 0")
