@@ -13,6 +13,7 @@ import numpy as np
 import pytest
 from gymnasium.utils.env_checker import check_env
 
+from osg_control.perception.spec import PerceptionSpec
 from osg_control.control.ik import IKConfig, joint_reset_controller, rotation_error
 from osg_control.control.robot import HOME_Q
 from osg_control.environment.arm_env import ACTION_BOUNDS, OBS_DIM, EnvConfig
@@ -147,7 +148,7 @@ def test_seeded_reset_is_deterministic(env: KitchenEnv) -> None:
 
 def test_observation_noise_changes_only_position(env: KitchenEnv, log_dir: Path) -> None:
     with contextlib.chdir(log_dir):
-        noisy = KitchenEnv(config=EnvConfig(obs_noise_std=0.01))
+        noisy = KitchenEnv(config=EnvConfig(perception=PerceptionSpec(tcp_noise=0.01)))
     try:
         for seed in range(3):
             clean_obs, _ = env.reset(seed=seed)

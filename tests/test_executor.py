@@ -8,6 +8,7 @@ from collections.abc import Mapping
 import numpy as np
 import pytest
 
+from osg_control.perception.spec import PerceptionSpec
 from osg_control.domain.registry import get_domain
 from osg_control.execution.defaults import load_defaults, read_manifest
 from osg_control.execution.executor import (
@@ -62,7 +63,7 @@ def test_node_at_recognises_nodes_and_gripper_state() -> None:
 def _run(
     executor: Executor, goal: list[str], seed: int, door: float = 0.0
 ) -> tuple[KitchenEnv, dict]:
-    env = KitchenEnv(config=EnvConfig(obs_noise_std=0.0))
+    env = KitchenEnv(config=EnvConfig(perception=PerceptionSpec(tcp_noise=0.0)))
     obs, _ = env.reset(
         seed=seed,
         options={"node": "home", "radius": 0.15, "angle": 0.2, "world": {"door_opening": door}},
@@ -86,7 +87,7 @@ def test_pick_up_under_noise_with_the_tcp_filter(defaults: tuple[dict, object]) 
     # The task succeeds ~98 % of the time there (Tables IV/V), so ten fixed seeds with no
     # replanning must give at least nine successes, each a lifted cube.
     policies, classifier = defaults
-    env = KitchenEnv(config=EnvConfig(obs_noise_std=0.02))
+    env = KitchenEnv(config=EnvConfig(perception=PerceptionSpec(tcp_noise=0.02)))
     executor = Executor(policies, classifier, max_replans=0, filter_gain=0.2)
     lifted = 0
     for seed in range(10):
@@ -138,6 +139,7 @@ def test_unreachable_goal_reports_no_plan_without_moving(defaults: tuple[dict, o
     # The cube cannot go into the cabinet while the world says it is already lifted and the
     # only lifting skill needs it on the counter: use a world with no cube-on-counter fact.
     env.data.qpos[env.scene.cube_qpos + 2] = 0.5  # cube floating high: neither fact holds
+    obs = env.sense().state  # the robot reads its sensors on the edited scene
     result = Executor(policies, classifier).execute(["cube-in-cabinet"], env, obs)
     assert not result.success and result.failure and result.failure.startswith("no plan")
     assert result.outcomes == []
@@ -240,7 +242,7 @@ def test_a_start_part_way_down_to_the_cube_enters_at_grab_cube(
     defaults: tuple[dict, object],
 ) -> None:
     policies, classifier = defaults
-    env = KitchenEnv(config=EnvConfig(obs_noise_std=0.0))
+    env = KitchenEnv(config=EnvConfig(perception=PerceptionSpec(tcp_noise=0.0)))
     obs, _ = env.reset(seed=0, options={"position": (0.50, -0.20, 0.08), "radius": 0.01})
     result = Executor(policies, classifier, max_replans=0).execute(["cube-lifted"], env, obs)
     assert result.entry_skill == "grab-cube" and result.plan == ["pick-up-cube"]
@@ -263,7 +265,7 @@ def test_result_schema_is_stable(defaults: tuple[dict, object]) -> None:
 def test_a_task_env_is_not_cut_at_the_single_skill_episode_limit() -> None:
     """A long plan (e.g. the three-stage task, ~250 steps) must not end at the 200 steps
     of a single-skill episode: the executor bounds each skill itself."""
-    env = KITCHEN.make_env(config=task_env_config(0.0))
+    env = KITCHEN.make_env(config=task_env_config(PerceptionSpec()))
     env.reset(seed=0)
     hold = np.zeros(7)
     for _ in range(EnvConfig().max_steps + 5):

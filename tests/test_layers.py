@@ -16,7 +16,7 @@ DOMAIN_PACKAGES = ("kitchen", "franka")
 LAYERS: dict[str, int] = {
     "errors": 0, "paths": 0, "seeding": 0, "registration": 0, "io_safety": 0, "json_files": 0,
     "__init__": 0,
-    "control": 1, "domain": 1, "parallel": 1,
+    "control": 1, "domain": 1, "parallel": 1, "perception": 1,
     "environment": 2,
     "data": 3,
     "learning": 4, "planning": 4,
@@ -112,3 +112,53 @@ def test_core_strings_name_no_kitchen_thing() -> None:
 def test_every_layer_is_classified() -> None:
     unknown = {_layer(m) for m, _ in _modules()} - set(LAYERS) - set(DOMAIN_PACKAGES)
     assert not unknown, f"add {sorted(unknown)} to LAYERS"
+
+
+DECIDING_LAYERS = ("execution", "classifier", "learning")
+"""Layers that decide (or learn to): they read percepts, never the simulator's state."""
+TRUTH_ATTRIBUTES = (
+    "facts", "skill_success", "world_state", "read_world", "tcp_pose", "world", "arm_q",
+    "data", "model", "scene",
+)
+"""The env's truth accessors (``environment.contract``) and the simulator itself."""
+TRUTH_KEYS = ("world", "world_facts")
+"""The step info's truth entries."""
+
+
+def _truth_reads(tree: ast.AST) -> list[str]:
+    found = []
+    for node in ast.walk(tree):
+        if isinstance(node, ast.Attribute) and node.attr in TRUTH_ATTRIBUTES:
+            owner = node.value
+            if isinstance(owner, ast.Name) and owner.id == "env":
+                found.append(f"line {node.lineno}: env.{node.attr}")
+        if (
+            isinstance(node, ast.Subscript)
+            and isinstance(node.slice, ast.Constant)
+            and node.slice.value in TRUTH_KEYS
+        ):
+            found.append(f"line {node.lineno}: [{node.slice.value!r}]")
+    found += [f"imports {name}" for name in _imports(tree) if name.startswith("osg_control.kitchen")]
+    found += [
+        f"line {node.lineno}: imports mujoco"
+        for node in ast.walk(tree)
+        if isinstance(node, ast.Import) and any(a.name == "mujoco" for a in node.names)
+        or isinstance(node, ast.ImportFrom) and node.module == "mujoco"
+    ]
+    return found
+
+
+@pytest.mark.parametrize(
+    "module,path",
+    [(m, p) for m, p in _core() if _layer(m) in DECIDING_LAYERS],
+    ids=[m for m, _ in _core() if _layer(m) in DECIDING_LAYERS],
+)
+def test_deciding_layers_read_no_simulator_state(module: str, path: Path) -> None:
+    """execution/, classifier/ and learning/ read percepts (``env.percept()``), never the
+    env's truth accessors, the step info's truth, or MuJoCo."""
+    assert _truth_reads(ast.parse(path.read_text())) == [], module
+
+
+def test_the_truth_check_finds_a_truth_read() -> None:
+    source = "def f(env, info):\n    env.facts()\n    return info['world']\n"
+    assert sorted(_truth_reads(ast.parse(source))) == ["line 2: env.facts", "line 3: ['world']"]

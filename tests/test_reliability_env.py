@@ -11,6 +11,7 @@ import mujoco
 import numpy as np
 import pytest
 
+from osg_control.perception.spec import PerceptionSpec
 from osg_control.control.ik import urdf_velocity_limits
 from osg_control.control.servo import saturate_joint_speeds, velocity_limited_target
 from osg_control.domain.registry import get_domain
@@ -30,10 +31,8 @@ NAN = float("nan")
 @pytest.mark.parametrize(
     ("make", "field"),
     [
-        (lambda: EnvConfig(obs_noise_std=NAN), "EnvConfig.obs_noise_std"),
-        (lambda: EnvConfig(obs_noise_std=-1.0), "EnvConfig.obs_noise_std"),
-        (lambda: EnvConfig(obs_noise_std=float("inf")), "EnvConfig.obs_noise_std"),
-        (lambda: EnvConfig(obs_noise_std="0.1"), "EnvConfig.obs_noise_std"),
+        (lambda: EnvConfig(perception="paper"), "EnvConfig.perception"),
+        (lambda: EnvConfig(perception=PerceptionSpec("env")), "EnvConfig.perception"),
         (lambda: EnvConfig(max_steps=0), "EnvConfig.max_steps"),
         (lambda: EnvConfig(max_steps=2.5), "EnvConfig.max_steps"),
         (lambda: EnvConfig(max_steps=True), "EnvConfig.max_steps"),
@@ -53,7 +52,10 @@ def test_configuration_fields_out_of_range_are_refused(make, field) -> None:
 
 
 def test_configurations_in_range_are_accepted() -> None:
-    EnvConfig(obs_noise_std=0.02, max_steps=None, start_radius=0.1, start_angle=0.2)
+    EnvConfig(
+        perception=PerceptionSpec(tcp_noise=0.02), max_steps=None, start_radius=0.1,
+        start_angle=0.2,
+    )
     EnvConfig(max_steps=1, limit_joint_speed=False)
     FrankaConfig(limit_gain=1.0, posture_cost=0.0)
 

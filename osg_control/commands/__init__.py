@@ -11,6 +11,7 @@ from typing import TYPE_CHECKING
 
 if TYPE_CHECKING:
     from osg_control.domain.base import Domain
+    from osg_control.perception.spec import PerceptionSpec
 
 DEFAULT_DOMAIN = "kitchen"
 """The domain ``osg`` uses without ``--domain``: the first one this package ships."""
@@ -51,6 +52,47 @@ def add_filter_argument(parser: argparse.ArgumentParser) -> None:
         help=f"feed the policies a filtered TCP position (gain in (0, 1], default "
         f"{DEFAULT_GAIN} when the flag is given without a value); off by default",
     )
+
+
+def add_perception_arguments(parser: argparse.ArgumentParser) -> None:
+    """Add ``--perception NAME`` and ``--object-noise SIGMA`` (``perception.spec``)."""
+    from osg_control.perception.spec import OBJECT_NOISE, PERCEPTIONS
+
+    parser.add_argument(
+        "--perception",
+        default=None,
+        metavar="NAME",
+        help=f"what the robot perceives: {', '.join(PERCEPTIONS)} (default: the domain's first, "
+        "e.g. the kitchen's paper protocol)",
+    )
+    parser.add_argument(
+        "--object-noise",
+        type=float,
+        default=None,
+        metavar="SIGMA",
+        help=f"the robot perception's object-pose noise [m] (default {OBJECT_NOISE})",
+    )
+
+
+def perception_of(
+    args: argparse.Namespace, domain: Domain, default_noise: float = 0.0
+) -> PerceptionSpec:
+    """The perception the command line asks for, with the paper's TCP noise ``--noise``
+    (default ``default_noise`` under the paper's protocol, none under the others).
+
+    Raises:
+        UsageError: an unknown name, a bad noise level, or a perception the domain does not
+            support (exit 2, nothing run).
+    """
+    from osg_control.perception.spec import check_supported, perception_spec
+
+    name = args.perception or domain.perceptions[0]
+    noise = getattr(args, "noise", None)
+    if noise is None:
+        noise = default_noise if name == "paper" else 0.0
+    spec = perception_spec(name, noise, args.object_noise)
+    check_supported(spec, domain.perceptions, domain.name)
+    return spec
 
 
 def add_backend_arguments(parser: argparse.ArgumentParser) -> None:

@@ -17,7 +17,12 @@ from osg_control.classifier.data import class_starts, load_classifier_data, move
 from osg_control.classifier.metrics import format_report
 from osg_control.classifier.model import StateClassifier, evaluate, reload_split
 from osg_control.classifier.train import TrainConfig, train_classifier
-from osg_control.commands import add_backend_arguments, domain_of
+from osg_control.commands import (
+    add_backend_arguments,
+    add_perception_arguments,
+    domain_of,
+    perception_of,
+)
 from osg_control.domain.base import Domain
 from osg_control.execution.defaults import defaults_root, describe_models, models_in_use
 from osg_control.io_safety import check_output_dir
@@ -184,6 +189,7 @@ def run_reach(args: argparse.Namespace) -> int:
 
     models = str(args.models) if args.models else None
     domain = domain_of(args)
+    perception = perception_of(args, domain)
     with open_executor(args.backend, args.workers, args.address) as executor:
         table = reach_table(
             domain,
@@ -191,9 +197,10 @@ def run_reach(args: argparse.Namespace) -> int:
             args.episodes,
             args.seed,
             args.workers,
-            args.noise,
+            perception.tcp_noise,
             executor,
             progress=not args.json,
+            perception=perception,
         )
     table["models"] = models_in_use(domain, models)
     _emit(args, table, f"{format_reach_table(table)}\n{describe_models(table['models'])}")
@@ -214,7 +221,10 @@ def add_reach(verbs: Verbs) -> None:
     parser.add_argument("--seed", type=int, default=0)
     parser.add_argument("--workers", type=_int_at_least(1), default=2)
     add_backend_arguments(parser)
-    parser.add_argument("--noise", type=float, default=0.0, help="TCP observation noise [m]")
+    parser.add_argument(
+        "--noise", type=float, default=None, help="the paper protocol's TCP noise [m] (default 0)"
+    )
+    add_perception_arguments(parser)
     parser.add_argument("--models", type=Path, help="defaults folder (default: shipped)")
     parser.add_argument("--json", action="store_true", help="print JSON instead of a table")
     parser.set_defaults(func=run_reach)

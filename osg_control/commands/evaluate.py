@@ -9,7 +9,13 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
-from osg_control.commands import add_backend_arguments, add_filter_argument, domain_of
+from osg_control.commands import (
+    add_backend_arguments,
+    add_filter_argument,
+    add_perception_arguments,
+    domain_of,
+    perception_of,
+)
 from osg_control.domain.base import Domain
 from osg_control.evaluation.evaluate import format_task_table, task_table
 from osg_control.evaluation.resume import source_fingerprint
@@ -27,7 +33,13 @@ def register(subparsers: argparse._SubParsersAction) -> None:
         "tasks", help="Tables IV and V: the domain's tasks from its start regions"
     )
     tasks.add_argument("--episodes", type=int, default=100, help="episodes per cell")
-    tasks.add_argument("--noise", type=float, default=0.02, help="TCP observation noise [m]")
+    tasks.add_argument(
+        "--noise",
+        type=float,
+        default=None,
+        help="the paper protocol's TCP observation noise [m] (default 0.02)",
+    )
+    add_perception_arguments(tasks)
     tasks.add_argument("--seed", type=int, default=0)
     tasks.add_argument("--workers", type=int, default=2)
     add_backend_arguments(tasks)
@@ -113,6 +125,7 @@ def run_benchmark_command(args: argparse.Namespace) -> int:
 def run_tasks(args: argparse.Namespace) -> int:
     """Print Tables IV and V."""
     domain = domain_of(args)
+    perception = perception_of(args, domain, default_noise=0.02)
     resume_dir = evaluation_cache(domain, "tasks", args.models)
     with open_executor(args.backend, args.workers, args.address) as executor:
         table = task_table(
@@ -121,13 +134,14 @@ def run_tasks(args: argparse.Namespace) -> int:
             args.episodes,
             args.seed,
             args.workers,
-            args.noise,
+            perception.tcp_noise,
             args.task,
             args.replans,
             args.filter,
             executor,
             resume_dir=resume_dir,
             progress=not args.json,
+            perception=perception,
         )
     return print_result(domain, args, table, format_task_table)
 

@@ -91,6 +91,8 @@ class Domain:
         defaults_dir: the shipped skills and classifier (``skills/``, ``classifier/``,
             ``manifest.json``), or None if the domain ships none.
         env_id: the Gymnasium id its env is registered under, if any.
+        perceptions: the perceptions (``perception.spec.PERCEPTIONS``) its env simulates;
+            the first is the default of every command that runs episodes.
         published: published figures to report beside ours (see
             ``osg_control.evaluation.report.PUBLISHED_KEYS``).
         benchmark: an outside benchmark's protocol on this domain's env (``osg evaluate
@@ -119,6 +121,7 @@ class Domain:
     watched_facts: frozenset[str] = frozenset()
     defaults_dir: Path | None = None
     env_id: str | None = None
+    perceptions: tuple[str, ...] = ("paper", "robot", "sim")
     published: Mapping[str, Any] = field(default_factory=dict)
     benchmark: Benchmark | None = None
     action_bounds: tuple[float, ...] = (0.02, 0.02, 0.02, 0.1, 0.1, 0.1, 1.0)
@@ -218,6 +221,7 @@ class Domain:
             "hand_empty": self.hand_empty,
             "watched_facts": sorted(self.watched_facts),
             "env_id": self.env_id,
+            "perceptions": list(self.perceptions),
         }
 
 

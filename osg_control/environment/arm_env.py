@@ -68,6 +68,9 @@ from osg_control.environment.options import (
 from osg_control.environment.poses import canonical_quat, quat_rotation, sample_start_pose
 from osg_control.environment.success import GRIPPER_CLOSED_CMD, GRIPPER_OPEN_CMD, success_holds
 from osg_control.errors import EnvOptionError, SimulationError
+from osg_control.perception.percept import Percept
+from osg_control.perception.sensors import noisy_world, sensor_slices
+from osg_control.perception.spec import PerceptionSpec
 
 __all__ = [
     "ACTION_BOUNDS",
@@ -96,7 +99,8 @@ class EnvConfig:
     """Options of ``KitchenEnv``.
 
     Attributes:
-        obs_noise_std: Gaussian noise on the observed TCP position [m] (0 = none).
+        perception: what the robot perceives and with what noise (``perception.spec``;
+            default: the paper's protocol without noise, i.e. the exact state).
         max_steps: episode step budget (truncation); a skill's own budget wins if set;
             None: no truncation (task execution, where the executor bounds each skill).
         ik: the differential-IK controller's configuration.
@@ -111,7 +115,7 @@ class EnvConfig:
         EnvOptionError: a field of the wrong type or outside its range (``BOUNDS``), named.
     """
 
-    obs_noise_std: float = 0.0
+    perception: PerceptionSpec = field(default_factory=PerceptionSpec)
     max_steps: int | None = 200
     ik: IKConfig = field(default_factory=IKConfig)
     start_radius: float = 0.0
@@ -119,7 +123,6 @@ class EnvConfig:
     limit_joint_speed: bool = True
 
     BOUNDS: ClassVar[dict[str, Bounds]] = {
-        "obs_noise_std": Bounds(),
         "max_steps": Bounds(low=1, integer=True, optional=True),
         "start_radius": Bounds(),
         "start_angle": Bounds(),
@@ -131,6 +134,15 @@ class EnvConfig:
         if not isinstance(self.limit_joint_speed, bool):
             raise EnvOptionError(
                 f"EnvConfig.limit_joint_speed must be a bool, got {self.limit_joint_speed!r}"
+            )
+        if not isinstance(self.perception, PerceptionSpec):
+            raise EnvOptionError(
+                f"EnvConfig.perception must be a PerceptionSpec, got {self.perception!r}"
+            )
+        if self.perception.name not in ("paper", "robot", "sim"):
+            raise EnvOptionError(
+                f"EnvConfig.perception: this env simulates the paper, robot and sim perceptions, not "
+                f"{self.perception.name!r}"
             )
         if not isinstance(self.ik, IKConfig):
             raise EnvOptionError(f"EnvConfig.ik must be an IKConfig, got {self.ik!r}")
@@ -170,6 +182,9 @@ class ArmEnv(gym.Env):
     """The entries the ``world`` reset option may have (``check_world`` checks the values)."""
     holdable: tuple[str, ...] = ()
     """What a start may hold (the ``holding`` reset option)."""
+    world_sensors: dict[str, str] = {}
+    """World field -> the sensor kind that reads it (``perception.sensors``), in the order of
+    ``read_world``'s vector."""
 
     def __init__(
         self,
@@ -213,6 +228,9 @@ class ArmEnv(gym.Env):
         self._succeeded = False
         self._episode_over = False
         self._renderer: mujoco.Renderer | None = None
+        self._sensor_slices = sensor_slices(self.world_sensors)
+        self._fk_data: mujoco.MjData | None = None
+        self._percept: Percept | None = None
 
     # ----------------------------------------------------------------- the scene
     def build_model(self) -> mujoco.MjModel:
@@ -240,6 +258,12 @@ class ArmEnv(gym.Env):
     ) -> None:
         """Put the scene's objects in place for a start (the arm is already placed and its
         kinematics computed): ``world`` holds explicit options, ``facts`` the start facts."""
+
+    def detect_world(self, state: np.ndarray, world: np.ndarray) -> np.ndarray:
+        """The perceived world with its ``detected`` fields recomputed from the percepts
+        (``state``: the perceived 10-D state; e.g. a grasp from the finger width and the
+        object's perceived pose)."""
+        return world
 
     def snap_start(
         self,
@@ -273,23 +297,28 @@ class ArmEnv(gym.Env):
         return self.data.qpos[self._arm_qpos].copy()
 
     def tcp_pose(self) -> tuple[np.ndarray, np.ndarray]:
-        """True TCP position [m] and rotation matrix (no observation noise)."""
+        """True TCP position [m] and rotation matrix: the simulator's truth, for scoring and
+        set-ups (what decides reads ``percept``)."""
+        return self._true_tcp()
+
+    def _true_tcp(self) -> tuple[np.ndarray, np.ndarray]:
         return (
             self.data.site_xpos[self._tcp].copy(),
             self.data.site_xmat[self._tcp].reshape(3, 3).copy(),
         )
 
     def world_state(self) -> np.ndarray:
-        """The scene's state beyond the robot: facts for effects and evaluation, never
-        policy input."""
+        """The scene's true state beyond the robot: for scoring and labels, never for
+        deciding (``percept().world`` is what the robot perceives)."""
         return self.read_world()
 
     def facts(self) -> frozenset[str]:
-        """The world facts that hold now."""
+        """The world facts that hold now in the simulator (scoring; ``percept().facts`` is
+        what the robot believes)."""
         return self.facts_of(self.read_world())
 
     def _true_obs(self) -> np.ndarray:
-        pos, _ = self.tcp_pose()
+        pos, _ = self._true_tcp()
         quat = np.zeros(4)
         mujoco.mju_mat2Quat(quat, self.data.site_xmat[self._tcp])
         fingers = self.data.qpos[self._finger_qpos]
@@ -299,11 +328,63 @@ class ArmEnv(gym.Env):
         )
 
     def observe(self) -> np.ndarray:
-        """The current observation (with the configured noise on the TCP position)."""
-        obs = self._true_obs()
-        if self.config.obs_noise_std > 0:
-            obs[:3] += self.np_random.normal(0.0, self.config.obs_noise_std, 3)
-        return obs
+        """The perceived 10-D state of the latest percept (a copy)."""
+        return self.percept().state.copy()
+
+    def percept(self) -> Percept:
+        """What the robot perceived at the last reset, step or joint reset: the only input
+        of whatever decides (the executor, policies, classifier, fact detectors)."""
+        if self._percept is None:
+            raise RuntimeError("the env has not been reset")
+        return self._percept
+
+    def sense(self) -> Percept:
+        """Read the sensors now without stepping (e.g. after the scene was edited from
+        outside); ``percept`` then returns this reading."""
+        return self._perceive()
+
+    def _perceive(self) -> Percept:
+        """Read the simulated sensors once (``config.perception``) and keep the percept."""
+        spec = self.config.perception
+        truth = self.read_world()
+        if spec.name == "sim":
+            state, joints, world = self._true_obs(), self.arm_q, truth
+        else:
+            state, joints = self._perceived_state(spec)
+            world = self.detect_world(
+                state, noisy_world(spec, self.np_random, truth, self._sensor_slices)
+            )
+        self._percept = Percept(state, joints, world, self.facts_of(world))
+        return self._percept
+
+    def _perceived_state(self, spec: PerceptionSpec) -> tuple[np.ndarray, np.ndarray]:
+        """The 10-D state and the joints: the paper's noisy TCP, or the TCP by forward
+        kinematics of noisy encoders with a noisy finger width."""
+        if spec.joint_noise == 0.0 and spec.finger_noise == 0.0:
+            state = self._true_obs()
+            if spec.tcp_noise > 0:
+                state[:3] += self.np_random.normal(0.0, spec.tcp_noise, 3)
+            return state, self.arm_q
+        joints = self.arm_q + self.np_random.normal(0.0, spec.joint_noise, len(ARM_JOINTS))
+        if self._fk_data is None:
+            self._fk_data = mujoco.MjData(self.model)
+        self._fk_data.qpos[self._arm_qpos] = joints
+        mujoco.mj_kinematics(self.model, self._fk_data)
+        quat = np.zeros(4)
+        mujoco.mju_mat2Quat(quat, self._fk_data.site_xmat[self._tcp])
+        fingers = float(self.data.qpos[self._finger_qpos].sum())
+        fingers += float(self.np_random.normal(0.0, spec.finger_noise))
+        force = abs(float(self.data.actuator_force[self._gripper_act]))
+        state = np.concatenate(
+            [
+                self._fk_data.site_xpos[self._tcp],
+                canonical_quat(quat),
+                [self._gripper_cmd, force, fingers],
+            ]
+        )
+        if spec.tcp_noise > 0:
+            state[:3] += self.np_random.normal(0.0, spec.tcp_noise, 3)
+        return state, joints
 
     # ----------------------------------------------------------------- reset
     def reset(
@@ -365,11 +446,12 @@ class ArmEnv(gym.Env):
             )
         if asked is not None:
             given = {k: options[k] for k in ("world", "holding", "gripper") if k in options}
-            check_facts_hold(facts, self.facts(), f"the options {given}")
+            check_facts_hold(facts, self.facts_of(self.read_world()), f"the options {given}")
         self._steps = 0
         self._succeeded = False
         self._episode_over = False
         self.peak_joint_speed_ratio = 0.0
+        self._perceive()
         return self.observe(), self._info()
 
     def _place(
@@ -453,7 +535,8 @@ class ArmEnv(gym.Env):
                 self._gripper_cmd = GRIPPER_CLOSED_CMD
             elif action[6] > 0.5:
                 self._gripper_cmd = GRIPPER_OPEN_CMD
-            q_target = self.ik.relative_step(self.arm_q, action[:6])
+            # The controller reads the encoders: the perceived joints.
+            q_target = self.ik.relative_step(self.percept().joints, action[:6])
             self.data.ctrl[self._gripper_act] = (
                 FINGER_OPEN if self._gripper_cmd == GRIPPER_OPEN_CMD else 0.0
             )
@@ -461,11 +544,11 @@ class ArmEnv(gym.Env):
         else:
             self._step_speed_ratio = 0.0  # nothing simulated
         self._steps += 1
-        world = self.world_state()
+        world = self.read_world()
         reward = 0.0
         terminated = False
         if failure is None and self.skill is not None and not self._succeeded:
-            if self.skill_success(world=world):
+            if self._truth_success(self.skill, world):
                 self._succeeded = True
                 reward = 1.0
                 terminated = True
@@ -475,6 +558,7 @@ class ArmEnv(gym.Env):
         truncated = not terminated and budget is not None and self._steps >= budget
         self._episode_over = self._episode_over or terminated or truncated
         info = self._info(world)
+        info["percept"] = self._perceive()
         info["action_applied"] = action
         info["joint_speed_ratio"] = self._step_speed_ratio
         if failure is not None:
@@ -513,7 +597,8 @@ class ArmEnv(gym.Env):
     def skill_success(
         self, skill: SkillSpec | None = None, world: np.ndarray | None = None
     ) -> bool:
-        """The success predicate: TCP within tolerance of beta, gripper state, world effect.
+        """The success predicate on the simulator's truth (scoring and Algorithm 1's
+        labels): TCP within tolerance of beta, gripper state, world effect.
 
         Args:
             skill: the skill to check (default: the env's own).
@@ -522,12 +607,17 @@ class ArmEnv(gym.Env):
         skill = skill or self.skill
         if skill is None:
             return False
-        facts = self.facts_of(self.read_world() if world is None else world)
+        return self._truth_success(skill, self.read_world() if world is None else world)
+
+    def _truth_success(self, skill: SkillSpec, world: np.ndarray) -> bool:
         return success_holds(
-            skill, self.nodes[skill.end], self.tcp_pose()[0], self._gripper_cmd, facts
+            skill, self.nodes[skill.end], self._true_tcp()[0], self._gripper_cmd,
+            self.facts_of(world),
         )
 
     def _info(self, world: np.ndarray | None = None) -> dict[str, Any]:
+        """The step's information: ``world`` and ``world_facts`` are the simulator's truth,
+        for scoring and for labelling scripted data, never for deciding (``percept``)."""
         world = self.read_world() if world is None else world
         return {
             "world": world,
@@ -551,9 +641,16 @@ class ArmEnv(gym.Env):
         Raises:
             SimulationError: the physics diverged (or the joint state is non-finite).
         """
+        try:
+            return self._drive_to_posture(max_steps, tolerance)
+        finally:
+            self._perceive()
+
+    def _drive_to_posture(self, max_steps: int, tolerance: float) -> int:
+        """``joint_reset``'s loop (the percept is refreshed after it, whatever happens)."""
         if self._reset_ik is None:
             self._reset_ik = joint_reset_controller(self.config.ik)
-        pos, rot = self.tcp_pose()
+        pos, rot = self._true_tcp()
         posture = np.asarray(self.config.ik.posture)
         previous = np.inf
         for step in range(max_steps):

@@ -13,7 +13,7 @@ episodes.
 from __future__ import annotations
 
 from collections.abc import Callable, Iterable, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from functools import cache
 from pathlib import Path
 from typing import Any
@@ -32,6 +32,7 @@ from osg_control.execution.executor import task_env_config
 from osg_control.learning.checkpoints import require_skills
 from osg_control.parallel import LocalExecutor, TaskExecutor
 from osg_control.parallel.lazy import grid
+from osg_control.perception.spec import PerceptionSpec
 from osg_control.seeding import skill_seed
 
 
@@ -65,9 +66,14 @@ def _policy(domain: str, directory: str, skill: str) -> Any:
 
 
 @cache
-def _env(domain: str, skill: str, noise: float) -> ArmEnv:
+def _env(domain: str, skill: str, perception: PerceptionSpec) -> ArmEnv:
     found = get_domain(domain)
-    return found.make_env(skill=found.skill(skill), config=EnvConfig(obs_noise_std=noise))
+    return found.make_env(skill=found.skill(skill), config=EnvConfig(perception=perception))
+
+
+def at_noise(perception: PerceptionSpec, noise: float) -> PerceptionSpec:
+    """``perception`` with the paper's TCP noise ``noise`` [m] (a Table I column)."""
+    return replace(perception, tcp_noise=float(noise))
 
 
 @dataclass(frozen=True)
@@ -77,7 +83,7 @@ class SkillEpisode:
     domain: str
     skill: str
     policy_dir: str
-    noise: float
+    perception: PerceptionSpec
     seed: int
     cell: int
     index: int
@@ -90,7 +96,7 @@ def run_skill_episode(task: SkillEpisode) -> bool:
     policy: Callable[[np.ndarray], np.ndarray] = _policy(task.domain, task.policy_dir, task.skill)
     if task.filter_gain is not None:
         policy = FilteredPolicy(policy, task.filter_gain)
-    env = _env(task.domain, task.skill, task.noise)
+    env = _env(task.domain, task.skill, task.perception)
     rng = episode_rng(task.seed, task.skill, task.cell, task.index)
     obs, _ = env.reset(
         seed=int(rng.integers(2**31)),
@@ -120,10 +126,13 @@ def skill_table(
     filter_gain: float | None = None,
     executor: TaskExecutor | None = None,
     progress: bool = False,
+    perception: PerceptionSpec | None = None,
 ) -> dict[str, Any]:
     """Table I: success rate of every learned skill at each observation-noise level.
 
     Args:
+        noise_levels: the paper's TCP noise [m] of each column, added to ``perception``'s
+            (default: the paper's protocol).
         filter_gain: run the policies on ``estimator.TcpFilter`` estimates with this gain;
             None (the paper's protocol) feeds them the raw noisy observation.
         executor: where the episodes run (default: a local pool of ``workers``).
@@ -138,11 +147,13 @@ def skill_table(
         domain.skill(name)
     require_skills(policy_dir, names)
     executor = executor or LocalExecutor(workers)
+    perception = perception or PerceptionSpec()
     cells = [(name, k, float(noise)) for name in names for k, noise in enumerate(noise_levels)]
 
     def job(cell: tuple[str, int, float], i: int) -> SkillEpisode:
         name, k, noise = cell
-        return SkillEpisode(domain.name, name, str(policy_dir), noise, seed, k, i, filter_gain)
+        seen = at_noise(perception, noise)
+        return SkillEpisode(domain.name, name, str(policy_dir), seen, seed, k, i, filter_gain)
 
     tasks = grid(cells, episodes, job)
     outcomes = executor.map(run_skill_episode, tasks)
@@ -153,6 +164,7 @@ def skill_table(
     scripted_rates = cell_means(scripted, len(names), scripted_episodes, "scripted", progress)
     return {
         "noise": list(noise_levels),
+        "perception": perception.to_dict(),
         "episodes": episodes,
         "seed": seed,
         "filter_gain": filter_gain,
@@ -198,8 +210,8 @@ def cached_executor(
 
 
 @cache
-def _plain_env(domain: str, noise: float) -> ArmEnv:
-    return get_domain(domain).make_env(config=task_env_config(noise))
+def _plain_env(domain: str, perception: PerceptionSpec) -> ArmEnv:
+    return get_domain(domain).make_env(config=task_env_config(perception))
 
 
 @dataclass(frozen=True)
@@ -211,7 +223,7 @@ class StartEpisode:
     name: str
     models: str | None
     region: int
-    noise: float
+    perception: PerceptionSpec
     seed: int
     cell: int
     index: int
@@ -242,7 +254,7 @@ def run_reach_episode(task: StartEpisode) -> tuple[bool, bool, bool]:
     """
     domain = get_domain(task.domain)
     executor = cached_executor(task.domain, task.models, 0, None)
-    env = _plain_env(task.domain, task.noise)
+    env = _plain_env(task.domain, task.perception)
     region = domain.start_regions[task.region]
     outcomes = []
     outside = False
@@ -250,13 +262,13 @@ def run_reach_episode(task: StartEpisode) -> tuple[bool, bool, bool]:
         # In the region's facts (e.g. a world where every movement skill's path is clear).
         obs = _reset_in_region(env, task, region.facts)
         if chooser == "classifier":
-            skill = domain.skill(str(executor.classifier.predict(obs)))
+            skill = domain.skill(str(executor.classifier.predict(obs)))  # the percept
             start = np.asarray(domain.nodes[skill.start].position)
             outside = bool(np.linalg.norm(env.tcp_pose()[0] - start) > skill.start_radius)
         else:
             skill = domain.skill(nearest_start_skill(domain, env.tcp_pose()[0]))
-        outcome, _ = executor.run_skill(env, skill, obs)
-        outcomes.append(outcome.success)
+        executor.run_skill(env, skill, obs)
+        outcomes.append(env.skill_success(skill))  # scored on the simulator's truth
     return outcomes[0], outside, outcomes[1]
 
 
@@ -274,17 +286,20 @@ def reach_table(
     noise: float = 0.0,
     executor: TaskExecutor | None = None,
     progress: bool = False,
+    perception: PerceptionSpec | None = None,
 ) -> dict[str, Any]:
     """Table III: entry-skill success from random starts around the domain's start regions.
 
-    ``executor``: where the episodes run (default: a local pool of ``workers``);
-    ``progress``: show a progress bar on stderr.
+    ``noise``: the paper's TCP noise [m] added to ``perception``'s (default: the paper's
+    protocol); ``executor``: where the episodes run (default: a local pool of
+    ``workers``); ``progress``: show a progress bar on stderr.
     """
     regions = domain.start_regions
+    seen = at_noise(perception or PerceptionSpec(), noise)
     tasks = grid(
         range(len(regions)),
         episodes,
-        lambda r, i: StartEpisode(domain.name, "reach", models, r, noise, seed, r, i),
+        lambda r, i: StartEpisode(domain.name, "reach", models, r, seen, seed, r, i),
     )
     executor = executor or LocalExecutor(workers)
     outcomes = executor.map(run_reach_episode, tasks)
@@ -302,6 +317,7 @@ def reach_table(
         "episodes": episodes,
         "seed": seed,
         "noise": noise,
+        "perception": seen.to_dict(),
         "rows": rows,
         "average": float(results[:, 0].mean()),
         "nearest_node_average": float(results[:, 2].mean()),
@@ -340,10 +356,11 @@ def run_task_episode(episode: TaskEpisode) -> bool:
     start = episode.start
     domain = get_domain(start.domain)
     task = domain.task(episode.task)
-    env = _plain_env(start.domain, start.noise)
+    env = _plain_env(start.domain, start.perception)
     obs = _reset_in_region(env, start, domain.task_world(task))
     executor = cached_executor(start.domain, start.models, episode.max_replans, episode.filter_gain)
-    return bool(executor.execute(task.goal, env, obs).success)
+    executor.execute(task.goal, env, obs)
+    return set(task.goal) <= env.facts()  # scored on the simulator's truth
 
 
 def task_table(
@@ -359,10 +376,13 @@ def task_table(
     executor: TaskExecutor | None = None,
     resume_dir: Path | None = None,
     progress: bool = False,
+    perception: PerceptionSpec | None = None,
 ) -> dict[str, Any]:
-    """Tables IV and V: task success per start region, without and with replanning.
+    """Tables IV and V: task success per start region, without and with replanning,
+    scored on the simulator's truth (the goal facts hold at the end).
 
-    ``tasks``: task names (default: all the domain's); ``filter_gain``: the executor's
+    ``noise``: the paper's TCP noise [m] added to ``perception``'s (default: the paper's
+    protocol); ``tasks``: task names (default: all the domain's); ``filter_gain``: the executor's
     ``TcpFilter`` gain (None: raw observations); ``executor``: where the episodes run
     (default: a local pool of ``workers``); ``resume_dir``: keep finished episodes there and
     resume from them (``resume``); ``progress``: show a progress bar on stderr.
@@ -370,11 +390,12 @@ def task_table(
     regions = domain.start_regions
     tasks = [domain.task(t).name for t in (tasks or [t.name for t in domain.tasks])]
     cells = [(t, r, k) for k in replans for t in tasks for r in range(len(regions))]
+    seen = at_noise(perception or PerceptionSpec(), noise)
 
     def job(cell: tuple[str, int, int], i: int) -> TaskEpisode:
         t, r, k = cell
         return TaskEpisode(
-            StartEpisode(domain.name, t, models, r, noise, seed, r, i), t, k, filter_gain
+            StartEpisode(domain.name, t, models, r, seen, seed, r, i), t, k, filter_gain
         )
 
     executor = executor or LocalExecutor(workers)
@@ -385,6 +406,7 @@ def task_table(
         "episodes": episodes,
         "seed": seed,
         "noise": noise,
+        "perception": seen.to_dict(),
         "filter_gain": filter_gain,
         "regions": [region.name for region in regions],
         "tasks": list(tasks),

@@ -3,6 +3,10 @@
 The only module where simulator, policies, classifier and planner meet. Given a goal (PDDL
 world facts) and the env's current state:
 
+Everything here decides from what the robot perceives (``env.percept()``: the perceived
+state, and the facts the domain's detectors read from the perceived world); the
+simulator's truth is for scoring the result, outside.
+
 1. if the TCP is on a graph node, plan from it; if it is part-way along a manipulation
    skill's path (an interrupted skill), that skill is the entry; otherwise the classifier
    picks the entry (movement) skill among those whose recorded start facts
@@ -12,8 +16,8 @@ world facts) and the env's current state:
    success predicate), its step budget runs out, or a precondition it keeps and the domain
    watches (``Domain.watched_facts``, e.g. a grasp) is lost for ``GRASP_GRACE_STEPS``
    steps; the joints are reset between skills;
-3. on a failure (timeout, lost grasp, or the expected effect missing from the world
-   state) the state is re-read, re-classified and re-planned, up to ``max_replans`` times.
+3. on a failure (timeout, lost grasp, or the expected effect missing from the perceived
+   facts) the state is re-read, re-classified and re-planned, up to ``max_replans`` times.
 """
 
 from __future__ import annotations
@@ -30,8 +34,11 @@ from osg_control.control.divergence import is_divergence
 from osg_control.control.estimator import TcpTracker
 from osg_control.domain.base import Domain
 from osg_control.domain.spec import SkillSpec, nearest_start
-from osg_control.environment.arm_env import GRIPPER_OPEN_CMD, ArmEnv, EnvConfig
+from osg_control.environment.arm_env import GRIPPER_OPEN_CMD, EnvConfig
+from osg_control.environment.contract import SkillEnv
+from osg_control.environment.success import success_holds
 from osg_control.errors import SimulationError
+from osg_control.perception.spec import PerceptionSpec
 from osg_control.planning.api import graph_domain, plan_for_goal
 from osg_control.planning.graph import SkillGraph
 
@@ -101,11 +108,11 @@ class ExecutionResult:
         return {"schema_version": RESULT_SCHEMA_VERSION, **asdict(self)}
 
 
-def task_env_config(noise: float) -> EnvConfig:
-    """The env options of a task execution: observation noise ``noise`` [m] and no episode
+def task_env_config(perception: PerceptionSpec) -> EnvConfig:
+    """The env options of a task execution: what the robot perceives and no episode
     truncation, since the executor bounds every skill by its own budget (a domain whose env
     has its own time limit, like FrankaKitchen-v1's, keeps it)."""
-    return EnvConfig(obs_noise_std=noise, max_steps=None)
+    return EnvConfig(perception=perception, max_steps=None)
 
 
 def node_at(domain: Domain, obs: np.ndarray, facts: Iterable[str]) -> str | None:
@@ -213,7 +220,7 @@ class Executor:
         self.max_replans = max_replans
         self.reset_joints = reset_joints
         self.filter_gain = filter_gain
-        self.on_step: Callable[[ArmEnv], Any] | None = None
+        self.on_step: Callable[[SkillEnv], Any] | None = None
         """Called after every env step (e.g. to record video frames)."""
 
     def plan(
@@ -262,18 +269,20 @@ class Executor:
 
     def run_skill(
         self,
-        env: ArmEnv,
+        env: SkillEnv,
         skill: SkillSpec,
         obs: np.ndarray,
         tracker: TcpTracker | None = None,
     ) -> tuple[SkillOutcome, np.ndarray]:
-        """Run one option until beta holds, its step budget runs out or it loses a watched
-        precondition (``Domain.watched_facts``).
+        """Run one option until beta holds on the percepts, its step budget runs out or it
+        loses a watched precondition (``Domain.watched_facts``) from the perceived facts.
 
-        ``tracker``, if given, turns each observation into the policy's input; it reads
-        every observation and is told every action of the skill.
+        ``tracker``, if given, turns each observation into the policy's input and into the
+        TCP position beta is checked on; it reads every observation and is told every
+        action of the skill.
         """
         policy = self.policies[skill.name]
+        end = self.domain.nodes[skill.end]
         watched = (skill.preconditions - skill.del_effects) & self.domain.watched_facts
         started = time.perf_counter()
         lost_steps = 0
@@ -289,14 +298,16 @@ class Executor:
                 return SkillOutcome(
                     skill.name, False, step, time.perf_counter() - started, failure=info["failure"]
                 ), obs
-            if env.skill_success(skill):
+            percept = env.percept()
+            position = (percept.state if tracker is None else tracker.read(obs))[:3]
+            if success_holds(skill, end, position, percept.state[7], percept.facts):
                 return SkillOutcome(skill.name, True, step, time.perf_counter() - started), obs
             if truncated or terminated:
                 ended = TIME_LIMIT if truncated else EPISODE_ENDED
                 return SkillOutcome(
                     skill.name, False, step, time.perf_counter() - started, failure=ended
                 ), obs
-            lost = watched - env.facts_of(info["world"]) if watched else set()
+            lost = watched - percept.facts
             lost_steps = lost_steps + 1 if lost else 0
             if lost_steps >= GRASP_GRACE_STEPS:
                 return SkillOutcome(
@@ -314,11 +325,13 @@ class Executor:
             failure=f"timeout after {skill.max_steps} steps",
         ), obs
 
-    def execute(self, goal: Iterable[str], env: ArmEnv, obs: np.ndarray) -> ExecutionResult:
-        """Reach ``goal`` from the env's current state (``obs`` is its latest observation)."""
+    def execute(self, goal: Iterable[str], env: SkillEnv, obs: np.ndarray) -> ExecutionResult:
+        """Reach ``goal`` from the env's current state (``obs`` is its latest observation),
+        deciding from the percepts; ``success`` is what the robot believes (score an
+        episode on the simulator's truth, e.g. ``env.facts()``, outside)."""
         goal = sorted(set(goal))
         started = time.perf_counter()
-        facts = env.facts()
+        facts = env.percept().facts
         result = ExecutionResult(goal=goal, success=False, entry_skill=None, plan=[])
         tracker = TcpTracker(self.filter_gain) if self.filter_gain is not None else None
         planning_time = 0.0
@@ -342,7 +355,7 @@ class Executor:
             obs, failed = self._run_sequence(
                 env, ([entry] if entry else []) + plan, obs, result, tracker
             )
-            facts = env.facts()
+            facts = env.percept().facts
             if not failed:
                 result.success = set(goal) <= facts
                 if not result.success:
@@ -369,7 +382,7 @@ class Executor:
 
     def _run_sequence(
         self,
-        env: ArmEnv,
+        env: SkillEnv,
         sequence: list[str],
         obs: np.ndarray,
         result: ExecutionResult,
@@ -379,7 +392,7 @@ class Executor:
         for index, name in enumerate(sequence):
             skill = self.skills[name]
             outcome, obs = self.run_skill(env, skill, obs, tracker)
-            facts = env.facts()
+            facts = env.percept().facts
             if outcome.success and not (skill.add_effects <= facts):
                 outcome.success = False
                 outcome.failure = f"expected effects {sorted(skill.add_effects - facts)} missing"
@@ -401,7 +414,7 @@ class Executor:
         return obs, None
 
 
-def _open_gripper(env: ArmEnv, steps: int = 5) -> tuple[np.ndarray, str | None]:
+def _open_gripper(env: SkillEnv, steps: int = 5) -> tuple[np.ndarray, str | None]:
     """Open an empty but closed gripper in place (recovery before a movement skill, whose
     termination needs it open); returns the observation and a divergence, if any."""
     obs = env.observe()

@@ -17,6 +17,7 @@ import numpy as np
 from osg_control.domain.spec import SkillSpec
 from osg_control.environment.arm_env import ArmEnv, EnvConfig
 from osg_control.errors import SkillSpecError, lookup
+from osg_control.kitchen.detectors import WORLD_SENSORS, detect_grasps
 from osg_control.kitchen.options import WORLD_OPTIONS, check_world_options
 from osg_control.kitchen.scene import SceneIndex, build_kitchen_model
 from osg_control.kitchen.skills import DOOR_OPENED, NODES, SKILLS_BY_NAME, WORLD_FACTS
@@ -46,6 +47,7 @@ class KitchenEnv(ArmEnv):
     world_facts = WORLD_FACTS
     world_options = WORLD_OPTIONS
     holdable = tuple(_FINGER_ON)
+    world_sensors = WORLD_SENSORS
 
     def __init__(
         self,
@@ -76,6 +78,11 @@ class KitchenEnv(ArmEnv):
     def facts_of(self, world: np.ndarray) -> frozenset[str]:
         """``world.world_facts`` of a world-state vector."""
         return world_facts(world_state_from_array(world))
+
+    def detect_world(self, state: np.ndarray, world: np.ndarray) -> np.ndarray:
+        """The grasps from the finger width and the perceived poses
+        (``detectors.detect_grasps``)."""
+        return detect_grasps(state, world)
 
     def check_world(self, world: dict[str, Any], holding: str | None) -> None:
         """Refuse a non-finite or out-of-range ``door_opening`` or ``cube_pos``

@@ -1,0 +1,68 @@
+"""The kitchen's perception: which sensor reads each world field, and the grasp detectors.
+
+A robot has no contact oracle: it believes it holds the cube when its gripper is commanded
+shut, the finger width reads the cube's width and the perceived cube lies between the
+fingers; the handle likewise with the fin's width and the handle's perceived place (the
+``handle`` node moved along the door's perceived opening).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from osg_control.environment.success import GRIPPER_CLOSED_CMD
+from osg_control.kitchen.skills import NODES
+from osg_control.kitchen.world import CUBE_HALF_SIZE, WORLD_FIELDS
+from osg_control.perception.sensors import ANGLE, DETECTED, POSITION, QUATERNION
+
+WORLD_SENSORS: dict[str, str] = {
+    "door_opening": POSITION,
+    "valve_angle": ANGLE,
+    "cube_x": POSITION,
+    "cube_y": POSITION,
+    "cube_z": POSITION,
+    "cube_qw": QUATERNION,
+    "cube_qx": QUATERNION,
+    "cube_qy": QUATERNION,
+    "cube_qz": QUATERNION,
+    "cube_grasped": DETECTED,
+    "handle_grasped": DETECTED,
+}
+"""World field -> sensor: the pose estimator sees the door's travel, the valve's angle and
+the cube's pose; the grasps are detected from the other percepts."""
+assert tuple(WORLD_SENSORS) == WORLD_FIELDS
+
+CUBE_GRIP_WIDTH = 2 * (CUBE_HALF_SIZE - 0.0005)
+"""Finger width [m] with the fingers shut on the cube."""
+HANDLE_GRIP_WIDTH = 0.019
+"""Finger width [m] with the fingers shut on the handle's fin."""
+WIDTH_BAND = (-0.008, 0.005)
+"""How far below and above an object's grip width [m] a shut gripper counts as holding it
+(contact penetration squeezes it; a slipping object widens it)."""
+GRIP_REACH = 0.06
+"""Largest distance [m] from the perceived TCP to the perceived object of a grasp: the
+cube's or the handle's noise (1 cm), the TCP's (2 cm under the paper's protocol), and the
+grasp's offset from the object's centre."""
+_FIELD = {name: i for i, name in enumerate(WORLD_FIELDS)}
+
+
+def _grips(state: np.ndarray, width: float, target: np.ndarray) -> bool:
+    shut = state[7] == GRIPPER_CLOSED_CMD
+    low, high = width + WIDTH_BAND[0], width + WIDTH_BAND[1]
+    near = float(np.linalg.norm(state[:3] - target)) <= GRIP_REACH
+    return bool(shut and low <= state[9] <= high and near)
+
+
+def detect_grasps(state: np.ndarray, world: np.ndarray) -> np.ndarray:
+    """The perceived world with ``cube_grasped`` and ``handle_grasped`` from the percepts.
+
+    Args:
+        state: the perceived 10-D state (TCP, gripper command, force, finger width).
+        world: the pose estimator's world vector (``WORLD_FIELDS``).
+    """
+    detected = np.array(world, dtype=float)
+    cube = detected[[_FIELD["cube_x"], _FIELD["cube_y"], _FIELD["cube_z"]]]
+    handle = np.asarray(NODES["handle"].position) + [0.0, detected[_FIELD["door_opening"]], 0.0]
+    detected[_FIELD["cube_grasped"]] = float(_grips(state, CUBE_GRIP_WIDTH, cube))
+    detected[_FIELD["handle_grasped"]] = float(_grips(state, HANDLE_GRIP_WIDTH, handle))
+    return detected

@@ -1,0 +1,142 @@
+"""Named perceptions: which sensors a robot has and how noisy they are.
+
+- ``paper``: the paper's protocol: Gaussian noise ``tcp_noise`` [m] on the perceived TCP
+  position, joints and objects exact.
+- ``robot``: joint encoders with ``ENCODER_NOISE`` [rad] per joint, the TCP by forward
+  kinematics of the perceived joints, finger width with ``FINGER_NOISE`` [m], object
+  positions with ``object_noise`` [m] (default 1 cm) and orientations with
+  ``OBJECT_ANGLE_NOISE`` [rad] from a simulated pose estimator.
+- ``env``: an outside env's own observation (FrankaKitchen-v1: its robot and object noise).
+- ``sim``: the simulator's state itself, an oracle (reported as such wherever it is used).
+
+The gripper's force is the gripper motor's own effort (the actuator force the robot drives;
+the Franka Hand reports its grasp force the same way), not a fingertip sensor.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import asdict, dataclass
+from typing import Any
+
+from osg_control.errors import UsageError
+
+ENCODER_NOISE = 5e-4
+"""Joint encoder noise [rad], per joint: about 0.4 mm at the Panda's TCP per joint (its
+absolute encoders resolve far finer; the margin stands for calibration and backlash)."""
+FINGER_NOISE = 5e-4
+"""Finger width noise [m] (the gripper's own width reading)."""
+OBJECT_NOISE = 0.01
+"""Default object position noise [m] of the ``robot`` perception's pose estimator."""
+OBJECT_ANGLE_NOISE = 0.05
+"""Object orientation noise [rad] (about 3 degrees) of the ``robot`` pose estimator."""
+PERCEPTIONS: dict[str, str] = {
+    "paper": "noise on the perceived TCP position, objects exact (the paper's protocol)",
+    "robot": "joint encoders, TCP by forward kinematics, noisy object pose estimator",
+    "env": "an outside env's own observation, with its own noise",
+    "sim": "the simulator's state (an oracle)",
+}
+"""The known perceptions and what each perceives."""
+
+
+@dataclass(frozen=True)
+class PerceptionSpec:
+    """What a robot perceives and with what noise.
+
+    Attributes:
+        name: one of ``PERCEPTIONS``.
+        tcp_noise: Gaussian noise on the perceived TCP position [m] (``paper``).
+        joint_noise: encoder noise [rad] per arm joint (``robot``: TCP by forward
+            kinematics of the noisy joints).
+        finger_noise: noise on the perceived finger width [m].
+        object_noise: noise on object positions [m] (the pose estimator's).
+        object_angle_noise: noise on object orientations and joint angles [rad].
+    """
+
+    name: str = "paper"
+    tcp_noise: float = 0.0
+    joint_noise: float = 0.0
+    finger_noise: float = 0.0
+    object_noise: float = 0.0
+    object_angle_noise: float = 0.0
+
+    def __post_init__(self) -> None:
+        if self.name not in PERCEPTIONS:
+            raise UsageError(
+                f"unknown perception {self.name!r}; known perceptions: {', '.join(PERCEPTIONS)}"
+            )
+        for field_name in (
+            "tcp_noise", "joint_noise", "finger_noise", "object_noise", "object_angle_noise"
+        ):
+            value = getattr(self, field_name)
+            if isinstance(value, bool) or not isinstance(value, (int, float)):
+                raise UsageError(f"perception {field_name} must be a number, got {value!r}")
+            if not math.isfinite(value) or value < 0:
+                raise UsageError(f"perception {field_name} must be finite and >= 0, got {value!r}")
+
+    @property
+    def exact(self) -> bool:
+        """No noise anywhere: the percept equals what the simulator's state gives."""
+        return not any(
+            (self.tcp_noise, self.joint_noise, self.finger_noise, self.object_noise,
+             self.object_angle_noise)
+        )
+
+    def to_dict(self) -> dict[str, Any]:
+        """The name and parameters, for a command's ``--json``."""
+        return asdict(self)
+
+
+def perception_spec(
+    name: str = "paper", noise: float = 0.0, object_noise: float | None = None
+) -> PerceptionSpec:
+    """The named perception with the command line's noise levels.
+
+    Args:
+        name: ``paper``, ``robot``, ``env`` or ``sim``.
+        noise: the paper's TCP position noise [m] (``paper``; refused elsewhere when > 0).
+        object_noise: the pose estimator's position noise [m] (``robot``; default
+            ``OBJECT_NOISE``).
+
+    Raises:
+        UsageError: an unknown name (the known ones listed), a negative or non-finite
+            noise, or a noise the perception has no sensor for.
+    """
+    if name not in PERCEPTIONS:
+        raise UsageError(f"unknown perception {name!r}; known perceptions: {', '.join(PERCEPTIONS)}")
+    for label, value in (("--noise", noise), ("--object-noise", object_noise)):
+        if value is not None and (not math.isfinite(value) or value < 0):
+            raise UsageError(f"{label} must be finite and >= 0, got {value!r}")
+    if name == "robot":
+        if noise:
+            raise UsageError(
+                "--noise is the paper protocol's TCP noise; the robot perception takes the TCP "
+                "from its joint encoders (use --perception paper, or --object-noise)"
+            )
+        return PerceptionSpec(
+            "robot",
+            joint_noise=ENCODER_NOISE,
+            finger_noise=FINGER_NOISE,
+            object_noise=OBJECT_NOISE if object_noise is None else object_noise,
+            object_angle_noise=OBJECT_ANGLE_NOISE,
+        )
+    if object_noise and name != "robot":
+        raise UsageError(f"--object-noise applies to the robot perception, not {name!r}")
+    if name == "paper":
+        return PerceptionSpec("paper", tcp_noise=noise)
+    if noise and name == "sim":
+        raise UsageError("the sim perception is the simulator's exact state: no --noise")
+    return PerceptionSpec(name, tcp_noise=noise)
+
+
+def check_supported(spec: PerceptionSpec, supported: tuple[str, ...], domain: str) -> None:
+    """Refuse a perception a domain does not support.
+
+    Raises:
+        UsageError: naming the domain and the perceptions it supports.
+    """
+    if spec.name not in supported:
+        raise UsageError(
+            f"domain {domain!r} does not support perception {spec.name!r}; "
+            f"it supports: {', '.join(supported)}"
+        )
