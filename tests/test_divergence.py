@@ -22,7 +22,7 @@ GOAL = ["door-open", "cube-in-cabinet"]
 def executor() -> Executor:
     _loaded = load_defaults(KITCHEN)
     policies, classifier = _loaded.policies, _loaded.classifier
-    return Executor(KITCHEN, policies, classifier, max_replans=2)
+    return Executor(KITCHEN, policies, classifier, _loaded.graph, max_replans=2)
 
 
 def _poison(env: KitchenEnv) -> None:

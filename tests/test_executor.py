@@ -24,9 +24,10 @@ from osg_control.kitchen.skills import NODES, SKILLS, SKILLS_BY_NAME
 KITCHEN = get_domain("kitchen")
 
 
-def Executor(*args: object, **kwargs: object) -> DomainExecutor:  # noqa: N802
-    """The kitchen's executor (the tests' shorthand)."""
-    return DomainExecutor(KITCHEN, *args, **kwargs)  # type: ignore[arg-type]
+def Executor(policies: dict, classifier: object, **kwargs: object) -> DomainExecutor:  # noqa: N802
+    """The kitchen's executor over the shipped plan costs (the tests' shorthand)."""
+    graph = load_defaults(KITCHEN).graph
+    return DomainExecutor(KITCHEN, policies, classifier, graph, **kwargs)  # type: ignore[arg-type]
 
 
 @pytest.fixture(scope="module")

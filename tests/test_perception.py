@@ -70,7 +70,7 @@ class GuardedKitchenEnv(KitchenEnv):
 @pytest.fixture(scope="module")
 def executor() -> Executor:
     defaults = load_defaults(KITCHEN)
-    return Executor(KITCHEN, defaults.policies, defaults.classifier, graph=defaults.graph)
+    return Executor(KITCHEN, defaults.policies, defaults.classifier, defaults.graph)
 
 
 @pytest.mark.parametrize(

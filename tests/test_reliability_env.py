@@ -168,7 +168,7 @@ def test_a_nan_arm_joint_ends_the_step_as_a_named_failure(kitchen: KitchenEnv) -
 @pytest.fixture(scope="module")
 def executor() -> Executor:
     loaded = load_defaults(KITCHEN)
-    return Executor(KITCHEN, loaded.policies, loaded.classifier, max_replans=2)
+    return Executor(KITCHEN, loaded.policies, loaded.classifier, loaded.graph, max_replans=2)
 
 
 @pytest.mark.parametrize("at_step", [1, 30])

@@ -347,6 +347,11 @@ class ArmEnv(gym.Env):
         """Read the simulated sensors once (``config.perception``) and keep the percept."""
         spec = self.config.perception
         truth = self.read_world()
+        if truth.shape != (len(self.world_sensors),):
+            raise EnvOptionError(
+                f"{type(self).__name__}: world_sensors name {len(self.world_sensors)} fields, "
+                f"read_world gives {truth.shape}; declare a sensor for every world field"
+            )
         if spec.name == "sim":
             state, joints, world = self._true_obs(), self.arm_q, truth
         else:

@@ -192,8 +192,10 @@ class Executor:
             with this gain, carried across the skills of an execution), and locate the
             robot on the graph from it; None uses the raw observation (the paper's
             protocol).
-        graph: the skill graph whose costs plans minimise (e.g. with the measured success
-            rates); default: the domain's specs at uniform cost.
+        graph: the skill graph whose costs plans minimise: the cost model, e.g. the
+            defaults' measured success rates (``defaults.load_defaults(...).graph``,
+            ``planning.costs.measured_graph``), or ``planning.graph.graph_from_specs(domain)``
+            for uniform costs, said explicitly.
     """
 
     def __init__(
@@ -201,12 +203,17 @@ class Executor:
         domain: Domain,
         policies: Mapping[str, Policy],
         classifier: EntryClassifier,
+        graph: SkillGraph,
         planner: str = "astar",
         max_replans: int = 2,
         reset_joints: bool = True,
         filter_gain: float | None = None,
-        graph: SkillGraph | None = None,
     ) -> None:
+        if not isinstance(graph, SkillGraph):
+            raise TypeError(
+                f"Executor needs a SkillGraph cost model, got {type(graph).__name__}: pass "
+                f"load_defaults(domain).graph or planning.graph.graph_from_specs(domain)"
+            )
         missing = sorted(set(domain.skills_by_name) - set(policies))
         if missing:
             raise ValueError(f"domain {domain.name!r}: no policy for skills {missing}")
@@ -431,5 +438,4 @@ def load_executor(domain: Domain, directory: str | Path | None = None, **kwargs:
     from osg_control.execution.defaults import load_defaults
 
     defaults = load_defaults(domain, directory)
-    kwargs.setdefault("graph", defaults.graph)
-    return Executor(domain, defaults.policies, defaults.classifier, **kwargs)
+    return Executor(domain, defaults.policies, defaults.classifier, defaults.graph, **kwargs)

@@ -7,14 +7,15 @@ from __future__ import annotations
 
 import os
 import warnings
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Any, ClassVar
 
 import mujoco
 import numpy as np
 
 from osg_control.environment.options import Bounds, check_fields
-from osg_control.errors import DomainError
+from osg_control.errors import DomainError, EnvOptionError
+from osg_control.perception.spec import PerceptionSpec
 
 ARM_JOINTS = tuple(f"robot:panda0_joint{i}" for i in range(1, 8))
 FINGER_JOINTS = ("robot:panda0_finger_joint1", "robot:panda0_finger_joint2")
@@ -34,29 +35,54 @@ class FrankaConfig:
         orientation_cost: its orientation weight [1/rad].
         posture_cost: weight of the posture task toward the env's reset posture.
         limit_gain: mink configuration-limit gain.
-        obs_noise_std: Gaussian noise on the observed TCP position [m].
+        perception: what the adapter perceives (``franka.perception``): ``env`` (the
+            env's own observation, the default) or ``sim`` (the simulator, an oracle);
+            ``tcp_noise`` adds the paper's Gaussian noise [m] to the perceived TCP position
+            (``env`` only: ``sim`` is exact).
 
     Raises:
-        EnvOptionError: a field outside its range (``BOUNDS``), named.
+        EnvOptionError: a field outside its range (``BOUNDS``), or a perception the domain
+            does not support, named.
     """
 
     position_cost: float = 1.0
     orientation_cost: float = 0.5
     posture_cost: float = 1e-3
     limit_gain: float = 0.5
-    obs_noise_std: float = 0.0
+    perception: PerceptionSpec = field(default_factory=lambda: PerceptionSpec("env"))
 
     BOUNDS: ClassVar[dict[str, Bounds]] = {
         "position_cost": Bounds(),
         "orientation_cost": Bounds(),
         "posture_cost": Bounds(),
         "limit_gain": Bounds(high=1.0, open_low=True),
-        "obs_noise_std": Bounds(),
     }
-    """The range of each field."""
+    """The range of each numeric field."""
 
     def __post_init__(self) -> None:
+        from osg_control.franka.perception import PERCEPTIONS
+
         check_fields(self, self.BOUNDS)
+        spec = self.perception
+        if not isinstance(spec, PerceptionSpec):
+            raise EnvOptionError(f"FrankaConfig.perception must be a PerceptionSpec, got {spec!r}")
+        if spec.name not in PERCEPTIONS:
+            raise EnvOptionError(
+                f"FrankaConfig.perception: franka-kitchen supports the perceptions "
+                f"{', '.join(PERCEPTIONS)}, not {spec.name!r}"
+            )
+        noisy = {
+            k: getattr(spec, k)
+            for k in ("joint_noise", "finger_noise", "object_noise", "object_angle_noise")
+            if getattr(spec, k)
+        }
+        if noisy or (spec.name == "sim" and spec.tcp_noise):
+            raise EnvOptionError(
+                f"FrankaConfig.perception {spec.name!r}: the env's own observation carries "
+                f"the robot's and the objects' noise (its robot_noise_ratio and "
+                f"object_noise_ratio) and 'sim' is exact; only 'env' takes tcp_noise, got "
+                f"{ {**noisy, 'tcp_noise': spec.tcp_noise} }"
+            )
 
 
 def model_path() -> str:
@@ -134,6 +160,15 @@ class ArmIK:
         self.limits = [mink.ConfigurationLimit(model, gain=config.limit_gain)]
         self.lower = model.jnt_range[:, 0].copy()
         self.upper = model.jnt_range[:, 1].copy()
+        self._dynamics = mujoco.MjData(model)
+
+    def bias(self, q: np.ndarray, qvel: np.ndarray) -> np.ndarray:
+        """The arm's bias torques [N m] (gravity, Coriolis) at joints ``q`` and speeds
+        ``qvel`` on the arm model (the hand's mass included, the fingers welded)."""
+        self._dynamics.qpos[:] = q
+        self._dynamics.qvel[:] = qvel
+        mujoco.mj_forward(self.model, self._dynamics)
+        return self._dynamics.qfrc_bias.copy()
 
     def tcp_pose(self, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """TCP position and rotation matrix at arm joints ``q``."""

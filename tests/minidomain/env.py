@@ -9,6 +9,7 @@ import mujoco
 import numpy as np
 
 from minidomain.domain import FACTS, NODES, SKILLS, facts_of
+from osg_control.perception.sensors import POSITION
 from osg_control.control.scene_model import home_keyed_model, with_panda
 from osg_control.domain.spec import SkillSpec
 from osg_control.environment.arm_env import ArmEnv, EnvConfig
@@ -29,6 +30,7 @@ class MiniEnv(ArmEnv):
 
     world_facts = FACTS
     world_options = ("button_depth",)
+    world_sensors = {"button_depth": POSITION}  # the pose estimator sees the button's travel
 
     def __init__(
         self,
