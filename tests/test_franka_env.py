@@ -173,11 +173,13 @@ def test_reset_sets_up_a_skills_start_facts_through_the_envs_steps() -> None:
 def test_set_ups_ignore_the_episodes_observation_noise() -> None:
     """Table I evaluates a skill under 2 cm observation noise; its set-up (here: open the
     microwave and let go) still runs on the true state and succeeds."""
-    from osg_control.environment.arm_env import EnvConfig
+    from osg_control.perception.spec import PerceptionSpec
 
     starts = []
     for noise in (0.0, 0.02):
-        env = make_franka_env(skill="move-microwave-to-home", config=EnvConfig(obs_noise_std=noise))
+        env = make_franka_env(
+            skill="move-microwave-to-home", perception=PerceptionSpec("env", tcp_noise=noise)
+        )
         _obs, info = env.reset(seed=3)
         assert "microwave-open" in info["world_facts"]
         starts.append(env.tcp_pose()[0])

@@ -32,7 +32,7 @@ NAN = float("nan")
     ("make", "field"),
     [
         (lambda: EnvConfig(perception="paper"), "EnvConfig.perception"),
-        (lambda: EnvConfig(perception=PerceptionSpec("env")), "EnvConfig.perception"),
+        (lambda: KitchenEnv(config=EnvConfig(perception=PerceptionSpec("env"))), "EnvConfig.perception"),
         (lambda: EnvConfig(max_steps=0), "EnvConfig.max_steps"),
         (lambda: EnvConfig(max_steps=2.5), "EnvConfig.max_steps"),
         (lambda: EnvConfig(max_steps=True), "EnvConfig.max_steps"),

@@ -9,7 +9,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, TypeAlias
 
 from osg_control.commands import domain_of
-from osg_control.errors import PDDLError, PlanningError
+from osg_control.errors import PDDLError, PlanningError, UsageError
 
 if TYPE_CHECKING:
     from osg_control.planning.task import PlanResult
@@ -112,7 +112,9 @@ def _plan(args: argparse.Namespace) -> PlanResult:
     from osg_control.planning.graph import load_graph
 
     domain = domain_of(args)
-    graph = load_graph(args.graph) if args.graph else measured_graph(domain)
+    if args.graph and args.models:
+        raise UsageError("--graph and --models both give the plan costs: give one")
+    graph = load_graph(args.graph) if args.graph else measured_graph(domain, args.models)
     facts = None if args.facts is None else args.facts.split()
     return plan_for_goal(
         domain, args.goal, args.from_node, facts, args.planner, graph, limits=limits
@@ -150,6 +152,13 @@ def register(subparsers: Verbs) -> None:
         type=Path,
         help="skill graph JSON with success rates (default: the domain's specs with the "
         "shipped defaults' measured success rates)",
+    )
+    parser.add_argument(
+        "--models",
+        type=Path,
+        metavar="DIR",
+        help="a defaults folder whose manifest's measured success rates set the costs (the "
+        "same costs `osg run --models DIR` plans with)",
     )
     parser.add_argument(
         "--planner",

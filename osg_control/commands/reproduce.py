@@ -21,8 +21,14 @@ from pathlib import Path
 from typing import Any
 
 from osg_control import __version__
-from osg_control.commands import add_filter_argument, domain_of
+from osg_control.commands import (
+    add_filter_argument,
+    add_perception_arguments,
+    domain_of,
+    perception_of,
+)
 from osg_control.domain.base import Domain
+from osg_control.domain.registry import get_domain
 from osg_control.domain.spec import SkillSpec
 from osg_control.errors import EXIT_CODES, OSGError
 from osg_control.io_safety import atomic_write, check_output_dir
@@ -58,7 +64,13 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     parser.add_argument("--out", type=Path, default=Path("osg-reproduction"))
     parser.add_argument("--seed", type=int, default=0)
     parser.add_argument("--workers", type=int, default=2)
-    parser.add_argument("--noise", type=float, default=0.02, help="noise for Tables IV/V [m]")
+    parser.add_argument(
+        "--noise",
+        type=float,
+        default=None,
+        help="the paper protocol's TCP noise for Tables IV/V [m] (default 0.02)",
+    )
+    add_perception_arguments(parser)
     add_filter_argument(parser)
     parser.add_argument(
         "--check",
@@ -123,6 +135,7 @@ def run(args: argparse.Namespace) -> int:
     from osg_control.cli import main as osg
 
     domain = domain_of(args)
+    perception = perception_of(args, domain, default_noise=DEPLOYMENT_NOISE)  # refused: exit 2
     if args.compare is not None:
         from osg_control.evaluation.check import figures_file, read_figures
 
@@ -288,8 +301,10 @@ def _write_manifest(defaults: Path, manifest: dict[str, Any]) -> None:
 
 
 def deployment_rates(table_i: dict[str, Any]) -> dict[str, float]:
-    """Each skill's Table I rate at ``DEPLOYMENT_NOISE`` (the plan costs' rates)."""
-    column = list(table_i["noise"]).index(DEPLOYMENT_NOISE)
+    """Each skill's Table I rate at ``DEPLOYMENT_NOISE`` (the plan costs' rates; the only
+    column under a perception other than the paper's)."""
+    noise = list(table_i["noise"])
+    column = noise.index(DEPLOYMENT_NOISE) if DEPLOYMENT_NOISE in noise else len(noise) - 1
     return {row["skill"]: float(row["rates"][column]) for row in table_i["rows"]}
 
 
@@ -299,9 +314,13 @@ def _manifest(
     return {
         "domain": domain,
         "command": f"osg --domain {domain} reproduce{' --quick' if args.quick else ''}"
-        f"{'' if args.filter is None else f' --filter {args.filter}'} "
+        f"{'' if args.filter is None else f' --filter {args.filter}'}"
+        f"{'' if args.perception is None else f' --perception {args.perception}'}"
+        f"{'' if args.object_noise is None else f' --object-noise {args.object_noise}'} "
         f"--seed {args.seed} --out {args.out}",
         "seed": args.seed,
+        "perception": perception_of(args, get_domain(domain), DEPLOYMENT_NOISE).to_dict(),
+        "filter_gain": args.filter,
         "scale": scale.__dict__,
         "package_version": __version__,
         "git_commit": commit,
@@ -314,15 +333,18 @@ def _table_i(
 ) -> dict[str, Any]:
     from osg_control.evaluation.evaluate import format_skill_table, skill_table
 
+    perception = perception_of(args, domain, default_noise=DEPLOYMENT_NOISE)
+    paper = perception.name == "paper"
     table = skill_table(
         domain,
         defaults / "skills",
-        (0.0, 0.01, DEPLOYMENT_NOISE),
+        (0.0, 0.01, DEPLOYMENT_NOISE) if paper else (0.0,),
         scale.table_i_episodes,
         args.seed,
         args.workers,
         scripted_episodes=max(scale.table_i_episodes, 20),
         filter_gain=args.filter,
+        perception=perception,
     )
     print(format_skill_table(table))
     return table
@@ -346,7 +368,16 @@ def _table_iii(
 ) -> dict[str, Any]:
     from osg_control.evaluation.evaluate import format_reach_table, reach_table
 
-    table = reach_table(domain, str(defaults), scale.reach_episodes, args.seed, args.workers)
+    perception = perception_of(args, domain)
+    table = reach_table(
+        domain,
+        str(defaults),
+        scale.reach_episodes,
+        args.seed,
+        args.workers,
+        perception.tcp_noise,
+        perception=perception,
+    )
     print(format_reach_table(table))
     return table
 
@@ -356,14 +387,16 @@ def _tables_iv_v(
 ) -> dict[str, Any]:
     from osg_control.evaluation.evaluate import format_task_table, task_table
 
+    perception = perception_of(args, domain, default_noise=DEPLOYMENT_NOISE)
     table = task_table(
         domain,
         str(defaults),
         scale.task_episodes,
         args.seed,
         args.workers,
-        args.noise,
+        perception.tcp_noise,
         filter_gain=args.filter,
+        perception=perception,
     )
     print(format_task_table(table))
     return table

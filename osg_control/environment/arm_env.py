@@ -90,6 +90,8 @@ OBS_HIGH = np.array([2.0, 2.0, 2.0, 1.0, 1.0, 1.0, 1.0, 1.0, 70.0, 0.1])
 unit quaternion, the gripper command, its force (the actuator's 70 N force range) and the
 finger distance (0 to 8 cm, with slack for contact penetration)."""
 CONTROL_HZ = 20.0
+SIMULATED_PERCEPTIONS = ("paper", "robot", "sim")
+"""The perceptions an ``ArmEnv`` simulates (``env`` is an outside env's own observation)."""
 RESET_OPTIONS = ("node", "position", "radius", "angle", "gripper", "facts", "world", "holding")
 """The options ``ArmEnv.reset`` knows; any other name is refused."""
 
@@ -138,11 +140,6 @@ class EnvConfig:
         if not isinstance(self.perception, PerceptionSpec):
             raise EnvOptionError(
                 f"EnvConfig.perception must be a PerceptionSpec, got {self.perception!r}"
-            )
-        if self.perception.name not in ("paper", "robot", "sim"):
-            raise EnvOptionError(
-                f"EnvConfig.perception: this env simulates the paper, robot and sim perceptions, not "
-                f"{self.perception.name!r}"
             )
         if not isinstance(self.ik, IKConfig):
             raise EnvOptionError(f"EnvConfig.ik must be an IKConfig, got {self.ik!r}")
@@ -195,6 +192,11 @@ class ArmEnv(gym.Env):
         render_mode: str | None = None,
     ) -> None:
         self.config = config or EnvConfig()
+        if self.config.perception.name not in SIMULATED_PERCEPTIONS:
+            raise EnvOptionError(
+                f"EnvConfig.perception: {type(self).__name__} simulates the perceptions "
+                f"{', '.join(SIMULATED_PERCEPTIONS)}, not {self.config.perception.name!r}"
+            )
         self.nodes = nodes
         self.home = home
         self.skill = skill

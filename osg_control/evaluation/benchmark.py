@@ -11,13 +11,18 @@ conservative, and it stays informative when every episode scores the same.
 
 Episode ``i`` resets with a seed drawn from ``SeedSequence([skill_seed(seed, goal set), 0,
 i])``: the same starts for every variant, whatever the number of workers.
+
+What the executor perceives is a named perception (``perception.spec``), by default the
+domain's first (``Domain.perceptions``; ``env``, the env's own observation, where the
+domain declares none); ``sim`` is the simulator's state, an oracle, and is reported as one.
 """
 
 from __future__ import annotations
 
+import json
 from collections import Counter
-from collections.abc import Sequence
-from dataclasses import dataclass
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, replace
 from functools import cache
 from pathlib import Path
 from typing import Any
@@ -32,6 +37,7 @@ from osg_control.evaluation.check import wilson_interval
 from osg_control.evaluation.evaluate import cached_executor, episode_rng
 from osg_control.evaluation.resume import resumable_map
 from osg_control.parallel import LocalExecutor, TaskExecutor
+from osg_control.perception.spec import PERCEPTIONS, PerceptionSpec, check_supported
 
 Z95 = 1.96
 """Two-sided 95 % normal quantile of the score's interval."""
@@ -60,18 +66,46 @@ class BenchmarkEpisode:
     tasks: tuple[str, ...]
     seed: int
     index: int
-    noise: float = 0.0
+    perception: PerceptionSpec | None = None
     filter_gain: float | None = None
     perturbed: bool = False
     limited: bool = True
     max_replans: int = 2
+    env_kwargs: str = ""
+    """The env's own constructor options, as JSON ("" for none)."""
+
+
+def benchmark_perception(
+    domain: Domain, perception: PerceptionSpec | None = None, noise: float = 0.0
+) -> PerceptionSpec:
+    """The perception a benchmark runs on: ``perception``, default the domain's first
+    (``env`` where it declares none), with the paper's TCP ``noise`` [m] if given.
+
+    Raises:
+        UsageError: a perception the domain does not support.
+    """
+    supported = tuple(getattr(domain, "perceptions", None) or ("env",))
+    spec = perception or PerceptionSpec(supported[0])
+    if noise:
+        spec = replace(spec, tcp_noise=noise)
+    check_supported(spec, supported, domain.name)
+    return spec
 
 
 @cache
 def _benchmark_env(
-    domain: str, tasks: tuple[str, ...], limit: int | None, noise: float, start_steps: int
+    domain: str,
+    tasks: tuple[str, ...],
+    limit: int | None,
+    perception: PerceptionSpec | None,
+    start_steps: int,
+    env_kwargs: str = "",
 ) -> Any:
-    return benchmark_of(get_domain(domain)).make_env(tasks, limit, noise, start_steps)
+    spec = benchmark_perception(get_domain(domain), perception)
+    extra = {"env_kwargs": env_kwargs} if env_kwargs else {}
+    return benchmark_of(get_domain(domain)).make_env(
+        tasks, limit, 0.0, start_steps, perception=spec, **extra
+    )
 
 
 def run_benchmark_episode(episode: BenchmarkEpisode) -> dict[str, Any]:
@@ -81,7 +115,9 @@ def run_benchmark_episode(episode: BenchmarkEpisode) -> dict[str, Any]:
     bench = benchmark_of(domain)
     limit = bench.step_limit if episode.limited else None
     start_steps = START_STEPS if episode.perturbed else 0
-    env = _benchmark_env(episode.domain, episode.tasks, limit, episode.noise, start_steps)
+    env = _benchmark_env(
+        episode.domain, episode.tasks, limit, episode.perception, start_steps, episode.env_kwargs
+    )
     rng = episode_rng(episode.seed, episode.goal_set, 0, episode.index)
     options = None
     if episode.perturbed:
@@ -122,16 +158,28 @@ def run_benchmark(
     workers: int = 2,
     executor: TaskExecutor | None = None,
     resume_dir: Path | None = None,
+    perception: PerceptionSpec | None = None,
+    env_kwargs: Mapping[str, Any] | None = None,
 ) -> dict[str, Any]:
     """Score the domain's policies on its benchmark (see module doc).
 
     ``goal_set`` names one of the benchmark's sets (default: its ``default_set``);
-    ``tasks`` (the env's task names) overrides it. Returns a JSON-ready summary: ``score``
-    (the mean, 0 to ``points``), ``interval`` (95 %), ``task_rates`` (each task's
-    completion rate), ``full_rate`` (episodes completing every task), ``steps`` (mean and
-    max steps used) and the protocol.
+    ``tasks`` (the env's task names) overrides it. ``perception``: what the executor
+    perceives (default: the domain's first, see ``benchmark_perception``), with the paper's
+    TCP ``noise`` [m] if given; ``env_kwargs``: the env's own constructor options (e.g.
+    FrankaKitchen-v1's ``robot_noise_ratio``). Returns a JSON-ready summary: ``score`` (the
+    mean, 0 to ``points``), ``interval`` (95 %), ``perception`` (its name and noise),
+    ``task_rates`` (each task's completion rate), ``full_rate`` (episodes completing every
+    task), ``max_steps`` (the largest step count of any episode), ``steps`` (mean and max)
+    and the protocol.
+
+    Raises:
+        DomainError: no benchmark, an unknown goal set or task.
+        UsageError: a perception the domain does not support.
     """
     bench = benchmark_of(domain)
+    spec = benchmark_perception(domain, perception, noise)
+    kwargs_json = json.dumps(dict(env_kwargs), sort_keys=True) if env_kwargs else ""
     if tasks:
         chosen = bench.check_tasks(tuple(tasks))
         name = "+".join(chosen)
@@ -146,11 +194,12 @@ def run_benchmark(
             chosen,
             seed,
             i,
-            noise,
+            spec,
             filter_gain,
             perturbed,
             limited,
             max_replans,
+            kwargs_json,
         )
         for i in range(episodes)
     ]
@@ -171,12 +220,16 @@ def run_benchmark(
         "score": round(float(bench.points * fractions.mean()), 3),
         "interval": [round(low, 3), round(high, 3)],
         "confidence": 0.95,
+        "perception": spec.to_dict(),
+        "oracle": spec.name == "sim",
+        "max_steps": int(steps.max()),
         "full_rate": float((fractions == 1.0).mean()),
         "task_rates": {t: float(done[:, k].mean()) for k, t in enumerate(chosen)},
         "steps": {"mean": float(steps.mean()), "max": int(steps.max())},
         "step_limit": bench.step_limit if limited else None,
         "perturbed": perturbed,
-        "noise": noise,
+        "noise": spec.tcp_noise,
+        "env_kwargs": dict(env_kwargs or {}),
         "filter_gain": filter_gain,
         "max_replans": max_replans,
         "failures": dict(failures.most_common()),
@@ -196,6 +249,13 @@ def format_benchmark(summary: dict[str, Any]) -> str:
         f"noise {summary['noise']:g} m" + (" + filter" if summary["filter_gain"] else ""),
     ]
     low, high = summary["interval"]
+    perception = summary.get("perception")
+    if perception:
+        name = perception["name"]
+        label = "ORACLE: " if name == "sim" else ""
+        protocol.insert(0, f"perception {name} ({label}{PERCEPTIONS.get(name, '')})")
+    if summary.get("env_kwargs"):
+        protocol.append(f"env options {json.dumps(summary['env_kwargs'], sort_keys=True)}")
     lines = [
         f"{summary['benchmark']}: {summary['goal_set']} ({', '.join(summary['tasks'])})",
         f"  protocol: {'; '.join(protocol)}; {summary['episodes']} episodes, seed "

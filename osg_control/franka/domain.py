@@ -16,16 +16,16 @@ grasp / pull / release for the microwave and the hinge cabinet
 
 from __future__ import annotations
 
-from dataclasses import replace
+from dataclasses import fields, replace
 from typing import Any
 
 import numpy as np
 
 from osg_control.domain.base import Domain, StartRegion, Task
-from osg_control.domain.benchmark import Benchmark
 from osg_control.domain.spec import MOVEMENT, Node, SkillSpec, Waypoint
 from osg_control.errors import DomainError
 from osg_control.franka.hinge import HINGE_NODES, HINGE_SKILLS
+from osg_control.franka.perception import GRASP_FORCE, PERCEPTIONS
 from osg_control.franka.kettle import KETTLE_NODES, KETTLE_SKILLS
 from osg_control.franka.poses import (
     ACTION_BOUNDS,
@@ -39,9 +39,6 @@ from osg_control.franka.poses import (
     wp,
 )
 from osg_control.paths import PACKAGE_DIR
-
-GRASP_FORCE = 1.0
-"""Both fingers pressing harder than this [N] count as a grasp."""
 
 TASK_FACTS: dict[str, tuple[str, str]] = {
     "microwave": ("microwave-open", "microwave-closed"),
@@ -64,10 +61,10 @@ _OFFSET = 9
 """The world vector's first entry is the env's qpos 9."""
 
 
-def world_of(object_qpos: np.ndarray, finger_forces: tuple[float, float]) -> np.ndarray:
-    """The world-state vector from the object qpos (21,) and the two finger forces [N]."""
-    grasped = float(min(finger_forces) > GRASP_FORCE)
-    return np.concatenate([np.asarray(object_qpos, dtype=float), [grasped]])
+def world_of(object_qpos: np.ndarray, grasped: bool) -> np.ndarray:
+    """The world-state vector from the object qpos (21,) and the grasp flag (truth: the
+    fingers' contact forces; percept: the finger width, ``franka.perception``)."""
+    return np.concatenate([np.asarray(object_qpos, dtype=float), [float(grasped)]])
 
 
 def task_done(world: np.ndarray, task: str) -> bool:
@@ -430,124 +427,37 @@ TASKS: tuple[Task, ...] = (
 START_WORLD: tuple[str, ...] = ("hand-empty", *(pair[1] for pair in TASK_FACTS.values()))
 
 
-def make_franka_env(
-    skill: SkillSpec | str | None = None,
-    config: Any = None,
-    render_mode: str | None = None,
-    env: Any = None,
-    tasks: list[str] | None = None,
-    max_episode_steps: int | None = None,
-    step_limit: int | None = None,
-) -> Any:
-    """A ``FrankaKitchenAdapter`` around ``env`` (a caller's env must track ``tasks``, if
-    given; default: a new FrankaKitchen-v1 with
-    ``tasks``, all seven if not given, and the registered 280-step limit unless
-    ``max_episode_steps``). ``config`` is a ``FrankaConfig``, or the core's ``EnvConfig``
-    (as collection and evaluation pass it), whose observation noise is kept;
-    ``step_limit``: the adapter's own limit, counted from the start (see the adapter)."""
-    from osg_control.franka.arm import FrankaConfig
-    from osg_control.franka.compat import prepare
-    from osg_control.franka.env import FrankaKitchenAdapter
-
-    if config is not None and not isinstance(config, FrankaConfig):
-        config = FrankaConfig(obs_noise_std=float(getattr(config, "obs_noise_std", 0.0)))
-    prepare()
-    unknown = sorted(set(tasks or ()) - set(TASK_FACTS))
-    if unknown:
-        raise DomainError(
-            f"franka-kitchen: unknown task(s) {unknown}; the library's tasks: {sorted(TASK_FACTS)}"
-        )
-    if env is None:
-        import gymnasium
-
-        kwargs: dict[str, Any] = {"tasks_to_complete": list(tasks or TASK_FACTS)}
-        if render_mode is not None:
-            kwargs["render_mode"] = render_mode
-        if max_episode_steps is not None:
-            kwargs["max_episode_steps"] = max_episode_steps
-        env = gymnasium.make("FrankaKitchen-v1", **kwargs)
-    elif tasks:
-        from osg_control.franka.env import check_kitchen
-
-        configured = set(getattr(check_kitchen(env), "goal", {}))
-        lacking = sorted(set(tasks) - configured)
-        if lacking:
-            raise DomainError(
-                f"franka-kitchen: the env given lacks task(s) {lacking} (its tasks: "
-                f"{sorted(configured)}); make it with gymnasium.make('FrankaKitchen-v1', "
-                f"tasks_to_complete=[...]) listing them"
-            )
-    spec = {s.name: s for s in SKILLS}[skill] if isinstance(skill, str) else skill
-    return FrankaKitchenAdapter(
-        env,
-        NODES,
-        world_of,
-        facts_of,
-        skill=spec,
-        config=config,
-        step_limit=step_limit,
-        setups=SETUPS,
-        world_facts=FACTS,
-    )
-
-
 STEP_COST = 2.0
 """Plan cost per budgeted step: the env's 280-step limit makes a plan's length matter (a
 45-step movement costs 90, as much as a 0.91 success rate's -ln p x 1000)."""
-STEP_LIMIT = 280
-"""FrankaKitchen-v1's registered episode limit (D4RL's protocol)."""
-UNLIMITED_STEPS = 100_000
-"""The env's limit in the no-limit variant (the executor's own budgets end it first)."""
-GOAL_SETS: dict[str, tuple[str, ...]] = {
-    "kitchen-complete": ("microwave", "kettle", "light switch", "slide cabinet"),
-    "kitchen-mixed": ("microwave", "kettle", "bottom burner", "light switch"),
-    "all-seven": tuple(TASK_FACTS),
-}
-"""D4RL's goal sets (kitchen-complete and kitchen-partial share theirs) and all seven."""
-
-
-def make_benchmark_env(
-    tasks: tuple[str, ...], step_limit: int | None, noise: float, start_steps: int = 0
-) -> Any:
-    """The benchmark's env: FrankaKitchen-v1 for ``tasks``; with ``step_limit`` and no
-    ``start_steps`` exactly the registered env (its own 280-step ``TimeLimit``), else one
-    whose own limit leaves ``start_steps`` for the drive to a perturbed start, the adapter
-    counting ``step_limit`` from the start."""
-    from osg_control.environment.arm_env import EnvConfig
-
-    if step_limit is None:
-        max_steps: int | None = UNLIMITED_STEPS
-    else:
-        max_steps = step_limit + start_steps if start_steps else None
-    return make_franka_env(
-        config=EnvConfig(obs_noise_std=noise),
-        tasks=list(tasks),
-        max_episode_steps=max_steps,
-        step_limit=step_limit if start_steps else None,
-    )
-
-
-BENCHMARK = Benchmark(
-    name="D4RL kitchen (FrankaKitchen-v1)",
-    goal_sets=GOAL_SETS,
-    default_set="kitchen-complete",
-    task_facts={task: pair[0] for task, pair in TASK_FACTS.items()},
-    step_limit=STEP_LIMIT,
-    make_env=make_benchmark_env,
-    published={
-        "BC": {"kitchen-complete": 65.0, "kitchen-mixed": 51.5},
-        "CQL": {"kitchen-complete": 43.8, "kitchen-mixed": 51.0},
-        "IQL": {"kitchen-complete": 62.5, "kitchen-mixed": 51.0},
-        "TD3+BC": {"kitchen-complete": 0.0, "kitchen-mixed": 0.0},
-    },
-    published_note="monolithic offline RL trained on D4RL's human demonstrations (TD3+BC: "
-    "about 0, one implementation, d3rlpy); ours: a skill graph trained on our own scripted "
-    "data for the same tasks, metric and 280-step limit",
+_ENV_NAMES = (
+    "BENCHMARK",
+    "GOAL_SETS",
+    "STEP_LIMIT",
+    "UNLIMITED_STEPS",
+    "make_benchmark_env",
+    "make_franka_env",
 )
 
 
+def __getattr__(name: str) -> Any:
+    """The env factories and the benchmark, defined in ``franka.envs`` (which imports this
+    module), re-exported here."""
+    if name in _ENV_NAMES:
+        from osg_control.franka import envs
+
+        return getattr(envs, name)
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+
+
 def franka_domain() -> Domain:
-    """The FrankaKitchen-v1 domain (registered as ``franka-kitchen``)."""
+    """The FrankaKitchen-v1 domain (registered as ``franka-kitchen``); the perceptions it
+    supports are ``PERCEPTIONS`` (``env``, the default, and the oracle ``sim``)."""
+    from osg_control.franka.envs import BENCHMARK, make_franka_env
+
+    # The core's ``Domain.perceptions`` where it has that field (the lead's perception layer).
+    declared = {f.name for f in fields(Domain)}
+    extra: dict[str, Any] = {"perceptions": PERCEPTIONS} if "perceptions" in declared else {}
     return Domain(
         name="franka-kitchen",
         description="Gymnasium-Robotics FrankaKitchen-v1 (the D4RL kitchen), via its own env",
@@ -567,4 +477,5 @@ def franka_domain() -> Domain:
         benchmark=BENCHMARK,
         action_bounds=ACTION_BOUNDS,
         step_cost=STEP_COST,
+        **extra,
     )

@@ -1,15 +1,16 @@
 """The adapter: a caller's FrankaKitchen-v1 with the paper's 10-D state and 7-D TCP action.
 
 Wraps an env made with ``gymnasium.make("FrankaKitchen-v1", tasks_to_complete=[...])``
-(any of its options); its ``step``, reward, observation noise, time limit and task
-completion run as the library ships them: the adapter only chooses the 9-D action.
+(any of its options, any wrapper of the caller's); its ``step``, reward, observation noise,
+time limit and task completion run as the library ships them: the adapter only chooses
+the 9-D action.
 
-State (10-D, world frame = the env's frame; the robot base stands at (0, 0, 1.8)):
-``[x, y, z, qw, qx, qy, qz, gripper command, grip force, finger distance]`` of the
-``end_effector`` site; the quaternion's sign is in the hemisphere of ``REFERENCE_QUAT`` (the
-tool's orientation at the env's reset, z along +y). Grip force [N]: the smaller of the two
-fingers' summed normal contact forces on things that are not the robot (a squeeze needs
-both). Finger distance: the sum of the two finger joints [m].
+Percept (``percept()``, computed once at the end of ``reset``, after each step and so
+within ``joint_reset``; ``observe()`` is its state): by ``FrankaConfig.perception``,
+``env`` (default) from the observation the caller's env returned, or ``sim``, the
+simulator's state (an oracle); see ``osg_control.franka.perception``. State (10-D, world
+frame = the env's frame; the robot base stands at (0, 0, 1.8)): ``[x, y, z, qw, qx, qy,
+qz, gripper command, grip force, finger distance]`` of the ``end_effector`` site.
 
 Action (7-D): ``[dx, dy, dz, da, db, dg, g]``, relative TCP position [m] and rotation
 vector [rad], clipped to ``ACTION_BOUNDS`` (4 cm and 0.2 rad per 80 ms step: 0.5 m/s, which
@@ -18,11 +19,15 @@ core's own kitchen is too slow here), and a gripper command (``g < -0.5`` closes
 ``g > 0.5`` opens). mink's differential IK on an arm-only model compiled from the env's own
 MJCF (``franka.arm``), with the joint limits the env enforces (the intersection of the MJCF
 joint ranges, the actuators' control ranges and ``franka_config.xml``'s position bounds),
-gives a joint
-velocity ``v`` for the commanded pose; the env's action is ``a = v / 2`` (the env sets the
-servo target to ``observed qpos + 2 a dt``), scaled as a whole vector so that
-``max |a| <= 1``: when it saturates the TCP moves slower along the same direction, never
-along another one. Fingers: ``+1`` opens, ``-1`` closes, every step.
+gives a joint velocity ``v`` for the commanded pose from the perceived joints (``env``: the
+observed ones, as the env's own servo target ``observed qpos + 2 a dt``; ``sim``: the true
+ones); the env's action is ``a = v / 2``, scaled as a whole vector so that ``max |a| <= 1``:
+when it saturates the TCP moves slower along the same direction, never along another one.
+Fingers: ``+1`` opens, ``-1`` closes, every step.
+
+Truth (``tcp_pose``, ``arm_q``, ``world_state``, ``facts``, ``skill_success``,
+``info["world"]``) is for scoring, the skill's reward (Algorithm 1's labels) and the reset's
+set-ups and drive (``franka.setup``), never for deciding.
 """
 
 from __future__ import annotations
@@ -32,12 +37,11 @@ from contextlib import contextmanager
 from typing import Any
 
 import gymnasium as gym
-import mujoco
 import numpy as np
 
 from osg_control.control.divergence import DivergenceWatch, non_finite_state
-from osg_control.domain.spec import Node, ScriptParams, SkillSpec
-from osg_control.environment.actions import checked_action, scale_into
+from osg_control.domain.spec import Node, SkillSpec
+from osg_control.environment.actions import checked_action
 from osg_control.environment.options import (
     GRIPPER_STATES,
     Bounds,
@@ -48,14 +52,9 @@ from osg_control.environment.options import (
     facts_option,
 )
 from osg_control.environment.poses import quat_rotation, sample_start_pose
-from osg_control.environment.success import (
-    GRIPPER_CLOSED_CMD,
-    GRIPPER_OPEN_CMD,
-    effects_hold,
-    success_holds,
-)
+from osg_control.environment.success import GRIPPER_CLOSED_CMD, GRIPPER_OPEN_CMD, success_holds
 from osg_control.errors import DomainError, EnvOptionError, SimulationError
-from osg_control.franka import poses
+from osg_control.franka import poses, setup
 from osg_control.franka.arm import (
     ARM_JOINTS,
     FINGER_JOINTS,
@@ -67,16 +66,18 @@ from osg_control.franka.arm import (
     scale_to_action,
     servo_response,
 )
+from osg_control.franka.perception import (
+    ARM,
+    REFERENCE_QUAT,
+    ROBOT_QVEL,
+    FrankaSensors,
+    observation_vector,
+)
+from osg_control.perception.percept import Percept
 
 ACTION_BOUNDS = np.array(poses.ACTION_BOUNDS)
 """Per-step bound of each action component: 4 cm, 0.2 rad (per 80 ms step), gripper."""
-REFERENCE_QUAT = (0.5, -0.5, -0.5, -0.5)
-"""The hemisphere of the state's quaternion: tool z along +y, fingers along x (about the
-orientation at the env's reset)."""
-NOISE_FREE = ScriptParams(threshold_std=0.0, noise_std=0.0)
-"""Algorithm 1 without its noise: a set-up's first attempt."""
-SETUP_ATTEMPTS = 5
-"""How often ``reset`` retries a skill's set-up (a noisy script) before giving up."""
+__all__ = ["ACTION_BOUNDS", "REFERENCE_QUAT", "FrankaKitchenAdapter", "check_kitchen"]
 FINGER_BODIES = ("panda0_leftfinger", "panda0_rightfinger")
 RESET_OPTIONS = ("node", "position", "radius", "angle", "max_steps", "gripper", "facts")
 """The options ``FrankaKitchenAdapter.reset`` knows; any other name is refused."""
@@ -105,12 +106,13 @@ class FrankaKitchenAdapter(gym.Env):
     """A FrankaKitchen-v1 driven by relative TCP commands (see module docstring).
 
     Args:
-        env: the caller's ``gymnasium.make("FrankaKitchen-v1", ...)`` env.
+        env: the caller's ``gymnasium.make("FrankaKitchen-v1", ...)`` env (any wrapper:
+            the ``env`` perception reads the observation its ``reset``/``step`` return).
         nodes: the domain's nodes (a skill's start and end poses).
         world_of: object qpos (21,) and grasp flag -> the world-state vector (the domain's).
         facts_of: world-state vector -> facts.
         skill: the skill whose success the env reports, if any.
-        config: IK weights and observation noise.
+        config: IK weights and the perception (default ``env``).
         step_limit: steps after ``reset``'s start (the drive to a random start not
             counted) after which ``step`` reports ``truncated``; None: only the env's own
             limit.
@@ -147,9 +149,9 @@ class FrankaKitchenAdapter(gym.Env):
         self.data = self.kitchen.data
         self.nodes = nodes
         self.skill = skill
-        self._world_of = world_of
         self._facts_of = facts_of
         self.config = config or FrankaConfig()
+        self.perception = self.config.perception
         self.render_mode = getattr(env, "render_mode", None)
         self.dt = float(self.kitchen.robot_env.dt)
         self.posture = np.asarray(self.kitchen.robot_env.init_qpos[:7], dtype=float).copy()
@@ -158,12 +160,23 @@ class FrankaKitchenAdapter(gym.Env):
         self._kp, self._fraction = servo_response(self.kitchen)
         self._arm_dof = np.array([self.model.joint(j).dofadr[0] for j in ARM_JOINTS])
         self._arm_qpos = np.array([self.model.joint(j).qposadr[0] for j in ARM_JOINTS])
-        self._finger_qpos = np.array([self.model.joint(j).qposadr[0] for j in FINGER_JOINTS])
-        self._tcp = self.model.site(TCP_SITE).id
-        self._robot_bodies = {
+        finger_qpos = np.array([self.model.joint(j).qposadr[0] for j in FINGER_JOINTS])
+        robot_bodies = {
             b for b in range(self.model.nbody) if self.model.body(b).name.startswith("panda0_")
         }
-        self._finger_bodies = [self.model.body(b).id for b in FINGER_BODIES]
+        self.sensors = FrankaSensors(
+            self.kitchen,
+            self.ik.tcp_pose,
+            world_of,
+            facts_of,
+            {
+                "arm_qpos": self._arm_qpos,
+                "finger_qpos": finger_qpos,
+                "tcp": self.model.site(TCP_SITE).id,
+                "finger_bodies": [self.model.body(b).id for b in FINGER_BODIES],
+                "robot_bodies": robot_bodies,
+            },
+        )
         self.observation_space = gym.spaces.Box(-np.inf, np.inf, (10,), np.float64)
         self.action_space = gym.spaces.Box(-ACTION_BOUNDS, ACTION_BOUNDS, (7,), np.float64)
         self.action_bounds = ACTION_BOUNDS
@@ -171,76 +184,50 @@ class FrankaKitchenAdapter(gym.Env):
         self._succeeded = False
         self._steps = 0
         self._episode_over = False
+        self._observation: np.ndarray | None = None
+        self._percept: Percept | None = None
         self.last_env_info: dict[str, Any] = {}
-        self._rng = np.random.default_rng()
+        self.script_rng = np.random.default_rng()
+        self._noise_rng = np.random.default_rng()
 
-    # ----------------------------------------------------------------- state
+    # ----------------------------------------------------------------- truth
     @property
     def arm_q(self) -> np.ndarray:
-        """The arm's true joint positions [rad] (a copy)."""
+        """Truth: the arm's joint positions [rad] (a copy)."""
         return self.data.qpos[self._arm_qpos].copy()
 
     def tcp_pose(self) -> tuple[np.ndarray, np.ndarray]:
-        """True TCP position [m] and rotation matrix."""
-        return (
-            self.data.site_xpos[self._tcp].copy(),
-            self.data.site_xmat[self._tcp].reshape(3, 3).copy(),
-        )
+        """Truth: the TCP position [m] and rotation matrix."""
+        return self.sensors.true_tcp()
 
     def finger_forces(self) -> tuple[float, float]:
-        """Summed normal contact force [N] on each finger from things not the robot."""
-        totals = [0.0, 0.0]
-        wrench = np.zeros(6)
-        for i in range(self.data.ncon):
-            contact = self.data.contact[i]
-            bodies = (
-                int(self.model.geom_bodyid[contact.geom1]),
-                int(self.model.geom_bodyid[contact.geom2]),
-            )
-            for f, finger in enumerate(self._finger_bodies):
-                if finger in bodies:
-                    other = bodies[1] if bodies[0] == finger else bodies[0]
-                    if other not in self._robot_bodies:
-                        mujoco.mj_contactForce(self.model, self.data, i, wrench)
-                        totals[f] += abs(float(wrench[0]))
-        return totals[0], totals[1]
+        """Truth: summed normal contact force [N] on each finger from things not the robot."""
+        return self.sensors.finger_forces()
 
     def grip_force(self) -> float:
-        """The squeeze [N]: the smaller of the two fingers' contact forces."""
+        """Truth: the squeeze [N], the smaller of the two fingers' contact forces."""
         return float(min(self.finger_forces()))
 
-    def _true_obs(self) -> np.ndarray:
-        pos, _ = self.tcp_pose()
-        quat = np.zeros(4)
-        mujoco.mju_mat2Quat(quat, self.data.site_xmat[self._tcp])
-        if float(np.dot(quat, REFERENCE_QUAT)) < 0:
-            quat = -quat
-        fingers = float(self.data.qpos[self._finger_qpos].sum())
-        return np.concatenate([pos, quat, [self._gripper_cmd, self.grip_force(), fingers]])
-
-    def observe(self) -> np.ndarray:
-        """The 10-D state (with the configured noise on the TCP position)."""
-        obs = self._true_obs()
-        if self.config.obs_noise_std > 0:
-            obs[:3] += self._rng.normal(0.0, self.config.obs_noise_std, 3)
-        return obs
+    def true_state(self) -> np.ndarray:
+        """Truth: the 10-D state of the simulator (the ``sim`` percept's state)."""
+        return self.sensors.true_state(self._gripper_cmd)
 
     def world_state(self) -> np.ndarray:
-        """The domain's world-state vector (object qpos, grasp flag)."""
-        return np.asarray(self._world_of(self.data.qpos[9:].copy(), self.finger_forces()))
+        """Truth: the domain's world-state vector (true object qpos, contact grasp)."""
+        return self.sensors.true_world()
 
     def facts_of(self, world: np.ndarray) -> frozenset[str]:
         """The domain's facts of a world-state vector."""
         return frozenset(self._facts_of(world))
 
     def facts(self) -> frozenset[str]:
-        """The facts that hold now."""
+        """Truth: the facts that hold now in the simulator."""
         return self.facts_of(self.world_state())
 
     def skill_success(
         self, skill: SkillSpec | None = None, world: np.ndarray | None = None
     ) -> bool:
-        """TCP within tolerance of the skill's end node, its gripper state, its effects."""
+        """Truth: TCP within tolerance of the skill's end node, its gripper state, effects."""
         skill = skill or self.skill
         if skill is None:
             return False
@@ -248,6 +235,40 @@ class FrankaKitchenAdapter(gym.Env):
         return success_holds(
             skill, self.nodes[skill.end], self.tcp_pose()[0], self._gripper_cmd, facts
         )
+
+    # ----------------------------------------------------------------- percepts
+    def percept(self) -> Percept:
+        """What the robot perceived at the last reset, step or joint reset: the only input
+        of whatever decides."""
+        if self._percept is None:
+            raise RuntimeError("the env has not been reset")
+        return self._percept
+
+    def observe(self) -> np.ndarray:
+        """The latest percept's 10-D state (a copy)."""
+        return self.percept().state.copy()
+
+    def env_observation(self) -> np.ndarray:
+        """The env's latest 59-D ``observation`` array, as the caller's env returned it."""
+        if self._observation is None:
+            raise RuntimeError("the env has not been reset")
+        return self._observation.copy()
+
+    def _perceive(self) -> Percept:
+        self._percept = self.sensors.perceive(
+            self.perception, self._observation, self._gripper_cmd, self._noise_rng
+        )
+        return self._percept
+
+    def _controlled(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """What the controller reads: the joints, their TCP pose and the bias torques;
+        ``env``: the observed joints and speeds on the arm model, ``sim``: the truth."""
+        if self.perception.name == "sim" or self._observation is None:
+            pos, rot = self.tcp_pose()
+            return self.arm_q, pos, rot, self.data.qfrc_bias[self._arm_dof].copy()
+        q = self._observation[ARM].copy()
+        pos, rot = self.ik.tcp_pose(q)
+        return q, pos, rot, self.ik.bias(q, self._observation[ROBOT_QVEL][:7])
 
     def _info(self, world: np.ndarray) -> dict[str, Any]:
         return {
@@ -271,7 +292,7 @@ class FrankaKitchenAdapter(gym.Env):
         is given) through the env's own steps (they count toward the env's own limit, not
         toward ``steps`` or ``step_limit``). ``max_steps`` bounds the drive (default 40).
         The world is the env's own: ``facts`` and ``gripper``, the core's options, are
-        accepted only if they hold in the start it gives.
+        accepted only if they hold (on the truth) in the start it gives.
 
         Raises:
             EnvOptionError: an unknown option name (the known ones listed), a value out of
@@ -304,65 +325,36 @@ class FrankaKitchenAdapter(gym.Env):
                 f"{node_name or 'of the env'} has the gripper {start_gripper}"
             )
         super().reset(seed=seed)
-        self._rng = np.random.default_rng(seed)
-        _obs, env_info = self.env.reset(seed=seed)
-        self.last_env_info = dict(env_info)
-        self._gripper_cmd = GRIPPER_OPEN_CMD
+        self.script_rng = np.random.default_rng(seed)
+        self._noise_rng = np.random.default_rng(None if seed is None else [seed, 1])
+        self._percept = None
+        self.reset_env(seed)
         self._succeeded = False
         self._steps = 0
         if self.skill is not None and self.skill.start in self.setups:
-            self._set_up(self.skill.start, seed)
+            setup.set_up(self, self.skill.start, seed)
         if node_name is not None:
             position, rotation = sample_start_pose(
                 self.np_random, centre, radius, angle, quat_rotation(node.orientation)
             )
-            with self._outside_the_skill():  # the drive is not the skill's episode
-                self.drive_to(position, rotation, gripper, max_steps=max_steps)
+            with self.outside_the_skill():  # the drive is not the skill's episode
+                setup.drive_to(self, position, rotation, gripper, max_steps=max_steps)
         self._steps = 0
         self._episode_over = False
         world = self.world_state()
         check_facts_hold(facts, self.facts_of(world), "the env's own reset")
+        self._perceive()
         return self.observe(), self._info(world)
 
-    def _set_up(self, node: str, seed: int | None) -> None:
-        """Bring the env from its reset to ``node`` in the world a skill starting there
-        needs, by running the node's set-up skills' scripts (``setups``) through the env's
-        own steps: first noise-free, then, if a skill's effects do not hold at its end,
-        with the scripts' own Algorithm 1 noise from a new reset, up to ``SETUP_ATTEMPTS``
-        attempts in all.
-
-        Raises:
-            SimulationError: no attempt gave every set-up skill its effects.
-        """
-        from osg_control.data.scripted import ScriptedPolicy
-
-        chain = self.setups[node]
-        with self._outside_the_skill():
-            for attempt in range(SETUP_ATTEMPTS):
-                if attempt:
-                    self.env.reset(seed=seed)
-                    self._gripper_cmd = GRIPPER_OPEN_CMD
-                done = True
-                for setup in chain:
-                    params = None if attempt else NOISE_FREE
-                    policy = ScriptedPolicy(setup, self._rng, params, ACTION_BOUNDS)
-                    policy.reset()
-                    while not policy.done and not self.skill_success(setup):
-                        # The true state: the set-up prepares the scene, it is not the
-                        # evaluated episode (whose observation noise it must not see).
-                        self.step(policy(self._true_obs()))
-                    if not effects_hold(setup, self.facts()):
-                        done = False
-                        break
-                if done:
-                    return
-            raise SimulationError(
-                f"set-up {[s.name for s in chain]} of node {node!r} did not give its effects "
-                f"in {SETUP_ATTEMPTS} attempts"
-            )
+    def reset_env(self, seed: int | None) -> None:
+        """The caller's env's own ``reset``, its observation kept, the gripper open."""
+        obs, env_info = self.env.reset(seed=seed)
+        self._observation = observation_vector(obs)
+        self.last_env_info = dict(env_info)
+        self._gripper_cmd = GRIPPER_OPEN_CMD
 
     @contextmanager
-    def _outside_the_skill(self) -> Iterator[None]:
+    def outside_the_skill(self) -> Iterator[None]:
         """Steps that are not the skill's episode (a set-up, the drive to a start): no
         success check, no reward, no termination from the skill."""
         skill, self.skill = self.skill, None
@@ -379,24 +371,8 @@ class FrankaKitchenAdapter(gym.Env):
         max_steps: int = 40,
         tolerance: float = 0.01,
     ) -> int:
-        """Step toward a TCP pose (position, rotation matrix) with the gripper ``"open"`` or
-        ``"closed"``; return the steps used."""
-        from osg_control.control.ik import rotation_error
-
-        g = GRIPPER_OPEN_CMD if gripper == "open" else GRIPPER_CLOSED_CMD
-        for step in range(max_steps):
-            pos, rot = self.tcp_pose()
-            error = np.asarray(position) - pos
-            turn = rotation_error(rot, rotation)
-            if np.linalg.norm(error) < tolerance and np.linalg.norm(turn) < 0.05:
-                return step
-            action = np.concatenate(
-                [scale_into(error, ACTION_BOUNDS[0]), scale_into(turn, ACTION_BOUNDS[3]), [g]]
-            )
-            *_, terminated, truncated, _info = self.step(action)
-            if terminated or truncated:
-                return step + 1
-        return max_steps
+        """``franka.setup.drive_to`` (on the true TCP): the steps used."""
+        return setup.drive_to(self, position, rotation, gripper, max_steps, tolerance)
 
     @property
     def steps(self) -> int:
@@ -423,19 +399,16 @@ class FrankaKitchenAdapter(gym.Env):
         return checked_action(action, ACTION_BOUNDS)
 
     def env_action(self, action: np.ndarray) -> np.ndarray:
-        """The env's 9-D action for a (clipped) 7-D TCP action at the current state."""
-        pos, rot = self.tcp_pose()
-        velocity = self.ik.velocity(
-            self.arm_q, pos + action[:3], rotation_step(rot, action[3:6]), self.dt
-        )
-        return self._arm_action(velocity)
+        """The env's 9-D action for a (clipped) 7-D TCP action at the perceived state."""
+        q, pos, rot, bias = self._controlled()
+        velocity = self.ik.velocity(q, pos + action[:3], rotation_step(rot, action[3:6]), self.dt)
+        return self._arm_action(velocity, bias)
 
-    def _arm_action(self, velocity: np.ndarray) -> np.ndarray:
+    def _arm_action(self, velocity: np.ndarray, bias: np.ndarray) -> np.ndarray:
         """IK joint velocity -> the env's 9-D action: each joint's step offset divided by
-        its servo's one-step response, plus the offset that holds gravity (``qfrc_bias /
+        its servo's one-step response, plus the offset that holds gravity (``bias /
         kp``), scaled as a whole (see ``servo_response``); fingers +-1."""
-        offset = velocity * self.dt / self._fraction
-        offset += self.data.qfrc_bias[self._arm_dof] / self._kp
+        offset = velocity * self.dt / self._fraction + bias / self._kp
         finger = -1.0 if self._gripper_cmd == GRIPPER_CLOSED_CMD else 1.0
         return np.concatenate([scale_to_action(offset, self.dt), [finger, finger]])
 
@@ -462,7 +435,8 @@ class FrankaKitchenAdapter(gym.Env):
             failure = non_finite_state(self.data, ("qpos",))
         else:
             watch = DivergenceWatch(self.data)
-            _obs, env_reward, terminated, truncated, env_info = self.env.step(env_action)
+            obs, env_reward, terminated, truncated, env_info = self.env.step(env_action)
+            self._observation = observation_vector(obs)
             self.last_env_info = dict(env_info)
             failure = watch.check()
             terminated = terminated or failure is not None
@@ -478,6 +452,7 @@ class FrankaKitchenAdapter(gym.Env):
         info["env_reward"] = float(env_reward)
         info["env_info"] = self.last_env_info
         info["action_applied"] = applied
+        info["percept"] = self._perceive()
         if failure is not None:
             info["failure"] = failure
         if self.skill is not None and self._succeeded:
@@ -489,19 +464,21 @@ class FrankaKitchenAdapter(gym.Env):
 
     # ----------------------------------------------------------------- joint reset
     def joint_reset(self, max_steps: int = 20, tolerance: float = 0.05) -> int:
-        """Drive the joints toward the env's reset posture while the TCP holds its pose
-        (a strong posture task under the frame task); returns the steps used."""
-        pos, rot = self.tcp_pose()
+        """Drive the perceived joints toward the env's reset posture while the perceived
+        TCP holds its pose (a strong posture task under the frame task); returns the steps
+        used (each step refreshes the percept)."""
+        _q, pos, rot, _bias = self._controlled()
         previous = np.inf
         for step in range(max_steps):
-            error = float(np.abs(self.arm_q - self.posture).max())
+            q, _pos, _rot, bias = self._controlled()
+            error = float(np.abs(q - self.posture).max())
             if error < tolerance or error > previous - 1e-4:
                 return step
             previous = error
             action = None
             if non_finite_state(self.data, ("qpos",)) is None:
-                velocity = self.ik.velocity(self.arm_q, pos, rot, self.dt, posture_cost=0.05)
-                action = self._arm_action(velocity)
+                velocity = self.ik.velocity(q, pos, rot, self.dt, posture_cost=0.05)
+                action = self._arm_action(velocity, bias)
             *_, terminated, truncated, info = self._env_step(action, np.zeros(7))
             if "failure" in info:
                 raise SimulationError(f"joint reset: {info['failure']}")
