@@ -23,7 +23,8 @@ LAYERS: dict[str, int] = {
     "classifier": 5,
     "execution": 6,
     "evaluation": 7,
-    "commands": 8, "cli": 8,
+    "pipeline": 8,
+    "commands": 9, "cli": 9,
 }  # fmt: skip
 """Each top-level module or sub-package's layer: a module may import its own layer or lower."""
 KITCHEN_WORDS = ("cube", "door", "handle", "valve", "cabinet", "counter", "kitchen")
@@ -117,8 +118,16 @@ def test_every_layer_is_classified() -> None:
 DECIDING_LAYERS = ("execution", "classifier", "learning")
 """Layers that decide (or learn to): they read percepts, never the simulator's state."""
 TRUTH_ATTRIBUTES = (
-    "facts", "skill_success", "world_state", "read_world", "tcp_pose", "world", "arm_q",
-    "data", "model", "scene",
+    "facts",
+    "skill_success",
+    "world_state",
+    "read_world",
+    "tcp_pose",
+    "world",
+    "arm_q",
+    "data",
+    "model",
+    "scene",
 )
 """The env's truth accessors (``environment.contract``) and the simulator itself."""
 TRUTH_KEYS = ("world", "world_facts")
@@ -138,12 +147,16 @@ def _truth_reads(tree: ast.AST) -> list[str]:
             and node.slice.value in TRUTH_KEYS
         ):
             found.append(f"line {node.lineno}: [{node.slice.value!r}]")
-    found += [f"imports {name}" for name in _imports(tree) if name.startswith("osg_control.kitchen")]
+    found += [
+        f"imports {name}" for name in _imports(tree) if name.startswith("osg_control.kitchen")
+    ]
     found += [
         f"line {node.lineno}: imports mujoco"
         for node in ast.walk(tree)
-        if isinstance(node, ast.Import) and any(a.name == "mujoco" for a in node.names)
-        or isinstance(node, ast.ImportFrom) and node.module == "mujoco"
+        if isinstance(node, ast.Import)
+        and any(a.name == "mujoco" for a in node.names)
+        or isinstance(node, ast.ImportFrom)
+        and node.module == "mujoco"
     ]
     return found
 

@@ -24,9 +24,9 @@ from osg_control.data.datasets import load_dataset
 from osg_control.domain.base import Domain
 from osg_control.domain.registry import domain_names, get_domain, register_domain
 from osg_control.execution.executor import Executor
-from osg_control.planning.graph import graph_from_specs
 from osg_control.learning.policy import load_policies
 from osg_control.planning.api import plan_for_goal
+from osg_control.planning.graph import graph_from_specs
 from osg_control.planning.graph_data import graph_from_datasets
 from osg_control.planning.pddl_io import export_pddl, read_domain, read_problem
 
@@ -110,7 +110,8 @@ def test_classifier_tells_the_movement_starts_apart(domain: Domain, trained: Pat
 
 def test_execute_reaches_the_goal(domain: Domain, trained: Path) -> None:
     classifier = StateClassifier.load(trained / "classifier", movement_classes(domain))
-    executor = Executor(domain, load_policies(trained / "skills"), classifier, graph_from_specs(domain))
+    policies = load_policies(trained / "skills")
+    executor = Executor(domain, policies, classifier, graph_from_specs(domain))
     env = domain.make_env()
     obs, _ = env.reset(seed=0)
     assert "button-up" in env.facts()

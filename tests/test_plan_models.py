@@ -31,6 +31,14 @@ def test_plan_costs_follow_the_models_manifest(tmp_path: Path, capsys) -> None:
 
 def test_plan_refuses_both_graph_and_models(tmp_path: Path, capsys) -> None:
     models = str(KITCHEN.defaults_dir)
-    argv = ["plan", "--goal", "cube-lifted", "--graph", str(tmp_path / "g.json"), "--models", models]
+    argv = [
+        "plan",
+        "--goal",
+        "cube-lifted",
+        "--graph",
+        str(tmp_path / "g.json"),
+        "--models",
+        models,
+    ]
     assert main(argv) == 2
     assert "--graph and --models" in capsys.readouterr().err

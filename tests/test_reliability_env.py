@@ -11,7 +11,6 @@ import mujoco
 import numpy as np
 import pytest
 
-from osg_control.perception.spec import PerceptionSpec
 from osg_control.control.ik import urdf_velocity_limits
 from osg_control.control.servo import saturate_joint_speeds, velocity_limited_target
 from osg_control.domain.registry import get_domain
@@ -22,6 +21,7 @@ from osg_control.execution.defaults import load_defaults
 from osg_control.execution.executor import Executor
 from osg_control.franka.arm import FrankaConfig
 from osg_control.kitchen.env import KitchenEnv
+from osg_control.perception.spec import PerceptionSpec
 
 KITCHEN = get_domain("kitchen")
 NAN = float("nan")
@@ -32,7 +32,10 @@ NAN = float("nan")
     ("make", "field"),
     [
         (lambda: EnvConfig(perception="paper"), "EnvConfig.perception"),
-        (lambda: KitchenEnv(config=EnvConfig(perception=PerceptionSpec("env"))), "EnvConfig.perception"),
+        (
+            lambda: KitchenEnv(config=EnvConfig(perception=PerceptionSpec("env"))),
+            "EnvConfig.perception",
+        ),
         (lambda: EnvConfig(max_steps=0), "EnvConfig.max_steps"),
         (lambda: EnvConfig(max_steps=2.5), "EnvConfig.max_steps"),
         (lambda: EnvConfig(max_steps=True), "EnvConfig.max_steps"),
@@ -53,7 +56,9 @@ def test_configuration_fields_out_of_range_are_refused(make, field) -> None:
 
 def test_configurations_in_range_are_accepted() -> None:
     EnvConfig(
-        perception=PerceptionSpec(tcp_noise=0.02), max_steps=None, start_radius=0.1,
+        perception=PerceptionSpec(tcp_noise=0.02),
+        max_steps=None,
+        start_radius=0.1,
         start_angle=0.2,
     )
     EnvConfig(max_steps=1, limit_joint_speed=False)

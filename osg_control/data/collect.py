@@ -29,6 +29,14 @@ from osg_control.data.chunks import chunk_attrs, keep_chunk
 from osg_control.data.datasets import Dataset, Episode, load_dataset, write_episodes
 from osg_control.data.scripted import ScriptedPolicy
 from osg_control.domain.base import Domain
+from osg_control.domain.frames import (
+    in_skill_frame,
+    node_position,
+    placement_offsets,
+    sample_placements,
+    shifted_skill,
+    skill_offset,
+)
 from osg_control.domain.registry import get_domain
 from osg_control.domain.spec import SkillSpec
 from osg_control.environment.arm_env import ArmEnv, EnvConfig
@@ -55,15 +63,38 @@ def _env_for(domain: Domain, skill: SkillSpec) -> ArmEnv:
     return _ENVS[key]
 
 
-def run_scripted_episode(domain: Domain, skill: SkillSpec, seed: int, index: int) -> Episode:
-    """Run Algorithm 1 for one episode from a random start in the skill's initiation region."""
+def placed_start_options(
+    domain: Domain, env: ArmEnv, skill: SkillSpec, placements: dict[str, np.ndarray]
+) -> dict[str, Any]:
+    """Reset options of a start with the domain's objects at ``placements``: the objects
+    not held placed there (``env.placement_world``), the start node moved with its anchor."""
+    options: dict[str, Any] = {"radius": skill.start_radius, "angle": skill.start_angle}
+    world = env.placement_world(placements, skill.holding)
+    if world:
+        options["world"] = world
+    if domain.nodes[skill.start].anchor is not None:
+        offsets = placement_offsets(domain, placements)
+        options["position"] = node_position(domain, skill.start, offsets).tolist()
+    return options
+
+
+def run_scripted_episode(
+    domain: Domain, skill: SkillSpec, seed: int, index: int, randomize: bool = True
+) -> Episode:
+    """Run Algorithm 1 for one episode from a random start in the skill's initiation region,
+    the domain's objects placed uniformly in their regions (``randomize``; else where the
+    scene has them). The script aims at the objects' true places (its oracle); the data are
+    recorded in the skill's frame (``domain.frames``)."""
     rng = np.random.default_rng(np.random.SeedSequence([skill_seed(seed, skill.name), index]))
     env = _env_for(domain, skill)
-    obs, info = env.reset(
-        seed=int(rng.integers(2**31)),
-        options={"radius": skill.start_radius, "angle": skill.start_angle},
-    )
-    policy = ScriptedPolicy(skill, rng, bounds=getattr(env, "action_bounds", None))
+    reset_seed = int(rng.integers(2**31))
+    options: dict[str, Any] = {"radius": skill.start_radius, "angle": skill.start_angle}
+    if randomize and domain.objects:
+        options = placed_start_options(domain, env, skill, sample_placements(domain, rng))
+    obs, info = env.reset(seed=reset_seed, options=options)
+    offset = skill_offset(domain, skill, env.anchor_offsets)
+    script = shifted_skill(skill, offset)
+    policy = ScriptedPolicy(script, rng, bounds=getattr(env, "action_bounds", None))
     policy.reset()
     rows: dict[str, list[Any]] = {k: [] for k in ("obs", "next", "act", "rew", "term", "world")}
     hold_left: int | None = None  # steps still to record after the first success
@@ -77,8 +108,8 @@ def run_scripted_episode(domain: Domain, skill: SkillSpec, seed: int, index: int
             and "failure" not in info
             and env.skill_success(world=info["world"])
         )
-        rows["obs"].append(obs)
-        rows["next"].append(next_obs)
+        rows["obs"].append(in_skill_frame(obs, offset))
+        rows["next"].append(in_skill_frame(next_obs, offset))
         rows["act"].append(info["action_applied"])
         rows["rew"].append(1.0 if at_goal else 0.0)
         rows["term"].append(at_goal)

@@ -21,7 +21,7 @@ from typing import Any
 import numpy as np
 
 from osg_control.domain.benchmark import Benchmark, validate_benchmark
-from osg_control.domain.spec import Node, SkillSpec, check_skill_fields
+from osg_control.domain.spec import Node, ObjectFrame, SkillSpec, check_skill_fields
 from osg_control.errors import DomainError, SkillSpecError, lookup
 
 
@@ -91,6 +91,8 @@ class Domain:
         defaults_dir: the shipped skills and classifier (``skills/``, ``classifier/``,
             ``manifest.json``), or None if the domain ships none.
         env_id: the Gymnasium id its env is registered under, if any.
+        objects: the objects nodes may be anchored to (``Node.anchor``), with their
+            placement regions.
         perceptions: the perceptions (``perception.spec.PERCEPTIONS``) its env simulates;
             the first is the default of every command that runs episodes.
         published: published figures to report beside ours (see
@@ -122,6 +124,7 @@ class Domain:
     defaults_dir: Path | None = None
     env_id: str | None = None
     perceptions: tuple[str, ...] = ("paper", "robot", "sim")
+    objects: tuple[ObjectFrame, ...] = ()
     published: Mapping[str, Any] = field(default_factory=dict)
     benchmark: Benchmark | None = None
     action_bounds: tuple[float, ...] = (0.02, 0.02, 0.02, 0.1, 0.1, 0.1, 1.0)
@@ -259,6 +262,7 @@ def validate_domain(domain: Domain) -> None:
         unknown = sorted(skill.facts - facts)
         if unknown:
             raise DomainError(f"{where}: skill {skill.name!r} names unknown facts {unknown}")
+    _check_objects(where, domain, facts)
     _check_facts(where, "start_world", domain.start_world, facts)
     _check_facts(where, "watched_facts", domain.watched_facts, facts)
     _check_facts(where, "hand_empty", (domain.hand_empty,), facts)
@@ -289,3 +293,26 @@ def _check_facts(where: str, field_name: str, named: Any, facts: set[str]) -> No
     unknown = sorted(set(named) - facts)
     if unknown:
         raise DomainError(f"{where}: field {field_name!r} names unknown facts {unknown}")
+
+
+def _check_objects(where: str, domain: Domain, facts: set[str]) -> None:
+    """Anchors name declared objects; an object's fields and fact are the domain's."""
+    objects = {o.name: o for o in domain.objects}
+    for node in domain.nodes.values():
+        if node.anchor is not None and node.anchor not in objects:
+            raise DomainError(
+                f"{where}: node {node.name!r} field 'anchor' names unknown object "
+                f"{node.anchor!r}; objects: {sorted(objects)}"
+            )
+    for frame in domain.objects:
+        unknown = sorted(set(frame.position_fields) - set(domain.world_fields))
+        if unknown:
+            raise DomainError(
+                f"{where}: object {frame.name!r} names unknown world fields {unknown}"
+            )
+        if frame.held_fact not in facts:
+            raise DomainError(
+                f"{where}: object {frame.name!r} names unknown fact {frame.held_fact!r}"
+            )
+        if not all(lo <= hi for lo, hi in zip(frame.region_low, frame.region_high, strict=True)):
+            raise DomainError(f"{where}: object {frame.name!r} has an empty placement region")

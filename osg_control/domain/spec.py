@@ -34,12 +34,42 @@ Quat = tuple[float, float, float, float]
 
 @dataclass(frozen=True)
 class Node:
-    """A named TCP pose of the skill graph: position [m], gripper state, orientation."""
+    """A named TCP pose of the skill graph: position [m], gripper state, orientation.
+
+    ``anchor`` names the object (``ObjectFrame``) the node moves with: its ``position`` is
+    given for the object at its ``nominal`` place and shifts with the object's perceived
+    displacement in the plane (``domain.frames``); None: a fixed pose.
+    """
 
     name: str
     position: tuple[float, float, float]
     gripper: Gripper = "open"
     orientation: Quat = TOP_DOWN_QUAT
+    anchor: str | None = None
+
+
+@dataclass(frozen=True)
+class ObjectFrame:
+    """An object that nodes may be anchored to, and where it may be placed.
+
+    Attributes:
+        name: the object (as the nodes' ``anchor`` names it).
+        position_fields: the world fields of its x and y position [m].
+        nominal: the (x, y) the anchored nodes' positions are given for [m].
+        rest_z: the height of its centre when it rests where it is placed [m].
+        region_low, region_high: the (x, y) corners of its placement region [m] (Algorithm
+            1's random placements and ``--randomize-objects``).
+        held_fact: the fact that holds while the robot holds it (its frame is then frozen
+            where it was picked up).
+    """
+
+    name: str
+    position_fields: tuple[str, str]
+    nominal: tuple[float, float]
+    rest_z: float
+    region_low: tuple[float, float]
+    region_high: tuple[float, float]
+    held_fact: str
 
 
 @dataclass(frozen=True)

@@ -25,7 +25,7 @@ catalogue or scene object.
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Any, ClassVar
 
 import gymnasium as gym
@@ -53,7 +53,8 @@ from osg_control.control.servo import (
     servo_speed_band,
     velocity_limited_target,
 )
-from osg_control.domain.spec import Node, SkillSpec
+from osg_control.domain.frames import offsets_of
+from osg_control.domain.spec import Node, ObjectFrame, SkillSpec
 from osg_control.environment.actions import checked_action
 from osg_control.environment.options import (
     GRIPPER_STATES,
@@ -179,6 +180,8 @@ class ArmEnv(gym.Env):
     """The entries the ``world`` reset option may have (``check_world`` checks the values)."""
     holdable: tuple[str, ...] = ()
     """What a start may hold (the ``holding`` reset option)."""
+    objects: tuple[ObjectFrame, ...] = ()
+    """The objects nodes may be anchored to (the domain's ``objects``)."""
     world_sensors: dict[str, str] = {}
     """World field -> the sensor kind that reads it (``perception.sensors``), in the order of
     ``read_world``'s vector."""
@@ -233,6 +236,9 @@ class ArmEnv(gym.Env):
         self._sensor_slices = sensor_slices(self.world_sensors)
         self._fk_data: mujoco.MjData | None = None
         self._percept: Percept | None = None
+        self.anchor_offsets: dict[str, np.ndarray] = {}
+        """Each object's true displacement from its nominal place at the last reset (the
+        frame the env's own skill is scored in; scoring and scripted collection only)."""
 
     # ----------------------------------------------------------------- the scene
     def build_model(self) -> mujoco.MjModel:
@@ -260,6 +266,26 @@ class ArmEnv(gym.Env):
     ) -> None:
         """Put the scene's objects in place for a start (the arm is already placed and its
         kinematics computed): ``world`` holds explicit options, ``facts`` the start facts."""
+
+    def placement_offsets(self, world: dict[str, Any]) -> dict[str, np.ndarray]:
+        """The displacement of each object the ``world`` reset option places (moves the
+        start of a skill whose start node is anchored to it)."""
+        return {}
+
+    def placement_world(
+        self, placements: dict[str, np.ndarray], holding: str | None
+    ) -> dict[str, Any]:
+        """The ``world`` reset options that put the objects at ``placements`` (those not
+        held: a held object is placed in the fingers)."""
+        return {}
+
+    def node_position(self, name: str) -> np.ndarray:
+        """Where a node is in the world as reset (its anchor's true displacement applied)."""
+        node = self.nodes[name]
+        position = np.asarray(node.position, dtype=float)
+        if node.anchor is not None and node.anchor in self.anchor_offsets:
+            position = position + self.anchor_offsets[node.anchor]
+        return position
 
     def detect_world(self, state: np.ndarray, world: np.ndarray) -> np.ndarray:
         """The perceived world with its ``detected`` fields recomputed from the percepts
@@ -421,11 +447,6 @@ class ArmEnv(gym.Env):
         check_names(options, RESET_OPTIONS, "reset option")
         node_name = options.get("node") or (self.skill.start if self.skill else self.home)
         node = self.nodes[choice_option("node", node_name, self.nodes)]
-        centre, radius, angle = check_start_options(
-            options.get("position", node.position),
-            options.get("radius", self.config.start_radius),
-            options.get("angle", self.config.start_angle),
-        )
         gripper = choice_option("gripper", options.get("gripper", node.gripper), GRIPPER_STATES)
         holding = options.get("holding", self.skill.holding if self.skill else None)
         choice_option("holding", holding, (None, *self.holdable))
@@ -438,6 +459,16 @@ class ArmEnv(gym.Env):
             raise EnvOptionError(f"reset option world must be a dict, got {world!r}")
         check_names(world, self.world_options, "world reset option")
         self.check_world(world, holding)
+        default_centre = np.asarray(node.position, dtype=float)
+        if node.anchor is not None:  # the node moves with the object the world places
+            default_centre = default_centre + self.placement_offsets(world).get(
+                node.anchor, np.zeros(3)
+            )
+        centre, radius, angle = check_start_options(
+            options.get("position", default_centre),
+            options.get("radius", self.config.start_radius),
+            options.get("angle", self.config.start_angle),
+        )
         asked = options.get("facts")
         default_facts = self.skill.start_facts if self.skill else frozenset()
         facts = default_facts if asked is None else facts_option(asked, self.world_facts)
@@ -458,6 +489,7 @@ class ArmEnv(gym.Env):
         self._succeeded = False
         self._episode_over = False
         self.peak_joint_speed_ratio = 0.0
+        self.anchor_offsets = offsets_of(self.objects, tuple(self.world_sensors), self.read_world())
         self._perceive()
         return self.observe(), self._info()
 
@@ -617,9 +649,9 @@ class ArmEnv(gym.Env):
         return self._truth_success(skill, self.read_world() if world is None else world)
 
     def _truth_success(self, skill: SkillSpec, world: np.ndarray) -> bool:
+        end = replace(self.nodes[skill.end], position=tuple(self.node_position(skill.end)))
         return success_holds(
-            skill, self.nodes[skill.end], self._true_tcp()[0], self._gripper_cmd,
-            self.facts_of(world),
+            skill, end, self._true_tcp()[0], self._gripper_cmd, self.facts_of(world)
         )
 
     def _info(self, world: np.ndarray | None = None) -> dict[str, Any]:

@@ -24,7 +24,7 @@ from __future__ import annotations
 
 import time
 from collections.abc import Callable, Iterable, Mapping
-from dataclasses import asdict, dataclass, field
+from dataclasses import asdict, dataclass, field, replace
 from pathlib import Path
 from typing import Any, Protocol
 
@@ -33,11 +33,20 @@ import numpy as np
 from osg_control.control.divergence import is_divergence
 from osg_control.control.estimator import TcpTracker
 from osg_control.domain.base import Domain
+from osg_control.domain.frames import (
+    Offsets,
+    in_skill_frame,
+    node_position,
+    shifted_nodes,
+    skill_offset,
+)
 from osg_control.domain.spec import SkillSpec, nearest_start
 from osg_control.environment.arm_env import GRIPPER_OPEN_CMD, EnvConfig
 from osg_control.environment.contract import SkillEnv
 from osg_control.environment.success import success_holds
 from osg_control.errors import SimulationError
+from osg_control.execution.locate import node_at, recorded_world_holds, skill_on_path
+from osg_control.execution.objects import ObjectTracker
 from osg_control.perception.spec import PerceptionSpec
 from osg_control.planning.api import graph_domain, plan_for_goal
 from osg_control.planning.graph import SkillGraph
@@ -52,8 +61,6 @@ truncated): by Gymnasium's protocol no further step is taken, so the execution e
 and succeeds if its goal facts hold."""
 
 RESULT_SCHEMA_VERSION = 1
-NODE_TOLERANCE = 0.02
-"""TCP distance [m] within which the robot counts as on a graph node or a skill's path."""
 GRASP_GRACE_STEPS = 5
 """Steps a watched fact may be false before the skill is stopped (a grasp's contact may
 flicker for a few steps in the offline data)."""
@@ -115,69 +122,6 @@ def task_env_config(perception: PerceptionSpec) -> EnvConfig:
     return EnvConfig(perception=perception, max_steps=None)
 
 
-def node_at(domain: Domain, obs: np.ndarray, facts: Iterable[str]) -> str | None:
-    """The graph node the TCP is on (within ``NODE_TOLERANCE``, gripper matching), if any.
-
-    A node reached only while holding something counts only when the gripper is closed;
-    empty-handed nodes only when the hand is empty (the domain's ``hand_empty`` fact).
-    """
-    facts = set(facts)
-    gripper = "open" if obs[7] == GRIPPER_OPEN_CMD else "closed"
-    best, best_distance = None, NODE_TOLERANCE
-    for node in domain.nodes.values():
-        if node.gripper != gripper or (gripper == "open") != (domain.hand_empty in facts):
-            continue
-        distance = float(np.linalg.norm(obs[:3] - np.asarray(node.position)))
-        if distance <= best_distance:
-            best, best_distance = node.name, distance
-    return best
-
-
-def recorded_world_holds(skill: SkillSpec, facts: Iterable[str]) -> bool:
-    """Whether the world a skill's data was recorded in holds now: its ``start_facts`` (a
-    skill recorded only in some world may run into what differs elsewhere)."""
-    return skill.start_facts <= set(facts)
-
-
-def _segment_distance(point: np.ndarray, a: np.ndarray, b: np.ndarray) -> float:
-    """Distance from a point to the segment a-b."""
-    span = b - a
-    length2 = float(span @ span)
-    t = 0.0 if length2 == 0.0 else float(np.clip((point - a) @ span / length2, 0.0, 1.0))
-    return float(np.linalg.norm(point - (a + t * span)))
-
-
-def skill_on_path(
-    domain: Domain, obs: np.ndarray, facts: Iterable[str], skills: Iterable[SkillSpec]
-) -> str | None:
-    """The applicable manipulation skill whose scripted path the TCP is on, if any.
-
-    A skill's path runs from its start node through its waypoints; on each leg the gripper
-    is in the state it had on leaving (it switches only at a waypoint). Algorithm 1's data
-    follows that path, so a state within ``NODE_TOLERANCE`` of a leg with the gripper
-    matching is one the skill's policy was trained on: the skill can carry on from there
-    (e.g. a grasp retried after the object slipped out). Movement skills are left to the
-    classifier: their legs are shared by both directions of travel.
-    """
-    facts = set(facts)
-    gripper = "open" if obs[7] == GRIPPER_OPEN_CMD else "closed"
-    position = np.asarray(obs[:3], dtype=float)
-    best, best_distance = None, NODE_TOLERANCE
-    for skill in skills:
-        if skill.is_movement or not skill.preconditions <= facts:
-            continue
-        start_node = domain.nodes[skill.start]
-        stops = [(start_node.position, start_node.gripper)]
-        stops += [(w.position, w.gripper) for w in skill.waypoints]
-        for (start, leg_gripper), (end, _) in zip(stops, stops[1:], strict=False):
-            if leg_gripper != gripper:
-                continue
-            distance = _segment_distance(position, np.asarray(start), np.asarray(end))
-            if distance <= best_distance:
-                best, best_distance = skill.name, distance
-    return best
-
-
 class Executor:
     """Classify, plan and run options on a domain's env.
 
@@ -231,18 +175,24 @@ class Executor:
         """Called after every env step (e.g. to record video frames)."""
 
     def plan(
-        self, goal: Iterable[str], obs: np.ndarray, facts: Iterable[str]
+        self,
+        goal: Iterable[str],
+        obs: np.ndarray,
+        facts: Iterable[str],
+        offsets: Offsets | None = None,
     ) -> tuple[str | None, list[str], Any]:
-        """Choose the entry skill (if off the graph) and plan the rest.
+        """Choose the entry skill (if off the graph) and plan the rest; ``offsets``: where
+        the objects are (anchored nodes move with them).
 
         Returns:
             ``(entry skill or None, plan, planner result)``.
         """
         facts = set(facts)
-        node = node_at(self.domain, obs, facts)
+        offsets = offsets or {}
+        node = node_at(self.domain, obs, facts, offsets)
         entry = None
         if node is None:
-            entry = self._entry_skill(obs, facts)
+            entry = self._entry_skill(obs, facts, offsets)
             skill = self.skills[entry]
             node = skill.end
             facts = (facts - skill.del_effects) | skill.add_effects
@@ -251,18 +201,19 @@ class Executor:
         )
         return entry, list(result.actions), result
 
-    def _entry_skill(self, obs: np.ndarray, facts: set[str]) -> str:
+    def _entry_skill(self, obs: np.ndarray, facts: set[str], offsets: Offsets | None = None) -> str:
         """Off the graph: the manipulation skill whose path the TCP is on; else the
         classifier's movement skill when the hand is empty; else the applicable skill whose
         start node is nearest (retry from where it failed)."""
-        on_path = skill_on_path(self.domain, obs, facts, self.skills.values())
+        on_path = skill_on_path(self.domain, obs, facts, self.skills.values(), offsets)
         if on_path is not None:
             return on_path
         if self.domain.hand_empty in facts:
             return self._classify(obs, facts)
         applicable = [s for s in self.skills.values() if s.preconditions <= facts]
         fallback = applicable or list(self.skills.values())
-        return nearest_start(fallback, self.domain.nodes, obs[:3]).name
+        nodes = shifted_nodes(self.domain, offsets or {})
+        return nearest_start(fallback, nodes, obs[:3]).name
 
     def _classify(self, obs: np.ndarray, facts: set[str]) -> str:
         """The classifier's likeliest movement skill among those whose recorded world holds
@@ -280,22 +231,29 @@ class Executor:
         skill: SkillSpec,
         obs: np.ndarray,
         tracker: TcpTracker | None = None,
+        objects: ObjectTracker | None = None,
     ) -> tuple[SkillOutcome, np.ndarray]:
         """Run one option until beta holds on the percepts, its step budget runs out or it
         loses a watched precondition (``Domain.watched_facts``) from the perceived facts.
 
         ``tracker``, if given, turns each observation into the policy's input and into the
         TCP position beta is checked on; it reads every observation and is told every
-        action of the skill.
+        action of the skill. ``objects`` estimates where the objects are from every percept
+        (default: a new one); a skill acting in an object's frame sees the TCP relative to
+        it and ends where it is (``domain.frames``).
         """
         policy = self.policies[skill.name]
         end = self.domain.nodes[skill.end]
+        if objects is None:
+            objects = ObjectTracker(self.domain)
+            objects.update(env.percept())
         watched = (skill.preconditions - skill.del_effects) & self.domain.watched_facts
         started = time.perf_counter()
         lost_steps = 0
         for step in range(1, skill.max_steps + 1):
             seen = obs if tracker is None else tracker.read(obs)
-            action = policy(seen)
+            offset = skill_offset(self.domain, skill, objects.offsets())
+            action = policy(in_skill_frame(seen, offset))
             if tracker is not None:
                 tracker.acted(action)
             obs, _reward, terminated, truncated, info = env.step(action)
@@ -306,8 +264,12 @@ class Executor:
                     skill.name, False, step, time.perf_counter() - started, failure=info["failure"]
                 ), obs
             percept = env.percept()
+            objects.update(percept)
             position = (percept.state if tracker is None else tracker.read(obs))[:3]
-            if success_holds(skill, end, position, percept.state[7], percept.facts):
+            goal = replace(
+                end, position=tuple(node_position(self.domain, end.name, objects.offsets()))
+            )
+            if success_holds(skill, goal, position, percept.state[7], percept.facts):
                 return SkillOutcome(skill.name, True, step, time.perf_counter() - started), obs
             if truncated or terminated:
                 ended = TIME_LIMIT if truncated else EPISODE_ENDED
@@ -341,6 +303,8 @@ class Executor:
         facts = env.percept().facts
         result = ExecutionResult(goal=goal, success=False, entry_skill=None, plan=[])
         tracker = TcpTracker(self.filter_gain) if self.filter_gain is not None else None
+        objects = ObjectTracker(self.domain)
+        objects.update(env.percept())
         planning_time = 0.0
         for attempt in range(self.max_replans + 1):
             if set(goal) <= facts:
@@ -352,7 +316,7 @@ class Executor:
                     break
             t0 = time.perf_counter()
             seen = obs if tracker is None else tracker.read(obs)
-            entry, plan, planned = self.plan(goal, seen, facts)
+            entry, plan, planned = self.plan(goal, seen, facts, objects.offsets())
             planning_time += time.perf_counter() - t0
             if attempt == 0:
                 result.entry_skill, result.plan = entry, plan
@@ -360,7 +324,7 @@ class Executor:
                 result.failure = f"no plan: unreachable goal facts {list(planned.unreached)}"
                 break
             obs, failed = self._run_sequence(
-                env, ([entry] if entry else []) + plan, obs, result, tracker
+                env, ([entry] if entry else []) + plan, obs, result, tracker, objects
             )
             facts = env.percept().facts
             if not failed:
@@ -394,11 +358,12 @@ class Executor:
         obs: np.ndarray,
         result: ExecutionResult,
         tracker: TcpTracker | None,
+        objects: ObjectTracker,
     ) -> tuple[np.ndarray, str | None]:
         """Run skills in order; stop at the first failure and return its reason."""
         for index, name in enumerate(sequence):
             skill = self.skills[name]
-            outcome, obs = self.run_skill(env, skill, obs, tracker)
+            outcome, obs = self.run_skill(env, skill, obs, tracker, objects)
             facts = env.percept().facts
             if outcome.success and not (skill.add_effects <= facts):
                 outcome.success = False
@@ -416,6 +381,7 @@ class Executor:
                 if env.episode_over:
                     return obs, f"joint reset after {name}: {EPISODE_ENDED}"
                 obs = env.observe()
+                objects.update(env.percept())
                 if tracker is not None:
                     tracker.settle()
         return obs, None

@@ -20,7 +20,7 @@ from osg_control.errors import SkillSpecError, lookup
 from osg_control.kitchen.detectors import WORLD_SENSORS, detect_grasps
 from osg_control.kitchen.options import WORLD_OPTIONS, check_world_options
 from osg_control.kitchen.scene import SceneIndex, build_kitchen_model
-from osg_control.kitchen.skills import DOOR_OPENED, NODES, SKILLS_BY_NAME, WORLD_FACTS
+from osg_control.kitchen.skills import CUBE, DOOR_OPENED, NODES, SKILLS_BY_NAME, WORLD_FACTS
 from osg_control.kitchen.world import (
     CUBE_HALF_SIZE,
     WorldState,
@@ -48,6 +48,7 @@ class KitchenEnv(ArmEnv):
     world_options = WORLD_OPTIONS
     holdable = tuple(_FINGER_ON)
     world_sensors = WORLD_SENSORS
+    objects = (CUBE,)
 
     def __init__(
         self,
@@ -78,6 +79,21 @@ class KitchenEnv(ArmEnv):
     def facts_of(self, world: np.ndarray) -> frozenset[str]:
         """``world.world_facts`` of a world-state vector."""
         return world_facts(world_state_from_array(world))
+
+    def placement_offsets(self, world: dict[str, Any]) -> dict[str, np.ndarray]:
+        """The cube's displacement when ``world`` places it (``cube_pos``)."""
+        if world.get("cube_pos") is None:
+            return {}
+        x, y = (float(v) for v in np.asarray(world["cube_pos"], dtype=float)[:2])
+        return {"cube": np.array([x - CUBE.nominal[0], y - CUBE.nominal[1], 0.0])}
+
+    def placement_world(
+        self, placements: dict[str, np.ndarray], holding: str | None
+    ) -> dict[str, Any]:
+        """``cube_pos`` unless the cube is held."""
+        if "cube" not in placements or holding == "cube":
+            return {}
+        return {"cube_pos": [float(v) for v in placements["cube"]]}
 
     def detect_world(self, state: np.ndarray, world: np.ndarray) -> np.ndarray:
         """The grasps from the finger width and the perceived poses

@@ -21,6 +21,7 @@ from osg_control.domain.spec import (
     TOP_DOWN_QUAT,
     Gripper,
     Node,
+    ObjectFrame,
     ScriptParams,
     SkillSpec,
     Waypoint,
@@ -62,13 +63,13 @@ NODES: dict[str, Node] = {
     node.name: node
     for node in (
         Node("home", (0.35, 0.00, 0.45)),
-        Node("above-cube", (0.50, -0.20, 0.15)),
+        Node("above-cube", (0.50, -0.20, 0.15), anchor="cube"),
         Node("door-front", (0.42, 0.14, 0.50)),
         Node("cabinet-front", (0.38, 0.30, 0.35)),
         Node("handle", (0.42, 0.14, 0.325), "closed"),
         Node("handle-open", (0.42, 0.54, 0.325), "closed"),
-        Node("cube-grasped", (0.50, -0.20, 0.03), "closed"),
-        Node("cube-lifted", (0.50, -0.20, 0.20), "closed"),
+        Node("cube-grasped", (0.50, -0.20, 0.03), "closed", anchor="cube"),
+        Node("cube-lifted", (0.50, -0.20, 0.20), "closed", anchor="cube"),
         Node("place-front", (0.40, 0.30, 0.20), "closed"),
         Node("cube-inside", (0.64, 0.30, 0.135), "closed"),
         Node("above-valve", (VALVE_HINGE[0] + VALVE_PUSH_RADIUS, VALVE_HINGE[1], 0.25)),
@@ -76,7 +77,20 @@ NODES: dict[str, Node] = {
         Node("valve-pushed", valve_push_point(VALVE_PUSH_ANGLES[-1])),
     )
 }
-"""Every node of the skill graph. The first four are where the movement skills meet."""
+"""Every node of the skill graph. The first four are where the movement skills meet. The
+cube's nodes are anchored to it (``CUBE``): they move with the cube in the plane."""
+
+CUBE = ObjectFrame(
+    name="cube",
+    position_fields=("cube_x", "cube_y"),
+    nominal=(0.50, -0.20),
+    rest_z=0.0225,
+    region_low=(0.40, -0.30),
+    region_high=(0.60, -0.10),
+    held_fact="holding-cube",
+)
+"""The cube: its nodes are given for it at (0.50, -0.20); it is placed anywhere in the 20 x
+20 cm square around that on the counter (clear of the valve and the cabinet's plinth)."""
 
 
 WORLD_FACTS: tuple[str, ...] = (

@@ -66,7 +66,11 @@ class PerceptionSpec:
                 f"unknown perception {self.name!r}; known perceptions: {', '.join(PERCEPTIONS)}"
             )
         for field_name in (
-            "tcp_noise", "joint_noise", "finger_noise", "object_noise", "object_angle_noise"
+            "tcp_noise",
+            "joint_noise",
+            "finger_noise",
+            "object_noise",
+            "object_angle_noise",
         ):
             value = getattr(self, field_name)
             if isinstance(value, bool) or not isinstance(value, (int, float)):
@@ -78,8 +82,13 @@ class PerceptionSpec:
     def exact(self) -> bool:
         """No noise anywhere: the percept equals what the simulator's state gives."""
         return not any(
-            (self.tcp_noise, self.joint_noise, self.finger_noise, self.object_noise,
-             self.object_angle_noise)
+            (
+                self.tcp_noise,
+                self.joint_noise,
+                self.finger_noise,
+                self.object_noise,
+                self.object_angle_noise,
+            )
         )
 
     def to_dict(self) -> dict[str, Any]:
@@ -103,7 +112,9 @@ def perception_spec(
             noise, or a noise the perception has no sensor for.
     """
     if name not in PERCEPTIONS:
-        raise UsageError(f"unknown perception {name!r}; known perceptions: {', '.join(PERCEPTIONS)}")
+        raise UsageError(
+            f"unknown perception {name!r}; known perceptions: {', '.join(PERCEPTIONS)}"
+        )
     for label, value in (("--noise", noise), ("--object-noise", object_noise)):
         if value is not None and (not math.isfinite(value) or value < 0):
             raise UsageError(f"{label} must be finite and >= 0, got {value!r}")

@@ -9,10 +9,10 @@ import mujoco
 import numpy as np
 
 from minidomain.domain import FACTS, NODES, SKILLS, facts_of
-from osg_control.perception.sensors import POSITION
 from osg_control.control.scene_model import home_keyed_model, with_panda
 from osg_control.domain.spec import SkillSpec
 from osg_control.environment.arm_env import ArmEnv, EnvConfig
+from osg_control.perception.sensors import POSITION
 
 SCENE = Path(__file__).with_name("scene.xml")
 PRESSED_START = 0.015

@@ -1,0 +1,108 @@
+"""Object frames: nodes that move with their object, and skills that act in its frame.
+
+A node anchored to an object (``Node.anchor``) lies at its declared position shifted by the
+object's displacement from its ``nominal`` place, in the plane (objects rest on surfaces,
+so only x and y move). A skill acts in the frame of its ``end`` node's object, if any: its
+policy sees the TCP relative to the object (the observation's position minus the
+displacement), its waypoints and termination shift with the object, and its data are
+recorded in that frame. A skill ending at a fixed node acts in the world frame, whatever
+its start.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+from dataclasses import replace
+
+import numpy as np
+
+from osg_control.domain.base import Domain
+from osg_control.domain.spec import Node, ObjectFrame, SkillSpec
+
+Offsets = Mapping[str, np.ndarray]
+"""Object name -> its displacement (3-D, z = 0) from its nominal place [m]."""
+
+
+def skill_frame(domain: Domain, skill: SkillSpec) -> str | None:
+    """The object whose frame the skill acts in: its end node's anchor (None: world)."""
+    return domain.nodes[skill.end].anchor
+
+
+def node_position(domain: Domain, name: str, offsets: Offsets) -> np.ndarray:
+    """Where a node is, its anchor's displacement applied."""
+    node = domain.nodes[name]
+    position = np.asarray(node.position, dtype=float)
+    if node.anchor is not None and node.anchor in offsets:
+        position = position + offsets[node.anchor]
+    return position
+
+
+def skill_offset(domain: Domain, skill: SkillSpec, offsets: Offsets) -> np.ndarray:
+    """The displacement of the skill's frame (zeros in the world frame)."""
+    frame = skill_frame(domain, skill)
+    if frame is None or frame not in offsets:
+        return np.zeros(3)
+    return np.asarray(offsets[frame], dtype=float)
+
+
+def in_skill_frame(obs: np.ndarray, offset: np.ndarray) -> np.ndarray:
+    """An observation with its TCP position relative to a frame displaced by ``offset``."""
+    if not np.any(offset):
+        return obs
+    shifted = np.array(obs, dtype=float)
+    shifted[..., :3] -= offset
+    return shifted
+
+
+def offsets_of(
+    objects: Sequence[ObjectFrame], world_fields: Sequence[str], world: np.ndarray
+) -> dict[str, np.ndarray]:
+    """Each object's displacement in a world vector (named by ``world_fields``)."""
+    index = {name: i for i, name in enumerate(world_fields)}
+    found = {}
+    for frame in objects:
+        x, y = (float(world[index[f]]) for f in frame.position_fields)
+        found[frame.name] = np.array([x - frame.nominal[0], y - frame.nominal[1], 0.0])
+    return found
+
+
+def sample_placements(domain: Domain, rng: np.random.Generator) -> dict[str, np.ndarray]:
+    """A uniform placement of every object in its region (x, y, and its resting z)."""
+    placed = {}
+    for frame in domain.objects:
+        xy = rng.uniform(frame.region_low, frame.region_high)
+        placed[frame.name] = np.array([xy[0], xy[1], frame.rest_z])
+    return placed
+
+
+def placement_offsets(
+    domain: Domain, placements: Mapping[str, np.ndarray]
+) -> dict[str, np.ndarray]:
+    """The displacement of each placed object from its nominal place."""
+    nominal = {frame.name: frame.nominal for frame in domain.objects}
+    return {
+        name: np.array([pos[0] - nominal[name][0], pos[1] - nominal[name][1], 0.0])
+        for name, pos in placements.items()
+    }
+
+
+def shifted_skill(skill: SkillSpec, offset: np.ndarray) -> SkillSpec:
+    """The skill with its waypoints moved by ``offset`` (Algorithm 1 aiming at an object
+    that lies ``offset`` from its nominal place)."""
+    if not np.any(offset):
+        return skill
+    waypoints = tuple(
+        replace(w, position=tuple(float(v) for v in np.asarray(w.position) + offset))
+        for w in skill.waypoints
+    )
+    return replace(skill, waypoints=waypoints)
+
+
+def shifted_nodes(domain: Domain, offsets: Offsets) -> dict[str, Node]:
+    """The domain's nodes where they are now (anchored ones moved with their objects)."""
+    if not any(np.any(v) for v in offsets.values()):
+        return dict(domain.nodes)
+    return {
+        name: replace(node, position=tuple(float(v) for v in node_position(domain, name, offsets)))
+        for name, node in domain.nodes.items()
+    }
