@@ -20,8 +20,9 @@ from pathlib import Path
 
 import numpy as np
 
-from osg_control.data.datasets import load_dataset
+from osg_control.data.datasets import Dataset, load_dataset
 from osg_control.domain.base import Domain
+from osg_control.domain.frames import offsets_of, skill_frame, skill_offset
 from osg_control.domain.spec import SkillSpec
 from osg_control.errors import DatasetError
 from osg_control.learning.checkpoints import sha256_file
@@ -172,11 +173,34 @@ def _merge(parts: list[LabelledStates]) -> LabelledStates:
     )
 
 
+def world_frame_observations(domain: Domain, dataset: Dataset) -> np.ndarray:
+    """A data set's observations in the world frame: a skill that acts in an object's
+    frame records the TCP relative to the object (``domain.frames``); each episode's
+    object displacement is read back from its recorded world states (its first step's:
+    the object rests until the skill grasps it)."""
+    observations = np.array(dataset.arrays["observations"], dtype=np.float32)
+    skill = domain.skills_by_name.get(dataset.skill_name)
+    if skill is None or skill_frame(domain, skill) is None:
+        return observations
+    worlds = dataset.arrays["world_states"][dataset.episode_starts]
+    if not np.all(np.isfinite(worlds)):
+        return observations  # world states not recorded (e.g. imported data)
+    offsets = np.array(
+        [
+            skill_offset(domain, skill, offsets_of(domain.objects, domain.world_fields, w))
+            for w in worlds
+        ]
+    )
+    observations[:, :3] += np.repeat(offsets, dataset.episode_lengths, axis=0)
+    return observations
+
+
 def load_classifier_data(
     data_dir: Path,
     classes: Sequence[str],
     seed: int,
     test_fraction: float = 0.2,
+    domain: Domain | None = None,
 ) -> ClassifierData:
     """Load, label, merge and split the data sets of ``classes``.
 
@@ -185,6 +209,9 @@ def load_classifier_data(
         classes: skill names; the label of a state is its skill's index here.
         seed: non-negative seed of the episode split (same seed, same file: same split).
         test_fraction: fraction of each data set's episodes held out, in (0, 1).
+        domain: the classes' domain: observations recorded in an object's frame are put
+            back in the world frame (``world_frame_observations``), the frame the classifier
+            sees at run time; None keeps them as recorded.
 
     Returns:
         The split data with the files' digests.
@@ -211,7 +238,12 @@ def load_classifier_data(
                 f"{path}: {dataset.num_episodes} episode(s); the train/test split needs at least 2"
             )
         approach = dataset.approach_mask
-        observations = dataset.arrays["observations"][approach]
+        recorded = (
+            dataset.arrays["observations"]
+            if domain is None
+            else world_frame_observations(domain, dataset)
+        )
+        observations = recorded[approach]
         in_test = np.repeat(
             held_out_episodes(dataset.num_episodes, test_fraction, seed, skill),
             dataset.episode_lengths,

@@ -26,6 +26,7 @@ from osg_control.classifier.data import (
 )
 from osg_control.classifier.metrics import EvaluationReport, evaluate_predictions
 from osg_control.data.datasets import OBS_DIM
+from osg_control.domain.base import Domain
 from osg_control.errors import CheckpointError
 from osg_control.io_safety import atomic_write
 from osg_control.json_files import read_json_object
@@ -285,7 +286,9 @@ def evaluate(
     )
 
 
-def reload_split(model: StateClassifier, data_dir: Path) -> tuple[ClassifierData, bool]:
+def reload_split(
+    model: StateClassifier, data_dir: Path, domain: Domain | None = None
+) -> tuple[ClassifierData, bool]:
     """Re-create the train/test split a classifier was trained with.
 
     Args:
@@ -307,5 +310,5 @@ def reload_split(model: StateClassifier, data_dir: Path) -> tuple[ClassifierData
         )
     except (KeyError, TypeError, ValueError) as err:
         raise CheckpointError(f"classifier checkpoint records no valid split ({err})") from err
-    data = load_classifier_data(data_dir, model.classes, seed, test_fraction)
+    data = load_classifier_data(data_dir, model.classes, seed, test_fraction, domain)
     return data, data.sha256 == model.info.get("datasets")

@@ -74,6 +74,17 @@ def add_perception_arguments(parser: argparse.ArgumentParser) -> None:
     )
 
 
+def add_randomize_argument(parser: argparse.ArgumentParser) -> None:
+    """Add ``--randomize-objects``: place the domain's objects uniformly in their placement
+    regions (seeded per episode) instead of where the scene has them."""
+    parser.add_argument(
+        "--randomize-objects",
+        action="store_true",
+        help="place the domain's objects (the kitchen's cube) uniformly in their placement "
+        "regions, seeded per episode (default: where the scene has them)",
+    )
+
+
 def perception_of(
     args: argparse.Namespace, domain: Domain, default_noise: float = 0.0
 ) -> PerceptionSpec:

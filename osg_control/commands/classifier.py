@@ -86,7 +86,7 @@ def run_train(args: argparse.Namespace) -> int:
     domain = domain_of(args)
     out = check_output_dir(_trained_dir(domain, args.out), "classifier folder")
     classes = movement_classes(domain)
-    data = load_classifier_data(_data_dir(domain, args.data), classes, args.seed)
+    data = load_classifier_data(_data_dir(domain, args.data), classes, args.seed, domain=domain)
     model = train_classifier(data, config, progress=True)
     sidecar = model.save(out)
     report = evaluate(model, data.test, class_starts(domain, classes))
@@ -113,7 +113,7 @@ def run_eval(args: argparse.Namespace) -> int:
     domain = domain_of(args)
     model_dir = _model_dir(domain, args.model)
     model = StateClassifier.load(model_dir, movement_classes(domain))
-    data, same_data = reload_split(model, _data_dir(domain, args.data))
+    data, same_data = reload_split(model, _data_dir(domain, args.data), domain)
     if not same_data:
         print(
             "osg: warning: the data sets differ from those the classifier was trained on "

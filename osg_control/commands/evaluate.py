@@ -13,6 +13,7 @@ from osg_control.commands import (
     add_backend_arguments,
     add_filter_argument,
     add_perception_arguments,
+    add_randomize_argument,
     domain_of,
     perception_of,
 )
@@ -40,6 +41,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
         help="the paper protocol's TCP observation noise [m] (default 0.02)",
     )
     add_perception_arguments(tasks)
+    add_randomize_argument(tasks)
     tasks.add_argument("--seed", type=int, default=0)
     tasks.add_argument("--workers", type=int, default=2)
     add_backend_arguments(tasks)
@@ -142,6 +144,7 @@ def run_tasks(args: argparse.Namespace) -> int:
             resume_dir=resume_dir,
             progress=not args.json,
             perception=perception,
+            randomize=args.randomize_objects,
         )
     return print_result(domain, args, table, format_task_table)
 

@@ -13,10 +13,12 @@ from osg_control.commands import (
     add_backend_arguments,
     add_filter_argument,
     add_perception_arguments,
+    add_randomize_argument,
     domain_of,
     perception_of,
 )
 from osg_control.domain.base import Domain
+from osg_control.domain.frames import sample_placements
 from osg_control.errors import UsageError
 from osg_control.evaluation.evaluate import format_skill_table, skill_table
 from osg_control.execution.defaults import defaults_root, describe_models, models_in_use
@@ -40,6 +42,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
         "--noise", type=float, default=None, help="the paper protocol's TCP noise sigma [m]"
     )
     add_perception_arguments(run)
+    add_randomize_argument(run)
     run.add_argument("--seed", type=int, default=0)
     run.add_argument(
         "--facts",
@@ -64,6 +67,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
         "the other perceptions)",
     )
     add_perception_arguments(skills)
+    add_randomize_argument(skills)
     skills.add_argument("--seed", type=int, default=0)
     skills.add_argument("--workers", type=int, default=2)
     add_backend_arguments(skills)
@@ -114,6 +118,10 @@ def run_task(args: argparse.Namespace) -> int:
     for episode in range(args.episodes):
         options = _start_options(domain, args.start, rng)
         options["facts"] = facts
+        if args.randomize_objects:
+            world = env.placement_world(sample_placements(domain, rng), None)
+            if world:
+                options["world"] = world
         obs, _ = env.reset(seed=int(rng.integers(2**31)), options=options)
         if args.video and episode == 0:
             executor.on_step = lambda e: frames.append(e.render())
@@ -172,6 +180,7 @@ def run_eval_skills(args: argparse.Namespace) -> int:
             executor=executor,
             progress=not args.json,
             perception=perception,
+            randomize=args.randomize_objects,
         )
     table["models"] = {"skills": str(models)}
     print(json.dumps(table, indent=2) if args.json else format_skill_table(table))

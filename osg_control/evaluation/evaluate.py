@@ -22,13 +22,15 @@ import numpy as np
 from tqdm import tqdm
 
 from osg_control.control.estimator import FilteredPolicy
-from osg_control.data.collect import run_scripted_episode
+from osg_control.data.collect import placed_start_options, run_scripted_episode
 from osg_control.domain.base import Domain
+from osg_control.domain.frames import in_skill_frame, sample_placements, skill_offset
 from osg_control.domain.registry import get_domain
 from osg_control.domain.spec import nearest_start
 from osg_control.environment.arm_env import ArmEnv, EnvConfig
 from osg_control.evaluation.resume import resumable_results
 from osg_control.execution.executor import task_env_config
+from osg_control.execution.objects import ObjectTracker
 from osg_control.learning.checkpoints import require_skills
 from osg_control.parallel import LocalExecutor, TaskExecutor
 from osg_control.parallel.lazy import grid
@@ -88,22 +90,32 @@ class SkillEpisode:
     cell: int
     index: int
     filter_gain: float | None = None
+    randomize: bool = False
 
 
 def run_skill_episode(task: SkillEpisode) -> bool:
-    """Run a learned skill from a random start in its initiation region; True on success."""
-    skill = get_domain(task.domain).skill(task.skill)
+    """Run a learned skill from a random start in its initiation region (the domain's
+    objects placed at random in their regions with ``randomize``); True on success, scored
+    by the env on the simulator's truth. The policy sees the percept, in the skill's frame
+    (the objects where the robot perceives them, ``ObjectTracker``)."""
+    domain = get_domain(task.domain)
+    skill = domain.skill(task.skill)
     policy: Callable[[np.ndarray], np.ndarray] = _policy(task.domain, task.policy_dir, task.skill)
     if task.filter_gain is not None:
         policy = FilteredPolicy(policy, task.filter_gain)
     env = _env(task.domain, task.skill, task.perception)
     rng = episode_rng(task.seed, task.skill, task.cell, task.index)
-    obs, _ = env.reset(
-        seed=int(rng.integers(2**31)),
-        options={"radius": skill.start_radius, "angle": skill.start_angle},
-    )
+    reset_seed = int(rng.integers(2**31))
+    options: dict[str, Any] = {"radius": skill.start_radius, "angle": skill.start_angle}
+    if task.randomize:
+        options = placed_start_options(domain, env, skill, sample_placements(domain, rng))
+    obs, _ = env.reset(seed=reset_seed, options=options)
+    objects = ObjectTracker(domain)
+    objects.update(env.percept())
     for _ in range(skill.max_steps):
-        obs, _reward, terminated, truncated, info = env.step(policy(obs))
+        offset = skill_offset(domain, skill, objects.offsets())
+        obs, _reward, terminated, truncated, info = env.step(policy(in_skill_frame(obs, offset)))
+        objects.update(env.percept())
         if terminated or truncated:
             return bool(info["success"])
     return False
@@ -127,10 +139,13 @@ def skill_table(
     executor: TaskExecutor | None = None,
     progress: bool = False,
     perception: PerceptionSpec | None = None,
+    randomize: bool = False,
 ) -> dict[str, Any]:
     """Table I: success rate of every learned skill at each observation-noise level.
 
     Args:
+        randomize: place the domain's objects at random in their regions (else where the
+            scene has them, the paper's protocol).
         noise_levels: the paper's TCP noise [m] of each column, added to ``perception``'s
             (default: the paper's protocol).
         filter_gain: run the policies on ``estimator.TcpFilter`` estimates with this gain;
@@ -153,7 +168,9 @@ def skill_table(
     def job(cell: tuple[str, int, float], i: int) -> SkillEpisode:
         name, k, noise = cell
         seen = at_noise(perception, noise)
-        return SkillEpisode(domain.name, name, str(policy_dir), seen, seed, k, i, filter_gain)
+        return SkillEpisode(
+            domain.name, name, str(policy_dir), seen, seed, k, i, filter_gain, randomize
+        )
 
     tasks = grid(cells, episodes, job)
     outcomes = executor.map(run_skill_episode, tasks)
@@ -165,6 +182,7 @@ def skill_table(
     return {
         "noise": list(noise_levels),
         "perception": perception.to_dict(),
+        "randomized_objects": randomize,
         "episodes": episodes,
         "seed": seed,
         "filter_gain": filter_gain,
@@ -227,21 +245,28 @@ class StartEpisode:
     seed: int
     cell: int
     index: int
+    randomize: bool = False
 
 
 def _reset_in_region(env: ArmEnv, task: StartEpisode, facts: Sequence[str]) -> np.ndarray:
+    """A start in the episode's region; with ``randomize`` the objects placed at random in
+    their regions (drawn after the reset seed: the fixed-placement starts are unchanged)."""
     rng = episode_rng(task.seed, task.name, task.cell, task.index)
-    region = get_domain(task.domain).start_regions[task.region]
-    obs, _ = env.reset(
-        seed=int(rng.integers(2**31)),
-        options={
-            "position": region.position,
-            "radius": region.radius,
-            "angle": region.angle,
-            "gripper": "open",
-            "facts": tuple(facts),
-        },
-    )
+    domain = get_domain(task.domain)
+    region = domain.start_regions[task.region]
+    reset_seed = int(rng.integers(2**31))
+    options: dict[str, Any] = {
+        "position": region.position,
+        "radius": region.radius,
+        "angle": region.angle,
+        "gripper": "open",
+        "facts": tuple(facts),
+    }
+    if task.randomize:
+        world = env.placement_world(sample_placements(domain, rng), None)
+        if world:
+            options["world"] = world
+    obs, _ = env.reset(seed=reset_seed, options=options)
     return obs
 
 
@@ -377,9 +402,11 @@ def task_table(
     resume_dir: Path | None = None,
     progress: bool = False,
     perception: PerceptionSpec | None = None,
+    randomize: bool = False,
 ) -> dict[str, Any]:
     """Tables IV and V: task success per start region, without and with replanning,
-    scored on the simulator's truth (the goal facts hold at the end).
+    scored on the simulator's truth (the goal facts hold at the end); ``randomize``: the
+    objects placed at random in their regions (seeded per episode).
 
     ``noise``: the paper's TCP noise [m] added to ``perception``'s (default: the paper's
     protocol); ``tasks``: task names (default: all the domain's); ``filter_gain``: the executor's
@@ -395,7 +422,10 @@ def task_table(
     def job(cell: tuple[str, int, int], i: int) -> TaskEpisode:
         t, r, k = cell
         return TaskEpisode(
-            StartEpisode(domain.name, t, models, r, seen, seed, r, i), t, k, filter_gain
+            StartEpisode(domain.name, t, models, r, seen, seed, r, i, randomize),
+            t,
+            k,
+            filter_gain,
         )
 
     executor = executor or LocalExecutor(workers)
@@ -407,6 +437,7 @@ def task_table(
         "seed": seed,
         "noise": noise,
         "perception": seen.to_dict(),
+        "randomized_objects": randomize,
         "filter_gain": filter_gain,
         "regions": [region.name for region in regions],
         "tasks": list(tasks),

@@ -1,0 +1,47 @@
+"""Disturbances of the kitchen's world: the cube knocked away after a grasp.
+
+The executor must notice from its percepts alone (the grasp detector loses the cube, the
+pose estimator sees it elsewhere) and pick it up again where it now lies.
+"""
+
+from __future__ import annotations
+
+import mujoco
+import numpy as np
+
+from osg_control.kitchen.env import KitchenEnv
+from osg_control.kitchen.skills import CUBE
+
+GRASP_SETTLE_STEPS = 3
+"""Steps the cube is held (truth) before it is knocked away: the grasp has closed."""
+
+
+def displace_cube(env: KitchenEnv, offset: np.ndarray) -> None:
+    """Teleport the cube by ``offset`` (x, y) [m] onto the counter, at rest."""
+    adr = env.scene.cube_qpos
+    env.data.qpos[adr : adr + 2] += np.asarray(offset, dtype=float)[:2]
+    env.data.qpos[adr + 2] = CUBE.rest_z
+    env.data.qpos[adr + 3 : adr + 7] = (1.0, 0.0, 0.0, 0.0)
+    dof = env.model.jnt_dofadr[env.model.joint("cube_free").id]
+    env.data.qvel[dof : dof + 6] = 0.0
+    mujoco.mj_forward(env.model, env.data)
+
+
+class CubeKnock:
+    """An ``Executor.on_step`` hook that knocks the cube ``low``-``high`` m away in a random
+    direction once it has been held (truth) for ``GRASP_SETTLE_STEPS`` steps, once."""
+
+    def __init__(self, rng: np.random.Generator, low: float = 0.03, high: float = 0.06) -> None:
+        distance = float(rng.uniform(low, high))
+        angle = float(rng.uniform(0, 2 * np.pi))
+        self.offset = distance * np.array([np.cos(angle), np.sin(angle)])
+        self.fired = False
+        self._held = 0
+
+    def __call__(self, env: KitchenEnv) -> None:
+        if self.fired:
+            return
+        self._held = self._held + 1 if env.world().cube_grasped else 0
+        if self._held >= GRASP_SETTLE_STEPS:
+            displace_cube(env, self.offset)
+            self.fired = True

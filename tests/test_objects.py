@@ -1,0 +1,130 @@
+"""Objects anywhere: anchored nodes, random placements, object-frame skills, recovery."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from osg_control.data.collect import placed_start_options, run_scripted_episode
+from osg_control.domain.frames import (
+    in_skill_frame,
+    node_position,
+    offsets_of,
+    sample_placements,
+    skill_frame,
+)
+from osg_control.domain.registry import get_domain
+from osg_control.errors import DomainError, EnvOptionError
+from osg_control.execution.defaults import load_defaults
+from osg_control.execution.executor import Executor, task_env_config
+from osg_control.execution.objects import ObjectTracker
+from osg_control.kitchen.env import KitchenEnv
+from osg_control.kitchen.skills import CUBE
+from osg_control.perception.percept import Percept
+from osg_control.perception.spec import perception_spec
+
+KITCHEN = get_domain("kitchen")
+
+
+def test_placements_lie_in_the_region_and_follow_the_seed() -> None:
+    rng = np.random.default_rng(0)
+    points = np.array([sample_placements(KITCHEN, rng)["cube"] for _ in range(500)])
+    assert np.all(points[:, :2] >= CUBE.region_low) and np.all(points[:, :2] <= CUBE.region_high)
+    assert np.all(points[:, 2] == CUBE.rest_z)
+    assert np.ptp(points[:, 0]) > 0.18 and np.ptp(points[:, 1]) > 0.18  # the whole square
+    again = sample_placements(KITCHEN, np.random.default_rng(0))["cube"]
+    np.testing.assert_array_equal(again, points[0])
+
+
+def test_an_anchored_node_moves_with_its_object_and_a_fixed_one_does_not() -> None:
+    env = KitchenEnv(skill="grab-cube")
+    obs, _ = env.reset(seed=0, options={"world": {"cube_pos": [0.56, -0.27, CUBE.rest_z]}})
+    np.testing.assert_allclose(env.node_position("above-cube"), [0.56, -0.27, 0.15], atol=1e-3)
+    np.testing.assert_allclose(obs[:3], [0.56, -0.27, 0.15], atol=0.01)  # the start moved too
+    np.testing.assert_array_equal(env.node_position("home"), KITCHEN.nodes["home"].position)
+    offsets = offsets_of(KITCHEN.objects, KITCHEN.world_fields, env.world_state())
+    moved = node_position(KITCHEN, "cube-grasped", offsets)
+    np.testing.assert_allclose(moved, [0.56, -0.27, 0.03], atol=1e-3)
+    assert skill_frame(KITCHEN, KITCHEN.skill("grab-cube")) == "cube"
+    assert skill_frame(KITCHEN, KITCHEN.skill("move-cube-to-home")) is None  # ends at home
+    shifted = in_skill_frame(obs, offsets["cube"])
+    np.testing.assert_allclose(shifted[:3], KITCHEN.nodes["above-cube"].position, atol=0.01)
+
+
+def test_scripted_data_of_an_object_skill_are_in_the_objects_frame() -> None:
+    episode = run_scripted_episode(KITCHEN, KITCHEN.skill("grab-cube"), 0, 3)
+    cube = episode.world_states[0, 2:4]
+    assert np.linalg.norm(cube - CUBE.nominal) > 0.005  # placed away from the nominal place
+    start = episode.observations[0, :3]
+    np.testing.assert_allclose(start[:2], KITCHEN.nodes["above-cube"].position[:2], atol=0.03)
+
+
+def test_the_tracker_averages_a_resting_object_restarts_on_a_jump_and_freezes_when_held() -> None:
+    tracker = ObjectTracker(KITCHEN)
+    rng = np.random.default_rng(1)
+    world = np.zeros(len(KITCHEN.world_fields))
+
+    def seen(x: float, facts: frozenset[str] = frozenset()) -> Percept:
+        reading = world.copy()
+        reading[2:4] = np.array([x, -0.20]) + rng.normal(0, 0.01, 2)
+        return Percept(np.zeros(10), np.zeros(7), reading, facts)
+
+    for _ in range(200):
+        tracker.update(seen(0.55))
+    assert np.linalg.norm(tracker.offsets()["cube"] - [0.05, 0, 0]) < 0.003
+    for _ in range(3):
+        tracker.update(seen(0.55, frozenset({"holding-cube"})))
+    held = tracker.offsets()["cube"]
+    tracker.update(seen(0.65, frozenset({"holding-cube"})))  # carried: the frame stays
+    np.testing.assert_array_equal(tracker.offsets()["cube"], held)
+    tracker.update(seen(0.45))  # put down 10 cm away: a jump
+    assert abs(tracker.offsets()["cube"][0] + 0.05) < 0.04
+
+
+def test_reset_refuses_a_cube_off_the_counter_or_out_of_reach() -> None:
+    env = KitchenEnv()
+    with pytest.raises(EnvOptionError, match="does not rest on"):
+        env.reset(seed=0, options={"world": {"cube_pos": [0.5, -0.2, 0.3]}})
+    with pytest.raises(EnvOptionError, match="out of the arm's reach"):
+        env.reset(seed=0, options={"world": {"cube_pos": [1.0, -0.6, CUBE.rest_z]}})
+
+
+def test_a_node_anchored_to_an_unknown_object_is_refused() -> None:
+    from dataclasses import replace
+
+    nodes = dict(KITCHEN.nodes)
+    nodes["home"] = replace(nodes["home"], anchor="kettle")
+    with pytest.raises(DomainError, match="unknown object 'kettle'"):
+        replace(KITCHEN, nodes=nodes)
+
+
+@pytest.fixture(scope="module")
+def executor() -> Executor:
+    defaults = load_defaults(KITCHEN)
+    return Executor(KITCHEN, defaults.policies, defaults.classifier, defaults.graph)
+
+
+def _start(env: KitchenEnv, seed: int) -> np.ndarray:
+    rng = np.random.default_rng(seed)
+    options = placed_start_options(
+        KITCHEN, env, KITCHEN.skill("move-home-to-cube"), sample_placements(KITCHEN, rng)
+    )
+    options["position"] = KITCHEN.nodes["home"].position
+    obs, _ = env.reset(seed=seed, options=options)
+    return obs
+
+
+def test_a_cube_placed_away_from_the_data_is_picked_up(executor: Executor) -> None:
+    env = KitchenEnv(config=task_env_config(perception_spec("robot")))
+    obs = _start(env, seed=11)
+    assert np.linalg.norm(env.anchor_offsets["cube"]) > 0.04
+    result = executor.execute(["cube-lifted"], env, obs)
+    assert result.success and "cube-lifted" in env.facts(), result.failure
+
+
+def test_a_blind_pose_estimator_cannot_pick_the_cube_up(executor: Executor) -> None:
+    blind = perception_spec("robot", object_noise=1.0)
+    env = KitchenEnv(config=task_env_config(blind))
+    obs = _start(env, seed=11)
+    executor.execute(["cube-lifted"], env, obs)
+    assert "cube-lifted" not in env.facts()
