@@ -272,3 +272,27 @@ def test_a_task_env_is_not_cut_at_the_single_skill_episode_limit() -> None:
     skill_env.reset(seed=0)
     truncations = [skill_env.step(hold)[3] for _ in range(EnvConfig().max_steps)]
     assert truncations[-1] and not any(truncations[:-1])
+
+
+class _HomeSplit:
+    """A classifier that splits a start at home between the skills leaving home, the
+    valve's the likeliest (as the shipped one does near home)."""
+
+    classes = tuple(s.name for s in KITCHEN.movement_skills)
+
+    def predict_proba(self, states: np.ndarray) -> np.ndarray:
+        shares = {"move-home-to-valve": 0.49, "move-home-to-cube": 0.31, "move-home-to-door": 0.2}
+        return np.array([shares.get(name, 0.0) for name in self.classes])
+
+
+def test_the_entry_is_goal_aware(defaults: tuple[dict, object]) -> None:
+    policies, _classifier = defaults
+    executor = Executor(policies, _HomeSplit())
+    obs = np.zeros(10)
+    obs[:3] = (0.40, 0.05, 0.42)  # off the graph, near home
+    obs[7] = 1.0
+    facts = {"hand-empty", "door-closed", "cube-on-counter", "valve-closed"}
+    assert executor._classify(obs, facts) == "move-home-to-valve"  # no goal: the argmax
+    assert executor._entry_skill(obs, facts, goal=["cube-lifted"]) == "move-home-to-cube"
+    assert executor._entry_skill(obs, facts, goal=["door-open"]) == "move-home-to-door"
+    assert executor._entry_skill(obs, facts, goal=["valve-open"]) == "move-home-to-valve"

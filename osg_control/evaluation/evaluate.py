@@ -376,16 +376,17 @@ class TaskEpisode:
     filter_gain: float | None = None
 
 
-def run_task_episode(episode: TaskEpisode) -> bool:
-    """Tables IV/V: run the executor on a task from a random start; True on success."""
+def run_task_episode(episode: TaskEpisode) -> tuple[bool, int]:
+    """Tables IV/V: run the executor on a task from a random start; whether the goal holds
+    in the simulator at the end, and how many skills were run."""
     start = episode.start
     domain = get_domain(start.domain)
     task = domain.task(episode.task)
     env = _plain_env(start.domain, start.perception)
     obs = _reset_in_region(env, start, domain.task_world(task))
     executor = cached_executor(start.domain, start.models, episode.max_replans, episode.filter_gain)
-    executor.execute(task.goal, env, obs)
-    return set(task.goal) <= env.facts()  # scored on the simulator's truth
+    result = executor.execute(task.goal, env, obs)
+    return set(task.goal) <= env.facts(), len(result.outcomes)  # scored on the truth
 
 
 def task_table(
@@ -430,8 +431,9 @@ def task_table(
 
     executor = executor or LocalExecutor(workers)
     results = resumable_results(executor, run_task_episode, grid(cells, episodes, job), resume_dir)
-    rates = cell_means(results, len(cells), episodes, "tasks", progress)
-    rates = rates.reshape(len(replans), len(tasks), len(regions))
+    means = cell_means(results, len(cells), episodes, "tasks", progress)
+    rates = means[:, 0].reshape(len(replans), len(tasks), len(regions))
+    skills_run = means[:, 1].reshape(len(replans), len(tasks), len(regions))
     return {
         "episodes": episodes,
         "seed": seed,
@@ -444,6 +446,7 @@ def task_table(
         "replans": list(replans),
         "rates": rates.tolist(),
         "averages": rates.mean(axis=2).tolist(),
+        "skills_executed": skills_run.mean(axis=2).tolist(),
     }
 
 
@@ -452,7 +455,8 @@ def format_task_table(table: dict[str, Any]) -> str:
     lines = []
     for k, budget in enumerate(table["replans"]):
         lines.append(
-            f"Tables IV/V: task success, sigma = {table['noise']:g} m, max replans = {budget} "
+            f"Tables IV/V: task success, {table['perception']['name']} perception, "
+            f"sigma = {table['noise']:g} m, max replans = {budget} "
             f"({table['episodes']} episodes per cell)"
         )
         lines.append(
@@ -465,5 +469,7 @@ def format_task_table(table: dict[str, Any]) -> str:
             lines.append(f"{r + 1:2d} {region:34s}{values}")
         averages = "".join(f" {v:19.3f}" for v in table["averages"][k])
         lines.append(f"   {'average':34s}{averages}")
+        executed = "".join(f" {v:19.2f}" for v in table["skills_executed"][k])
+        lines.append(f"   {'skills executed (mean)':34s}{executed}")
         lines.append("")
     return "\n".join(lines)

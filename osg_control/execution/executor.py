@@ -50,6 +50,7 @@ from osg_control.execution.objects import ObjectTracker
 from osg_control.perception.spec import PerceptionSpec
 from osg_control.planning.api import graph_domain, plan_for_goal
 from osg_control.planning.graph import SkillGraph
+from osg_control.planning.pddl_io import MIN_SUCCESS_RATE, skill_cost
 
 TIME_LIMIT = "the env's episode time limit was reached"
 """The failure of a skill whose env step came back truncated (e.g. a gymnasium
@@ -61,6 +62,9 @@ truncated): by Gymnasium's protocol no further step is taken, so the execution e
 and succeeds if its goal facts hold."""
 
 RESULT_SCHEMA_VERSION = 1
+ENTRY_MARGIN = 0.5
+"""A movement skill is an entry candidate when its classifier probability is at least this
+share of the best one's (``Executor._classify``)."""
 GRASP_GRACE_STEPS = 5
 """Steps a watched fact may be false before the skill is stopped (a grasp's contact may
 flicker for a few steps in the offline data)."""
@@ -188,42 +192,82 @@ class Executor:
             ``(entry skill or None, plan, planner result)``.
         """
         facts = set(facts)
+        goal = list(goal)
         offsets = offsets or {}
         node = node_at(self.domain, obs, facts, offsets)
         entry = None
         if node is None:
-            entry = self._entry_skill(obs, facts, offsets)
+            entry = self._entry_skill(obs, facts, offsets, goal)
             skill = self.skills[entry]
             node = skill.end
             facts = (facts - skill.del_effects) | skill.add_effects
         result = plan_for_goal(
-            self.domain, list(goal), node, sorted(facts), self.planner, pddl=self._pddl
+            self.domain, goal, node, sorted(facts), self.planner, pddl=self._pddl
         )
         return entry, list(result.actions), result
 
-    def _entry_skill(self, obs: np.ndarray, facts: set[str], offsets: Offsets | None = None) -> str:
-        """Off the graph: the manipulation skill whose path the TCP is on; else the
-        classifier's movement skill when the hand is empty; else the applicable skill whose
-        start node is nearest (retry from where it failed)."""
+    def _entry_skill(
+        self,
+        obs: np.ndarray,
+        facts: set[str],
+        offsets: Offsets | None = None,
+        goal: list[str] | None = None,
+    ) -> str:
+        """Off the graph: the manipulation skill whose path the TCP is on; else, the hand
+        empty, the classifier's movement skill (goal-aware, ``_classify``); else the
+        applicable skill whose start node is nearest (retry from where it failed)."""
         on_path = skill_on_path(self.domain, obs, facts, self.skills.values(), offsets)
         if on_path is not None:
             return on_path
         if self.domain.hand_empty in facts:
-            return self._classify(obs, facts)
+            return self._classify(obs, facts, goal)
         applicable = [s for s in self.skills.values() if s.preconditions <= facts]
         fallback = applicable or list(self.skills.values())
         nodes = shifted_nodes(self.domain, offsets or {})
         return nearest_start(fallback, nodes, obs[:3]).name
 
-    def _classify(self, obs: np.ndarray, facts: set[str]) -> str:
-        """The classifier's likeliest movement skill among those whose recorded world holds
-        (``recorded_world_holds``; all of them if none does)."""
-        proba = np.asarray(self.classifier.predict_proba(obs), dtype=float)
+    def _classify(self, obs: np.ndarray, facts: set[str], goal: list[str] | None = None) -> str:
+        """The entry movement skill among those whose recorded world holds
+        (``recorded_world_holds``; all of them if none does).
+
+        Without a goal: the classifier's likeliest. With one, goal-aware: skills that start
+        at the same node share their initiation region, so the classifier splits a start
+        there between them; the chance that the state lies in a node's region is the sum of
+        its skills' probabilities. Among the skills whose region's chance is at least
+        ``ENTRY_MARGIN`` of the best, the one that minimises ``round(-ln P * 1000)`` plus
+        its own operator cost plus the plan's cost from its end to the goal (plan costs are
+        ``-1000 ln`` of measured success rates: the likeliest way to the goal, entering
+        included). A start near home then enters toward the cube for a cube task instead of
+        toward the valve and back.
+        """
+        proba = np.asarray(self.classifier.predict_proba(obs), dtype=float).reshape(-1)
         classes = self.classifier.classes
         allowed = np.array([recorded_world_holds(self.skills[c], facts) for c in classes])
         if not allowed.any():
             allowed[:] = True
-        return classes[int(np.argmax(np.where(allowed, proba, -np.inf)))]
+        scores = np.where(allowed, proba, 0.0)
+        if goal is None:
+            return classes[int(np.argmax(np.where(allowed, proba, -np.inf)))]
+        starts = [self.skills[c].start for c in classes]
+        region = np.array([scores[[s == start for s in starts]].sum() for start in starts])
+        region = np.where(allowed, region, 0.0)
+        candidates = [i for i in range(len(classes)) if region[i] >= ENTRY_MARGIN * region.max()]
+        costs = {i: self._entry_cost(classes[i], float(region[i]), facts, goal) for i in candidates}
+        return classes[min(candidates, key=lambda i: (costs[i], -scores[i]))]
+
+    def _entry_cost(self, name: str, probability: float, facts: set[str], goal: list[str]) -> float:
+        """``-1000 ln p`` of entering through ``name``, its operator cost and the plan cost
+        from its end node (inf without a plan)."""
+        skill = self.skills[name]
+        after = (facts - skill.del_effects) | skill.add_effects
+        planned = plan_for_goal(
+            self.domain, goal, skill.end, sorted(after), self.planner, pddl=self._pddl
+        )
+        if not planned.solved or planned.cost is None:
+            return float("inf")
+        edge = self.graph.edge(name)
+        entering = skill_cost(max(probability, MIN_SUCCESS_RATE)) + skill_cost(edge.success_rate)
+        return float(entering + edge.step_cost + planned.cost)
 
     def run_skill(
         self,
