@@ -99,6 +99,8 @@ def perception_of(
 
     name = args.perception or domain.perceptions[0]
     noise = getattr(args, "noise", None)
+    if isinstance(noise, list):
+        noise = None  # a list of Table I columns, checked level by level by the verb
     if noise is None:
         noise = default_noise if name == "paper" else 0.0
     spec = perception_spec(name, noise, args.object_noise)

@@ -371,10 +371,11 @@ class ArmEnv(gym.Env):
         outside); ``percept`` then returns this reading."""
         return self._perceive()
 
-    def _perceive(self) -> Percept:
-        """Read the simulated sensors once (``config.perception``) and keep the percept."""
+    def _perceive(self, truth: np.ndarray | None = None) -> Percept:
+        """Read the simulated sensors once (``config.perception``) and keep the percept
+        (``truth``: the world vector, if the caller has read it already)."""
         spec = self.config.perception
-        truth = self.read_world()
+        truth = self.read_world() if truth is None else truth
         if truth.shape != (len(self.world_sensors),):
             raise EnvOptionError(
                 f"{type(self).__name__}: world_sensors name {len(self.world_sensors)} fields, "
@@ -597,7 +598,7 @@ class ArmEnv(gym.Env):
         truncated = not terminated and budget is not None and self._steps >= budget
         self._episode_over = self._episode_over or terminated or truncated
         info = self._info(world)
-        info["percept"] = self._perceive()
+        info["percept"] = self._perceive(world)
         info["action_applied"] = action
         info["joint_speed_ratio"] = self._step_speed_ratio
         if failure is not None:

@@ -1,0 +1,38 @@
+"""The train stage's resume rule: which checkpoints a rerun keeps (no torch needed)."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+from osg_control.domain.base import Domain
+from osg_control.domain.spec import SkillSpec
+from osg_control.learning.checkpoints import sha256_file
+
+
+def untrained_skills(domain: Domain, data: Path, skills: Path, steps: int, seed: int) -> list[str]:
+    """The domain's skills whose checkpoint in ``skills`` was not trained by this stage's
+    command on these very data sets (steps, seed, spec and the data set's sha256 in its
+    sidecar). A rerun into the same folder keeps the checkpoints only if there are none:
+    any other retrains every skill (``train_missing``), because weights trained in a
+    smaller batch of skills differ in the last bits from the batch of all (measured: three
+    skills retrained alone differed from a fresh run's), and a reproduction must be a fresh
+    run's bytes."""
+    return [skill.name for skill in domain.skills if not _trained(skill, data, skills, steps, seed)]
+
+
+def _trained(skill: SkillSpec, data: Path, skills: Path, steps: int, seed: int) -> bool:
+    try:
+        meta = json.loads((skills / f"{skill.name}.json").read_text())
+        dataset_sha256 = sha256_file(data / f"{skill.name}.h5")
+    except (OSError, ValueError):
+        return False
+    expected = {
+        "steps": steps,
+        "seed": seed,
+        "skill_spec": json.loads(skill.to_json()),
+        "dataset_sha256": dataset_sha256,
+    }
+    if not isinstance(meta, dict) or any(meta.get(k) != v for k, v in expected.items()):
+        return False
+    return (skills / f"{skill.name}.safetensors").exists()
