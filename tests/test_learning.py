@@ -10,8 +10,9 @@ from scipy.stats import fisher_exact
 from osg_control.cli import main
 from osg_control.data.collect import collect_skill, run_scripted_episode
 from osg_control.domain.registry import get_domain
-from osg_control.evaluation.evaluate import SkillEpisode, run_skill_episode
+from osg_control.evaluation.skill_table import SkillEpisode, run_skill_episode
 from osg_control.kitchen.skills import get_skill
+from osg_control.perception.spec import PerceptionSpec
 
 KITCHEN = get_domain("kitchen")
 
@@ -26,7 +27,7 @@ def test_trained_skill_beats_its_scripted_policy(tmp_path: Path) -> None:
     argv = ["train", "--skill", SKILL, "--steps", "1500", "--data", str(data), "--out", str(out)]
     assert main([*argv, "--threads", "1", "--seed", "0"]) == 0
     learned = [
-        run_skill_episode(SkillEpisode("kitchen", SKILL, str(out), 0.0, 7, 0, i))
+        run_skill_episode(SkillEpisode("kitchen", SKILL, str(out), PerceptionSpec(), 7, 0, i))
         for i in range(EPISODES)
     ]
     scripted = [

@@ -13,8 +13,9 @@ import pytest
 from osg_control.data.collect import LocalExecutor
 from osg_control.domain.registry import get_domain
 from osg_control.evaluation import evaluate
-from osg_control.evaluation.evaluate import reach_table, skill_table, task_table
+from osg_control.evaluation.evaluate import reach_table, task_table
 from osg_control.evaluation.resume import CHUNK_JOBS, resumable_map, source_fingerprint
+from osg_control.evaluation.skill_table import skill_table
 
 KITCHEN = get_domain("kitchen")
 KITCHEN_DEFAULTS = KITCHEN.defaults_dir

@@ -20,7 +20,7 @@ from osg_control.commands import (
 from osg_control.domain.base import Domain
 from osg_control.domain.frames import sample_placements
 from osg_control.errors import UsageError
-from osg_control.evaluation.evaluate import format_skill_table, skill_table
+from osg_control.evaluation.skill_table import format_skill_table, skill_table
 from osg_control.execution.defaults import defaults_root, describe_models, models_in_use
 from osg_control.execution.executor import load_executor, task_env_config
 from osg_control.io_safety import atomic_write, check_output_dir

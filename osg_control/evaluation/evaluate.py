@@ -1,5 +1,5 @@
-"""Evaluation: the paper's Table I (skills under observation noise), Table III (reaching the
-graph) and Tables IV/V (tasks), for any domain.
+"""Evaluation: the paper's Table III (reaching the graph) and Tables IV/V (tasks), for any
+domain, and what every table shares (Table I: ``skill_table``).
 
 Episodes run in parallel workers; episode ``i`` of a cell draws its start from
 ``SeedSequence([skill_seed(seed, NAME), k, i])`` where NAME is the cell's skill or task and
@@ -12,7 +12,7 @@ episodes.
 
 from __future__ import annotations
 
-from collections.abc import Callable, Iterable, Sequence
+from collections.abc import Iterable, Sequence
 from dataclasses import dataclass, replace
 from functools import cache
 from pathlib import Path
@@ -21,17 +21,13 @@ from typing import Any
 import numpy as np
 from tqdm import tqdm
 
-from osg_control.control.estimator import FilteredPolicy
-from osg_control.data.collect import placed_start_options, run_scripted_episode
 from osg_control.domain.base import Domain
-from osg_control.domain.frames import in_skill_frame, sample_placements, skill_offset
+from osg_control.domain.frames import sample_placements
 from osg_control.domain.registry import get_domain
 from osg_control.domain.spec import nearest_start
-from osg_control.environment.arm_env import ArmEnv, EnvConfig
+from osg_control.environment.arm_env import ArmEnv
 from osg_control.evaluation.resume import resumable_results
 from osg_control.execution.executor import task_env_config
-from osg_control.execution.objects import ObjectTracker
-from osg_control.learning.checkpoints import require_skills
 from osg_control.parallel import LocalExecutor, TaskExecutor
 from osg_control.parallel.lazy import grid
 from osg_control.perception.spec import PerceptionSpec
@@ -59,160 +55,9 @@ def cell_means(
     return sums / per_cell
 
 
-@cache
-def _policy(domain: str, directory: str, skill: str) -> Any:
-    """A skill's policy, loaded once per worker and checked against its domain."""
-    from osg_control.execution.defaults import load_skill_policies
-
-    return load_skill_policies(get_domain(domain), directory, [skill])[skill]
-
-
-@cache
-def _env(domain: str, skill: str, perception: PerceptionSpec) -> ArmEnv:
-    found = get_domain(domain)
-    return found.make_env(skill=found.skill(skill), config=EnvConfig(perception=perception))
-
-
 def at_noise(perception: PerceptionSpec, noise: float) -> PerceptionSpec:
     """``perception`` with the paper's TCP noise ``noise`` [m] (a Table I column)."""
     return replace(perception, tcp_noise=float(noise))
-
-
-@dataclass(frozen=True)
-class SkillEpisode:
-    """One learned-skill evaluation episode."""
-
-    domain: str
-    skill: str
-    policy_dir: str
-    perception: PerceptionSpec
-    seed: int
-    cell: int
-    index: int
-    filter_gain: float | None = None
-    randomize: bool = False
-
-
-def run_skill_episode(task: SkillEpisode) -> bool:
-    """Run a learned skill from a random start in its initiation region (the domain's
-    objects placed at random in their regions with ``randomize``); True on success, scored
-    by the env on the simulator's truth. The policy sees the percept, in the skill's frame
-    (the objects where the robot perceives them, ``ObjectTracker``)."""
-    domain = get_domain(task.domain)
-    skill = domain.skill(task.skill)
-    policy: Callable[[np.ndarray], np.ndarray] = _policy(task.domain, task.policy_dir, task.skill)
-    if task.filter_gain is not None:
-        policy = FilteredPolicy(policy, task.filter_gain)
-    env = _env(task.domain, task.skill, task.perception)
-    rng = episode_rng(task.seed, task.skill, task.cell, task.index)
-    reset_seed = int(rng.integers(2**31))
-    options: dict[str, Any] = {"radius": skill.start_radius, "angle": skill.start_angle}
-    if task.randomize:
-        options = placed_start_options(domain, env, skill, sample_placements(domain, rng))
-    obs, _ = env.reset(seed=reset_seed, options=options)
-    objects = ObjectTracker(domain)
-    objects.update(env.percept())
-    for _ in range(skill.max_steps):
-        offset = skill_offset(domain, skill, objects.offsets())
-        obs, _reward, terminated, truncated, info = env.step(policy(in_skill_frame(obs, offset)))
-        objects.update(env.percept())
-        if terminated or truncated:
-            return bool(info["success"])
-    return False
-
-
-def _scripted_success(task: tuple[str, str, int, int]) -> bool:
-    domain = get_domain(task[0])
-    return run_scripted_episode(domain, domain.skill(task[1]), task[2], task[3]).success
-
-
-def skill_table(
-    domain: Domain,
-    policy_dir: str | Path,
-    noise_levels: Sequence[float] = (0.0, 0.01, 0.02),
-    episodes: int = 200,
-    seed: int = 0,
-    workers: int = 2,
-    skills: Sequence[str] | None = None,
-    scripted_episodes: int = 100,
-    filter_gain: float | None = None,
-    executor: TaskExecutor | None = None,
-    progress: bool = False,
-    perception: PerceptionSpec | None = None,
-    randomize: bool = False,
-) -> dict[str, Any]:
-    """Table I: success rate of every learned skill at each observation-noise level.
-
-    Args:
-        randomize: place the domain's objects at random in their regions (else where the
-            scene has them, the paper's protocol).
-        noise_levels: the paper's TCP noise [m] of each column, added to ``perception``'s
-            (default: the paper's protocol).
-        filter_gain: run the policies on ``estimator.TcpFilter`` estimates with this gain;
-            None (the paper's protocol) feeds them the raw noisy observation.
-        executor: where the episodes run (default: a local pool of ``workers``).
-        progress: show progress bars on stderr.
-
-    Returns:
-        ``{"noise": [...], "episodes": N, "filter_gain": g, "rows": [{"skill",
-        "rates": [...], "scripted": rate}]}``.
-    """
-    names = list(skills or domain.skills_by_name)
-    for name in names:
-        domain.skill(name)
-    require_skills(policy_dir, names)
-    executor = executor or LocalExecutor(workers)
-    perception = perception or PerceptionSpec()
-    cells = [(name, k, float(noise)) for name in names for k, noise in enumerate(noise_levels)]
-
-    def job(cell: tuple[str, int, float], i: int) -> SkillEpisode:
-        name, k, noise = cell
-        seen = at_noise(perception, noise)
-        return SkillEpisode(
-            domain.name, name, str(policy_dir), seen, seed, k, i, filter_gain, randomize
-        )
-
-    tasks = grid(cells, episodes, job)
-    outcomes = executor.map(run_skill_episode, tasks)
-    rates = cell_means(outcomes, len(cells), episodes, "learned", progress)
-    rates = rates.reshape(len(names), len(noise_levels))
-    scripted_tasks = grid(names, scripted_episodes, lambda n, i: (domain.name, n, seed + 1, i))
-    scripted = executor.map(_scripted_success, scripted_tasks)
-    scripted_rates = cell_means(scripted, len(names), scripted_episodes, "scripted", progress)
-    return {
-        "noise": list(noise_levels),
-        "perception": perception.to_dict(),
-        "randomized_objects": randomize,
-        "episodes": episodes,
-        "seed": seed,
-        "filter_gain": filter_gain,
-        "rows": [
-            {"skill": n, "rates": rates[i].tolist(), "scripted": float(scripted_rates[i])}
-            for i, n in enumerate(names)
-        ],
-    }
-
-
-def format_skill_table(table: dict[str, Any]) -> str:
-    """Table I as text."""
-    header = (
-        f"{'#':>2} {'skill':26s}"
-        + "".join(f" {'sigma=' + format(n, 'g'):>10s}" for n in table["noise"])
-        + f" {'scripted':>9s}"
-    )
-    observed = (
-        "raw observations"
-        if table.get("filter_gain") is None
-        else f"TCP filter gain {table['filter_gain']:g}"
-    )
-    lines = [
-        f"Table I: learned skill success ({table['episodes']} episodes per cell, {observed})",
-        header,
-    ]
-    for i, row in enumerate(table["rows"], 1):
-        rates = "".join(f" {r:10.3f}" for r in row["rates"])
-        lines.append(f"{i:2d} {row['skill']:26s}{rates} {row['scripted']:9.2f}")
-    return "\n".join(lines)
 
 
 @cache

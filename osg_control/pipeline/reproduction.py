@@ -21,12 +21,9 @@ from typing import Any, TypeVar
 from osg_control import __version__
 from osg_control.domain.base import Domain
 from osg_control.errors import OSGError
-from osg_control.evaluation.evaluate import (
-    format_reach_table,
-    format_skill_table,
-    format_task_table,
-)
+from osg_control.evaluation.evaluate import format_reach_table, format_task_table
 from osg_control.evaluation.report import write_report
+from osg_control.evaluation.skill_table import format_skill_table
 from osg_control.io_safety import check_output_dir
 from osg_control.paths import PACKAGE_DIR
 from osg_control.perception.spec import PerceptionSpec

@@ -15,7 +15,8 @@ from typing import Any
 import numpy as np
 
 from osg_control.domain.base import Domain
-from osg_control.evaluation.evaluate import reach_table, skill_table, task_table
+from osg_control.evaluation.evaluate import reach_table, task_table
+from osg_control.evaluation.skill_table import skill_table
 from osg_control.perception.spec import PerceptionSpec
 from osg_control.pipeline.bundle import DEPLOYMENT_NOISE, ModelBundle
 
