@@ -33,9 +33,11 @@ residual against 2 cm reading noise (0.2 for 4.5 mm, 0.24 for 5.5 mm; see the mo
 docstring and docs/results.md)."""
 MOTION_MODEL = (0.862, 0.223)
 """TCP displacement per step = ``k_now * command_t + k_prev * command_{t-1}``, fitted with
-``fit_motion_model`` on the steps under ``PRECISION_COMMAND`` of the nineteen default data
-sets (seed 0, 300 episodes each), with the speed-limited servo (``control.servo``; before
-it, on every step: 0.875 and 0.24)."""
+``fit_motion_model`` on the steps under ``PRECISION_COMMAND`` of the kitchen's nineteen
+default data sets (seed 0, 300 episodes each), with the speed-limited servo
+(``control.servo``; before it, on every step: 0.875 and 0.24). The default of a defaults
+folder that records none: each domain's pipeline fits its own on its data and ships it in
+the manifest (``motion_model``), which the executor then uses."""
 PRECISION_COMMAND = 0.01
 """The motion model is fitted on steps that command less than 1 cm: the approaches and
 grasps, where the filtered estimate decides where to close. Longer commands are slowed by
@@ -137,8 +139,10 @@ class TcpTracker:
     the TCP still) is folded in as a reading of a resting arm.
     """
 
-    def __init__(self, gain: float = DEFAULT_GAIN) -> None:
-        self.filter = TcpFilter(gain)
+    def __init__(
+        self, gain: float = DEFAULT_GAIN, motion: tuple[float, float] = MOTION_MODEL
+    ) -> None:
+        self.filter = TcpFilter(gain, motion)
         self._pending: np.ndarray | None = None
         self._last_reading: np.ndarray | None = None
         self._last_seen: np.ndarray | None = None
@@ -182,9 +186,14 @@ class TcpTracker:
 class FilteredPolicy:
     """A policy that acts on filtered observations; one instance per episode."""
 
-    def __init__(self, policy: Callable[[np.ndarray], np.ndarray], gain: float) -> None:
+    def __init__(
+        self,
+        policy: Callable[[np.ndarray], np.ndarray],
+        gain: float,
+        motion: tuple[float, float] = MOTION_MODEL,
+    ) -> None:
         self.policy = policy
-        self.tracker = TcpTracker(gain)
+        self.tracker = TcpTracker(gain, motion)
 
     def reset(self) -> None:
         """Start a new episode."""

@@ -16,7 +16,7 @@ from typing import Any
 
 import numpy as np
 
-from osg_control.control.estimator import FilteredPolicy
+from osg_control.control.estimator import MOTION_MODEL, FilteredPolicy
 from osg_control.data.collect import placed_start_options, run_scripted_episode
 from osg_control.domain.base import Domain
 from osg_control.domain.frames import in_skill_frame, sample_placements, skill_offset
@@ -57,6 +57,7 @@ class SkillEpisode:
     index: int
     filter_gain: float | None = None
     randomize: bool = False
+    filter_motion: tuple[float, float] = MOTION_MODEL
 
 
 def run_skill_episode(task: SkillEpisode) -> bool:
@@ -68,7 +69,7 @@ def run_skill_episode(task: SkillEpisode) -> bool:
     skill = domain.skill(task.skill)
     policy: Callable[[np.ndarray], np.ndarray] = _policy(task.domain, task.policy_dir, task.skill)
     if task.filter_gain is not None:
-        policy = FilteredPolicy(policy, task.filter_gain)
+        policy = FilteredPolicy(policy, task.filter_gain, task.filter_motion)
     env = _env(task.domain, task.skill, task.perception)
     rng = episode_rng(task.seed, task.skill, task.cell, task.index)
     reset_seed = int(rng.integers(2**31))
@@ -106,12 +107,14 @@ def skill_table(
     progress: bool = False,
     perception: PerceptionSpec | None = None,
     randomize: bool = False,
+    filter_motion: tuple[float, float] = MOTION_MODEL,
 ) -> dict[str, Any]:
     """Table I: success rate of every learned skill at each observation-noise level.
 
     Args:
         randomize: place the domain's objects at random in their regions (else where the
             scene has them, the paper's protocol).
+        filter_motion: the TCP filter's motion model (the domain's fit).
         noise_levels: the paper's TCP noise [m] of each column, added to ``perception``'s
             (default: the paper's protocol).
         filter_gain: run the policies on ``estimator.TcpFilter`` estimates with this gain;
@@ -135,8 +138,9 @@ def skill_table(
         name, k, noise = cell
         seen = at_noise(perception, noise)
         return SkillEpisode(
-            domain.name, name, str(policy_dir), seen, seed, k, i, filter_gain, randomize
-        )
+            domain.name, name, str(policy_dir), seen, seed, k, i, filter_gain, randomize,
+            filter_motion,
+        )  # fmt: skip
 
     tasks = grid(cells, episodes, job)
     outcomes = executor.map(run_skill_episode, tasks)

@@ -10,6 +10,7 @@ reproduce`` writes a directory of the same layout.
 from __future__ import annotations
 
 import hashlib
+import math
 from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
@@ -17,8 +18,10 @@ from typing import Any
 
 from osg_control.classifier.data import movement_classes
 from osg_control.classifier.model import StateClassifier
+from osg_control.control.estimator import MOTION_MODEL
 from osg_control.domain.base import Domain
 from osg_control.errors import CheckpointError
+from osg_control.json_files import is_json_number
 from osg_control.learning.checkpoints import check_action_scale, checkpoint_paths, require_skills
 from osg_control.learning.policy import SkillPolicy
 from osg_control.planning.costs import MANIFEST, read_manifest, success_rates
@@ -45,6 +48,9 @@ class Defaults:
         graph: the domain's skill graph with the manifest's success rates (uniform costs
             for skills without one).
         manifest: the manifest as read.
+        motion_model: the TCP filter's ``(k_now, k_prev)`` fitted on the defaults' data
+            (the manifest's ``motion_model``; ``control.estimator.MOTION_MODEL`` when it
+            records none).
     """
 
     directory: Path
@@ -52,6 +58,7 @@ class Defaults:
     classifier: StateClassifier
     graph: SkillGraph
     manifest: dict[str, Any]
+    motion_model: tuple[float, float] = MOTION_MODEL
 
 
 def defaults_root(domain: Domain, directory: str | Path | None = None) -> Path:
@@ -84,7 +91,30 @@ def load_defaults(domain: Domain, directory: str | Path | None = None) -> Defaul
         classifier=StateClassifier.load(root / "classifier", movement_classes(domain)),
         graph=graph_from_specs(domain, success_rates=rates),
         manifest=manifest,
+        motion_model=manifest_motion_model(manifest, root / MANIFEST) or MOTION_MODEL,
     )
+
+
+MOTION_KEY = "motion_model"
+"""The manifest key of the TCP filter's motion model ``[k_now, k_prev]``."""
+
+
+def manifest_motion_model(manifest: dict[str, Any], path: Path) -> tuple[float, float] | None:
+    """A manifest's TCP filter motion model (None when it records none).
+
+    Raises:
+        CheckpointError: not two finite numbers; names the file.
+    """
+    value = manifest.get(MOTION_KEY)
+    if value is None:
+        return None
+    if (
+        not isinstance(value, list)
+        or len(value) != 2
+        or not all(is_json_number(v) and math.isfinite(v) for v in value)
+    ):
+        raise CheckpointError(f"{path}: {MOTION_KEY!r} must be two finite numbers, got {value!r}")
+    return float(value[0]), float(value[1])
 
 
 def load_skill_policies(

@@ -31,7 +31,7 @@ from typing import Any, Protocol
 import numpy as np
 
 from osg_control.control.divergence import is_divergence
-from osg_control.control.estimator import TcpTracker
+from osg_control.control.estimator import MOTION_MODEL, TcpTracker
 from osg_control.domain.base import Domain
 from osg_control.domain.frames import (
     Offsets,
@@ -140,6 +140,8 @@ class Executor:
             with this gain, carried across the skills of an execution), and locate the
             robot on the graph from it; None uses the raw observation (the paper's
             protocol).
+        motion_model: the filter's ``(k_now, k_prev)`` (the defaults' own,
+            ``load_executor``; default the kitchen's fit).
         graph: the skill graph whose costs plans minimise: the cost model, e.g. the
             defaults' measured success rates (``defaults.load_defaults(...).graph``,
             ``planning.costs.measured_graph``), or ``planning.graph.graph_from_specs(domain)``
@@ -156,6 +158,7 @@ class Executor:
         max_replans: int = 2,
         reset_joints: bool = True,
         filter_gain: float | None = None,
+        motion_model: tuple[float, float] = MOTION_MODEL,
     ) -> None:
         if not isinstance(graph, SkillGraph):
             raise TypeError(
@@ -175,6 +178,7 @@ class Executor:
         self.max_replans = max_replans
         self.reset_joints = reset_joints
         self.filter_gain = filter_gain
+        self.motion_model = motion_model
         self.on_step: Callable[[SkillEnv], Any] | None = None
         """Called after every env step (e.g. to record video frames)."""
 
@@ -346,7 +350,9 @@ class Executor:
         started = time.perf_counter()
         facts = env.percept().facts
         result = ExecutionResult(goal=goal, success=False, entry_skill=None, plan=[])
-        tracker = TcpTracker(self.filter_gain) if self.filter_gain is not None else None
+        tracker = (
+            None if self.filter_gain is None else TcpTracker(self.filter_gain, self.motion_model)
+        )
         objects = ObjectTracker(self.domain)
         objects.update(env.percept())
         planning_time = 0.0
@@ -448,4 +454,5 @@ def load_executor(domain: Domain, directory: str | Path | None = None, **kwargs:
     from osg_control.execution.defaults import load_defaults
 
     defaults = load_defaults(domain, directory)
+    kwargs.setdefault("motion_model", defaults.motion_model)
     return Executor(domain, defaults.policies, defaults.classifier, defaults.graph, **kwargs)

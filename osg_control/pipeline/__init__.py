@@ -33,6 +33,7 @@ _EXPORTS: dict[str, str] = {
     "ModelBundle": "bundle",
     "DataSets": "collect",
     "collect_datasets": "collect",
+    "fit_filter_motion": "motion",
     "TrainedSkills": "train",
     "train_skills": "train",
     "train_missing": "train",
@@ -63,6 +64,7 @@ _EXPORTS: dict[str, str] = {
 __all__ = [
     "DEPLOYMENT_NOISE",
     "DataSets",
+    "fit_filter_motion",
     "ExportedPlan",
     "FULL",
     "MeasuredRates",

@@ -19,6 +19,7 @@ from typing import Any
 
 from osg_control.domain.base import Domain
 from osg_control.errors import CheckpointError, OSGError
+from osg_control.execution.defaults import MOTION_KEY, manifest_motion_model
 from osg_control.io_safety import atomic_write
 from osg_control.json_files import is_json_number
 from osg_control.perception.spec import PerceptionSpec
@@ -35,7 +36,7 @@ PERCEPTION_KEY = "perception"
 NOISE_KEY = "noise"
 FILTER_KEY = "filter_gain"
 RATES_FROM_KEY = "success_rates_from"
-_OWN_KEYS = (PERCEPTION_KEY, NOISE_KEY, FILTER_KEY, RATES_KEY, RATES_FROM_KEY)
+_OWN_KEYS = (PERCEPTION_KEY, NOISE_KEY, FILTER_KEY, RATES_KEY, RATES_FROM_KEY, MOTION_KEY)
 """The manifest keys ``ModelBundle`` types; every other key is kept as ``provenance``."""
 
 
@@ -51,6 +52,9 @@ class ModelBundle:
             e.g. a manifest written before perceptions existed).
         noise: the paper protocol's TCP noise sigma [m] of the rates (None: not recorded).
         filter_gain: the TCP filter gain the policies ran with (None: raw observations).
+        motion_model: the TCP filter's ``(k_now, k_prev)`` fitted on the data the
+            skills were trained on (``pipeline.motion``; None: not fitted, the executor
+            then uses ``control.estimator.MOTION_MODEL``).
         rates_from: how the rates were measured, in words (the manifest's
             ``success_rates_from``; by default ``describe_measurement()`` when there are
             rates).
@@ -63,6 +67,7 @@ class ModelBundle:
     perception: PerceptionSpec | None = None
     noise: float | None = None
     filter_gain: float | None = None
+    motion_model: tuple[float, float] | None = None
     rates_from: str | None = None
     provenance: dict[str, Any] = field(default_factory=dict)
 
@@ -125,6 +130,8 @@ class ModelBundle:
         manifest[PERCEPTION_KEY] = None if self.perception is None else self.perception.to_dict()
         manifest[NOISE_KEY] = self.noise
         manifest[FILTER_KEY] = self.filter_gain
+        if self.motion_model is not None:
+            manifest[MOTION_KEY] = list(self.motion_model)
         if self.success_rates:
             manifest[RATES_KEY] = dict(self.success_rates)
         if self.rates_from is not None:
@@ -170,6 +177,7 @@ class ModelBundle:
             perception=perception,
             noise=noise,
             filter_gain=_number(manifest, FILTER_KEY, path),
+            motion_model=manifest_motion_model(manifest, path),
             rates_from=_text(manifest.get(RATES_FROM_KEY), path),
             provenance={k: v for k, v in manifest.items() if k not in _OWN_KEYS},
         )

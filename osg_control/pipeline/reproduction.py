@@ -1,11 +1,11 @@
 """The whole pipeline, from nothing to Tables I-V and a report.
 
 Stages, each timed: collect -> train (TD3+BC, all skills batched; kept when already trained
-on these data) -> Table I -> the measured success rates into the bundle's manifest ->
-graph + PDDL with those rates as costs -> classifier -> Table II -> Table III -> Tables
-IV/V -> report. The output folder's ``defaults/`` is a model bundle with the layout of the
-shipped defaults (``skills/``, ``classifier/``, ``manifest.json``); a domain's shipped
-defaults are a copy of it.
+on these data) -> filter (the TCP filter's motion model fitted on the data) -> Table I ->
+the measured success rates into the bundle's manifest -> graph + PDDL with those rates as
+costs -> classifier -> Table II -> Table III -> Tables IV/V -> report. The output folder's
+``defaults/`` is a model bundle with the layout of the shipped defaults (``skills/``,
+``classifier/``, ``manifest.json``); a domain's shipped defaults are a copy of it.
 """
 
 from __future__ import annotations
@@ -35,6 +35,7 @@ from osg_control.pipeline.classifier import (
 )
 from osg_control.pipeline.collect import DataSets, collect_datasets, format_collection
 from osg_control.pipeline.export import ExportedPlan, export_measured_pddl, format_export
+from osg_control.pipeline.motion import fit_filter_motion, format_motion
 from osg_control.pipeline.tables import (
     DEPLOYMENT_NOISE,
     bundle_with_rates,
@@ -230,10 +231,12 @@ def reproduce(config: ReproduceConfig, log: Log | None = None) -> Reproduction:
                 threads=config.train_threads),
         _format_trained,
     )  # fmt: skip
+    motion = stages.run("filter", partial(fit_filter_motion, domain, data_dir), format_motion)
     bundle = ModelBundle(
         defaults,
         perception=config.perception,
         filter_gain=config.filter_gain,
+        motion_model=motion,
         provenance={
             "domain": domain.name,
             "command": config.describe(),
@@ -249,7 +252,7 @@ def reproduce(config: ReproduceConfig, log: Log | None = None) -> Reproduction:
     figures["table_i"] = stages.run(
         "table I",
         partial(table_i, domain, bundle.policies_dir, scale.table_i_episodes, seed, workers,
-                config.perception, config.filter_gain),
+                config.perception, config.filter_gain, filter_motion=motion),
         format_skill_table,
     )  # fmt: skip
     bundle = bundle_with_rates(bundle, measured_rates(figures["table_i"]))

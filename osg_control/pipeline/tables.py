@@ -14,6 +14,7 @@ from typing import Any
 
 import numpy as np
 
+from osg_control.control.estimator import MOTION_MODEL
 from osg_control.domain.base import Domain
 from osg_control.evaluation.evaluate import reach_table, task_table
 from osg_control.evaluation.skill_table import skill_table
@@ -56,6 +57,7 @@ def table_i(
     filter_gain: float | None = None,
     scripted_episodes: int | None = None,
     progress: bool = False,
+    filter_motion: tuple[float, float] = MOTION_MODEL,
 ) -> dict[str, Any]:
     """Table I: every learned skill's success rate from its initiation region, per noise
     column (``table_i_noise_levels``), beside the scripted policy's.
@@ -67,6 +69,7 @@ def table_i(
         filter_gain: run the policies on TCP filter estimates with this gain.
         scripted_episodes: episodes of the scripted policy per skill (default:
             ``max(episodes, 20)``).
+        filter_motion: the filter's motion model (the domain's fit, ``pipeline.motion``).
 
     Raises:
         CheckpointError: a skill checkpoint missing or not the domain's.
@@ -83,6 +86,7 @@ def table_i(
         filter_gain=filter_gain,
         progress=progress,
         perception=perception,
+        filter_motion=filter_motion,
     )
 
 
