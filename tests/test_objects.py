@@ -128,3 +128,13 @@ def test_a_blind_pose_estimator_cannot_pick_the_cube_up(executor: Executor) -> N
     obs = _start(env, seed=11)
     executor.execute(["cube-lifted"], env, obs)
     assert "cube-lifted" not in env.facts()
+
+
+def test_a_cube_knocked_away_after_the_grasp_is_picked_up_again(executor: Executor) -> None:
+    """The grasp detector loses the cube, the pose estimator sees it 3-6 cm away: the
+    replan re-targets it (robot perception, a fixed seed)."""
+    from osg_control.kitchen.disturbances import knocked_cube_episode
+
+    env = KitchenEnv(config=task_env_config(perception_spec("robot")))
+    episode = knocked_cube_episode(executor, env, np.random.default_rng([0, 1]))
+    assert episode.knocked and episode.recovered and episode.replans >= 1

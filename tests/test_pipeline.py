@@ -40,7 +40,7 @@ from osg_control.planning.pddl_io import skill_cost
 TINY = Scale(episodes=16, train_steps=150, table_i_episodes=3, reach_episodes=1, task_episodes=1)
 MANIFEST_KEYS = {
     "domain", "command", "seed", "scale", "package_version", "git_commit", "datasets_sha256",
-    "perception", "filter_gain", "success_rates", "success_rates_from",
+    "perception", "filter_gain", "success_rates", "success_rates_from", "motion_model",
 }  # fmt: skip
 """The keys the manifest kept (``execution.defaults``, ``planning.costs`` and tests read them)."""
 
@@ -161,6 +161,8 @@ def test_a_manifest_without_a_perception_reads_as_unrecorded() -> None:
         ("noise", float("nan")),
         ("filter_gain", "high"),
         ("success_rates", {"press-button": 1.5}),
+        ("motion_model", [0.8]),
+        ("motion_model", [0.8, float("nan")]),
     ],
 )
 def test_a_malformed_manifest_is_refused(field: str, value: object, tmp_path: Path) -> None:
@@ -188,3 +190,20 @@ def test_a_failed_stage_is_named_and_nothing_after_it_runs(domain: Domain, tmp_p
         reproduce(ReproduceConfig(domain, tmp_path, TINY, workers=1, progress=False))
     assert isinstance(caught.value.__cause__, OutputError) and caught.value.stage == "collect"
     assert not (tmp_path / "defaults").exists()
+
+
+def test_the_filter_motion_model_is_fitted_on_the_runs_data_and_shipped(
+    domain: Domain, run: Reproduction
+) -> None:
+    """The manifest carries the fit of this run's data (not the kitchen's constant), and an
+    executor loaded from the bundle filters with it."""
+    from osg_control.control.estimator import MOTION_MODEL
+    from osg_control.execution.executor import load_executor
+    from osg_control.pipeline import fit_filter_motion
+
+    fitted = fit_filter_motion(domain, run.out / "data")
+    bundle = ModelBundle.read(run.bundle.directory, domain)
+    assert bundle.motion_model == pytest.approx(fitted)
+    assert bundle.motion_model != MOTION_MODEL
+    executor = load_executor(domain, run.bundle.directory, filter_gain=0.2)
+    assert executor.motion_model == pytest.approx(fitted)

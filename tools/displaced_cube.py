@@ -14,11 +14,9 @@ import json
 
 import numpy as np
 
-from osg_control.data.collect import placed_start_options
-from osg_control.domain.frames import sample_placements
 from osg_control.domain.registry import get_domain
 from osg_control.execution.executor import load_executor, task_env_config
-from osg_control.kitchen.disturbances import CubeKnock
+from osg_control.kitchen.disturbances import knocked_cube_episode
 from osg_control.perception.spec import perception_spec
 
 
@@ -34,25 +32,19 @@ def main() -> None:
     kitchen = get_domain("kitchen")
     executor = load_executor(kitchen, args.models, max_replans=2)
     env = kitchen.make_env(config=task_env_config(perception_spec(args.perception)))
-    recovered, replans, knocked = 0, [], 0
-    for episode in range(args.episodes):
-        rng = np.random.default_rng([args.seed, episode])
-        skill = kitchen.skill("move-home-to-cube")
-        options = placed_start_options(kitchen, env, skill, sample_placements(kitchen, rng))
-        options["position"] = kitchen.nodes["home"].position
-        obs, _ = env.reset(seed=int(rng.integers(2**31)), options=options)
-        executor.on_step = knock = CubeKnock(rng)
-        result = executor.execute(["cube-lifted"], env, obs)
-        knocked += int(knock.fired)
-        recovered += int(knock.fired and "cube-lifted" in env.facts())
-        replans.append(result.replans)
+    episodes = [
+        knocked_cube_episode(executor, env, np.random.default_rng([args.seed, i]))
+        for i in range(args.episodes)
+    ]
+    knocked = sum(e.knocked for e in episodes)
+    recovered = sum(e.recovered for e in episodes)
     summary = {
         "episodes": args.episodes,
         "seed": args.seed,
         "perception": perception_spec(args.perception).to_dict(),
         "knocked": knocked,
         "recovered": recovered / max(knocked, 1),
-        "mean_replans": float(np.mean(replans)),
+        "mean_replans": float(np.mean([e.replans for e in episodes if e.knocked] or [0])),
     }
     print(
         json.dumps(summary, indent=2)

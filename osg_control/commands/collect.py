@@ -9,19 +9,16 @@ from pathlib import Path
 
 from osg_control.commands import add_backend_arguments, domain_of
 from osg_control.commands.minari import add_verbs as add_minari_verbs
-from osg_control.data.collect import CHUNK_EPISODES, DEFAULT_EPISODES, HOLD_STEPS, collect_skill
+from osg_control.data.collect import DEFAULT_EPISODES, collect_skill
 from osg_control.data.datasets import (
-    FILE_OVERHEAD,
-    dataset_bytes,
     dataset_summary,
     load_dataset,
 )
-from osg_control.domain.base import Domain
-from osg_control.domain.spec import SkillSpec
 from osg_control.errors import DatasetError
 from osg_control.io_safety import check_output_dir
 from osg_control.parallel import open_executor
 from osg_control.paths import cache_dir
+from osg_control.pipeline.collect import collection_bytes
 
 
 def register(subparsers: argparse._SubParsersAction) -> None:
@@ -45,22 +42,6 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     info.add_argument("--json", action="store_true")
     info.set_defaults(func=run_info)
     add_minari_verbs(verbs)
-
-
-def collection_bytes(domain: Domain, skills: list[SkillSpec], episodes: int) -> int:
-    """The disk space collecting ``episodes`` episodes of each skill takes at most: every
-    skill's merged file plus the chunk files of the skill in progress (each episode taken
-    at its longest: the script's step budget plus the hold after a success)."""
-    sizes = [
-        dataset_bytes(
-            episodes * (sum(skill.waypoint_budgets()) + HOLD_STEPS),
-            episodes,
-            len(domain.world_fields),
-        )
-        for skill in skills
-    ]
-    chunk_files = -(-episodes // CHUNK_EPISODES)
-    return sum(sizes) + max(sizes, default=0) + (chunk_files - 1) * FILE_OVERHEAD
 
 
 def run_collect(args: argparse.Namespace) -> int:

@@ -6,12 +6,19 @@ pose estimator sees it elsewhere) and pick it up again where it now lies.
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import mujoco
 import numpy as np
 
+from osg_control.data.collect import placed_start_options
+from osg_control.domain.frames import sample_placements
+from osg_control.execution.executor import Executor
 from osg_control.kitchen.env import KitchenEnv
 from osg_control.kitchen.skills import CUBE
 
+GOAL = ("cube-lifted",)
+"""The task of a knocked-cube episode."""
 GRASP_SETTLE_STEPS = 3
 """Steps the cube is held (truth) before it is knocked away: the grasp has closed."""
 
@@ -45,3 +52,32 @@ class CubeKnock:
         if self._held >= GRASP_SETTLE_STEPS:
             displace_cube(env, self.offset)
             self.fired = True
+
+
+@dataclass(frozen=True)
+class KnockedEpisode:
+    """How one knocked-cube episode went (scored on the simulator's truth)."""
+
+    knocked: bool
+    recovered: bool
+    replans: int
+
+
+def knocked_cube_episode(
+    executor: Executor, env: KitchenEnv, rng: np.random.Generator
+) -> KnockedEpisode:
+    """Place the cube uniformly in its region, start at home, run ``GOAL`` with the cube
+    knocked 3-6 cm away once it has been grasped (``CubeKnock``)."""
+    domain = executor.domain
+    skill = domain.skill("move-home-to-cube")
+    options = placed_start_options(domain, env, skill, sample_placements(domain, rng))
+    options["position"] = domain.nodes["home"].position
+    obs, _ = env.reset(seed=int(rng.integers(2**31)), options=options)
+    knock = CubeKnock(rng)
+    executor.on_step = knock
+    try:
+        result = executor.execute(list(GOAL), env, obs)
+    finally:
+        executor.on_step = None
+    recovered = knock.fired and set(GOAL) <= env.facts()
+    return KnockedEpisode(knock.fired, recovered, result.replans)
