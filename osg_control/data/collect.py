@@ -35,6 +35,7 @@ from osg_control.domain.frames import (
     placement_offsets,
     sample_placements,
     shifted_skill,
+    skill_frame,
     skill_offset,
 )
 from osg_control.domain.registry import get_domain
@@ -78,18 +79,32 @@ def placed_start_options(
     return options
 
 
+def touches_objects(domain: Domain, skill: SkillSpec) -> bool:
+    """Whether a skill's data depend on where the domain's objects lie: it acts in an
+    object's frame, starts at a node anchored to one, or starts holding one. The others
+    (the kitchen's door and valve skills) are recorded with the objects where the scene has
+    them, their data the same as before objects could move."""
+    objects = {frame.name for frame in domain.objects}
+    return bool(
+        skill_frame(domain, skill) is not None
+        or domain.nodes[skill.start].anchor is not None
+        or skill.holding in objects
+    )
+
+
 def run_scripted_episode(
     domain: Domain, skill: SkillSpec, seed: int, index: int, randomize: bool = True
 ) -> Episode:
     """Run Algorithm 1 for one episode from a random start in the skill's initiation region,
-    the domain's objects placed uniformly in their regions (``randomize``; else where the
-    scene has them). The script aims at the objects' true places (its oracle); the data are
-    recorded in the skill's frame (``domain.frames``)."""
+    the domain's objects placed uniformly in their regions when the skill touches them
+    (``randomize`` and ``touches_objects``; else where the scene has them). The script aims
+    at the objects' true places (its oracle); the data are recorded in the skill's frame
+    (``domain.frames``)."""
     rng = np.random.default_rng(np.random.SeedSequence([skill_seed(seed, skill.name), index]))
     env = _env_for(domain, skill)
     reset_seed = int(rng.integers(2**31))
     options: dict[str, Any] = {"radius": skill.start_radius, "angle": skill.start_angle}
-    if randomize and domain.objects:
+    if randomize and touches_objects(domain, skill):
         options = placed_start_options(domain, env, skill, sample_placements(domain, rng))
     obs, info = env.reset(seed=reset_seed, options=options)
     offset = skill_offset(domain, skill, env.anchor_offsets)
