@@ -13,13 +13,13 @@ import numpy as np
 import pytest
 from gymnasium.utils.env_checker import check_env
 
-from osg_control.perception.spec import PerceptionSpec
 from osg_control.control.ik import IKConfig, joint_reset_controller, rotation_error
 from osg_control.control.robot import HOME_Q
 from osg_control.environment.arm_env import ACTION_BOUNDS, OBS_DIM, EnvConfig
 from osg_control.kitchen.env import KitchenEnv
 from osg_control.kitchen.skills import NODES, TOP_DOWN_QUAT
 from osg_control.kitchen.world import CUBE_HALF_SIZE, world_facts, world_state_from_array
+from osg_control.perception.spec import PerceptionSpec
 
 ZERO_ACTION = np.zeros(7)
 

@@ -48,7 +48,7 @@ def test_no_env_step_after_the_episode_is_over_and_never_past_280(index, monkeyp
     used to take one or two steps more (281-282)."""
     bench = benchmark_of(get_domain("franka-kitchen"))
     tasks = bench.tasks_of(bench.default_set)
-    adapter = _benchmark_env("franka-kitchen", tasks, bench.step_limit, None, 0)
+    adapter = _benchmark_env("franka-kitchen", tasks, bench.step_limit, None, 0, "")
     ends: list[bool] = []
     library_step = adapter.env.step
 

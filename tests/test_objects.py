@@ -138,3 +138,13 @@ def test_a_cube_knocked_away_after_the_grasp_is_picked_up_again(executor: Execut
     env = KitchenEnv(config=task_env_config(perception_spec("robot")))
     episode = knocked_cube_episode(executor, env, np.random.default_rng([0, 1]))
     assert episode.knocked and episode.recovered and episode.replans >= 1
+
+
+def test_only_skills_that_touch_the_cube_are_recorded_with_it_moved() -> None:
+    from osg_control.data.collect import touches_objects
+
+    touching = {s.name for s in KITCHEN.skills if touches_objects(KITCHEN, s)}
+    assert {"grab-cube", "pick-up-cube", "move-home-to-cube", "release-cube"} <= touching
+    assert not touching & {"grab-handle", "slide-door-open", "push-valve-open"}
+    episode = run_scripted_episode(KITCHEN, KITCHEN.skill("grab-handle"), 0, 3)
+    np.testing.assert_allclose(episode.world_states[0, 2:4], CUBE.nominal, atol=1e-3)

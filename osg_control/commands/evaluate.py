@@ -78,7 +78,16 @@ def _register_benchmark(verbs: argparse._SubParsersAction) -> None:
     add_backend_arguments(bench)
     bench.add_argument("--models", type=Path, default=None, help="defaults directory")
     bench.add_argument(
-        "--noise", type=float, default=0.0, help="TCP observation noise [m] (default 0)"
+        "--noise", type=float, default=None, help="TCP observation noise [m] (default 0)"
+    )
+    add_perception_arguments(bench)
+    bench.add_argument(
+        "--env-kwargs",
+        type=_json_object,
+        default=None,
+        metavar="JSON",
+        help="the env's own constructor options, passed to gymnasium.make (e.g. "
+        "'{\"robot_noise_ratio\": 0.02}')",
     )
     add_filter_argument(bench)
     bench.add_argument(
@@ -103,6 +112,7 @@ def run_benchmark_command(args: argparse.Namespace) -> int:
 
     domain = domain_of(args)
     benchmark_of(domain)
+    perception = perception_of(args, domain)
     resume_dir = evaluation_cache(domain, "benchmark", args.models)
     with open_executor(args.backend, args.workers, args.address) as executor:
         summary = run_benchmark(
@@ -112,7 +122,7 @@ def run_benchmark_command(args: argparse.Namespace) -> int:
             episodes=args.episodes,
             seed=args.seed,
             models=str(args.models) if args.models else None,
-            noise=args.noise,
+            noise=0.0,  # the perception carries the TCP noise
             filter_gain=args.filter,
             perturbed=args.perturbed,
             limited=not args.no_limit,
@@ -120,8 +130,21 @@ def run_benchmark_command(args: argparse.Namespace) -> int:
             workers=args.workers,
             executor=executor,
             resume_dir=resume_dir,
+            perception=perception,
+            env_kwargs=args.env_kwargs,
         )
     return print_result(domain, args, summary, format_benchmark)
+
+
+def _json_object(text: str) -> dict[str, Any]:
+    """``--env-kwargs``: a JSON object, else a usage error naming the option."""
+    try:
+        value = json.loads(text)
+    except json.JSONDecodeError as err:
+        raise argparse.ArgumentTypeError(f"not JSON ({err})") from None
+    if not isinstance(value, dict):
+        raise argparse.ArgumentTypeError(f"must be a JSON object, got {text!r}")
+    return value
 
 
 def run_tasks(args: argparse.Namespace) -> int:

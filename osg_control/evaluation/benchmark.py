@@ -13,8 +13,8 @@ Episode ``i`` resets with a seed drawn from ``SeedSequence([skill_seed(seed, goa
 i])``: the same starts for every variant, whatever the number of workers.
 
 What the executor perceives is a named perception (``perception.spec``), by default the
-domain's first (``Domain.perceptions``; ``env``, the env's own observation, where the
-domain declares none); ``sim`` is the simulator's state, an oracle, and is reported as one.
+domain's first (``Domain.perceptions``; e.g. ``env``, an outside env's own observation);
+``sim`` is the simulator's state, an oracle, and is reported as one.
 """
 
 from __future__ import annotations
@@ -32,7 +32,7 @@ import numpy as np
 from osg_control.domain.base import Domain
 from osg_control.domain.benchmark import Benchmark
 from osg_control.domain.registry import get_domain
-from osg_control.errors import DomainError
+from osg_control.errors import DomainError, UsageError
 from osg_control.evaluation.check import wilson_interval
 from osg_control.evaluation.evaluate import cached_executor, episode_rng
 from osg_control.evaluation.resume import resumable_map
@@ -79,16 +79,18 @@ def benchmark_perception(
     domain: Domain, perception: PerceptionSpec | None = None, noise: float = 0.0
 ) -> PerceptionSpec:
     """The perception a benchmark runs on: ``perception``, default the domain's first
-    (``env`` where it declares none), with the paper's TCP ``noise`` [m] if given.
+    (``Domain.perceptions``), with the paper's TCP ``noise`` [m] if given.
 
     Raises:
-        UsageError: a perception the domain does not support.
+        UsageError: a perception the domain does not support, or noise on ``sim``.
     """
-    supported = tuple(getattr(domain, "perceptions", None) or ("env",))
+    supported = tuple(domain.perceptions)
     spec = perception or PerceptionSpec(supported[0])
-    if noise:
-        spec = replace(spec, tcp_noise=noise)
     check_supported(spec, supported, domain.name)
+    if noise:
+        if spec.name == "sim":
+            raise UsageError("the sim perception is the simulator's exact state: no --noise")
+        spec = replace(spec, tcp_noise=noise)
     return spec
 
 

@@ -228,6 +228,23 @@ def servo_response(kitchen: Any) -> tuple[np.ndarray, np.ndarray]:
     return np.array(kp), np.array(fraction)
 
 
+class ServoCommand:
+    """IK joint velocity -> the env's 9-D action for this robot's servos: each joint's
+    step offset ``v dt`` divided by its servo's one-step response, plus the offset that
+    holds the bias torques (``bias / kp``: gravity), scaled as a whole (``scale_to_action``,
+    see ``servo_response``); fingers +-1 (closing or opening at full speed)."""
+
+    def __init__(self, kitchen: Any) -> None:
+        self.kp, self.fraction = servo_response(kitchen)
+        self.dt = float(kitchen.robot_env.dt)
+
+    def action(self, velocity: np.ndarray, bias: np.ndarray, closed: bool) -> np.ndarray:
+        """The env's action for joint velocity ``velocity`` [rad/s] under ``bias`` [N m]."""
+        offset = np.asarray(velocity) * self.dt / self.fraction + np.asarray(bias) / self.kp
+        finger = -1.0 if closed else 1.0
+        return np.concatenate([scale_to_action(offset, self.dt), [finger, finger]])
+
+
 def scale_to_action(offset: np.ndarray, dt: float) -> np.ndarray:
     """A joint servo-target offset [rad] -> the env's arm action (the env's target is
     ``observed q + ACTION_SCALE * a * dt``), scaled as a whole into [-1, 1]."""

@@ -16,17 +16,17 @@ grasp / pull / release for the microwave and the hinge cabinet
 
 from __future__ import annotations
 
-from dataclasses import fields, replace
+from dataclasses import replace
 from typing import Any
 
 import numpy as np
 
 from osg_control.domain.base import Domain, StartRegion, Task
 from osg_control.domain.spec import MOVEMENT, Node, SkillSpec, Waypoint
-from osg_control.errors import DomainError
+from osg_control.franka.burners import BURNER_NODES, BURNER_SKILLS
 from osg_control.franka.hinge import HINGE_NODES, HINGE_SKILLS
-from osg_control.franka.perception import GRASP_FORCE, PERCEPTIONS
 from osg_control.franka.kettle import KETTLE_NODES, KETTLE_SKILLS
+from osg_control.franka.perception import PERCEPTIONS
 from osg_control.franka.poses import (
     ACTION_BOUNDS,
     FORWARD,
@@ -136,41 +136,6 @@ MICRO_OPENED = (-0.62, 0.16, 1.80)
 0.232) is out of reach with the hand turned, so the end node is where the released hand
 settles (noise-free 48 steps; 6 of 8 under the script's noise)."""
 
-# Burner knobs: a vertical bar (2.8 cm wide in x, 9.6 cm tall, y 0.622-0.658) in front of a
-# disk, turning about world -y; the bottom burner's knob (qpos 11) is centred at
-# (-0.256, z 2.226), the top burner's (qpos 15) at (-0.256, z 2.34). Grasp the bar with the
-# fingers across x and twist the hand about +y (the knob's q goes negative); the library
-# counts a burner done once its knob is within 0.3 of -0.88 / -0.92.
-KNOB_X = -0.256
-KNOB_Y = 0.61
-KNOB_FRONT_Y = 0.53
-BOTTOM_KNOB_Z = 2.226
-TOP_KNOB_Z = 2.34
-KNOB_RADIUS = 0.035
-"""The fingers' arc about the knob's axis [m] (the bar reaches 0.048)."""
-KNOB_ARC = (-0.8, -0.4, 0.0, 0.3, 0.6, 0.9)
-"""The fingers' angles on the arc [rad from +z toward +x]; the bar turns ahead of them."""
-KNOB_ARC_STEPS = 5
-KNOB_PITCH = -0.3
-"""The tool tilted down about world x [rad]: level, this low target puts joint 6 at its
-limit (the TCP stalls 15 cm short); 0.3 rad down it is reached in 22 steps."""
-KNOB_GRASP_QUAT = turned((1.0, 0.0, 0.0), KNOB_PITCH)
-
-
-def knob_point(z: float, angle: float, y: float = KNOB_Y) -> tuple[float, float, float]:
-    """The TCP on the push's arc about the knob centred at ``(KNOB_X, z)``."""
-    return (
-        round(KNOB_X + KNOB_RADIUS * float(np.sin(angle)), 4),
-        y,
-        round(z + KNOB_RADIUS * float(np.cos(angle)), 4),
-    )
-
-
-def _knob_front(z: float, side: int) -> tuple[float, float, float]:
-    """In front of the arc's start (``side`` -1) or end (+1), clear of the bar."""
-    return knob_point(z, KNOB_ARC[0 if side < 0 else -1], KNOB_FRONT_Y)
-
-
 NODES: dict[str, Node] = {
     n.name: n
     for n in (
@@ -180,10 +145,7 @@ NODES: dict[str, Node] = {
         _node("light-front", (-0.31, 0.52, LIGHT_Z), "closed"),
         _node("light-pushed", (LIGHT_END_X, 0.52, LIGHT_Z), "closed"),
         _node("microwave-front", (-0.642, 0.40, MICRO_Z)),
-        Node("bottom-knob-front", _knob_front(BOTTOM_KNOB_Z, -1), "closed", KNOB_GRASP_QUAT),
-        Node("bottom-knob-turned", _knob_front(BOTTOM_KNOB_Z, 1), "closed", KNOB_GRASP_QUAT),
-        Node("top-knob-front", _knob_front(TOP_KNOB_Z, -1), "closed", KNOB_GRASP_QUAT),
-        Node("top-knob-turned", _knob_front(TOP_KNOB_Z, 1), "closed", KNOB_GRASP_QUAT),
+        *BURNER_NODES,
         Node("microwave-handle", micro_point(0.0), "closed", FORWARD),
         Node("microwave-pulled", MICRO_PULLED, "closed", micro_quat(MICRO_ANGLES[-1])),
         Node("microwave-opened", MICRO_OPENED, "open", micro_quat(MICRO_ANGLES[-1])),
@@ -203,43 +165,6 @@ def _movement(
 ) -> SkillSpec:
     """``poses.movement`` between two of ``NODES``."""
     return movement(name, NODES[start], NODES[end], start_facts, steps)
-
-
-def _turn_knob(name: str, level: str, z: float, on: str, off: str) -> SkillSpec:
-    """Push the top of a burner knob's bar along +x with the closed fingers (the knob turns
-    negative), then back off."""
-    return SkillSpec(
-        name=name,
-        kind="push",
-        start=f"{level}-knob-front",
-        end=f"{level}-knob-turned",
-        waypoints=(
-            wp(
-                knob_point(z, KNOB_ARC[0]),
-                "closed",
-                steps=10,
-                reach=0.008,
-                orientation=KNOB_GRASP_QUAT,
-            ),
-            *(
-                wp(
-                    knob_point(z, a),
-                    "closed",
-                    steps=KNOB_ARC_STEPS,
-                    reach=0.008,
-                    orientation=KNOB_GRASP_QUAT,
-                )
-                for a in KNOB_ARC[1:]
-            ),
-            _at(f"{level}-knob-turned", steps=8),
-        ),
-        preconditions=frozenset({"hand-empty", off}),
-        add_effects=frozenset({on}),
-        del_effects=frozenset({off}),
-        script=SCRIPT,
-        success_tolerance=0.03,
-        max_steps=50,
-    )
 
 
 SKILLS: tuple[SkillSpec, ...] = (
@@ -270,10 +195,7 @@ SKILLS: tuple[SkillSpec, ...] = (
         "move-bottom-knob-to-light", "bottom-knob-turned", "light-front", ("bottom-burner-on",)
     ),
     _movement("move-top-knob-to-light", "top-knob-turned", "light-front", ("top-burner-on",)),
-    _turn_knob(
-        "turn-bottom-knob", "bottom", BOTTOM_KNOB_Z, "bottom-burner-on", "bottom-burner-off"
-    ),
-    _turn_knob("turn-top-knob", "top", TOP_KNOB_Z, "top-burner-on", "top-burner-off"),
+    *BURNER_SKILLS,
     SkillSpec(
         name="push-slide",
         kind="push",
@@ -455,9 +377,6 @@ def franka_domain() -> Domain:
     supports are ``PERCEPTIONS`` (``env``, the default, and the oracle ``sim``)."""
     from osg_control.franka.envs import BENCHMARK, make_franka_env
 
-    # The core's ``Domain.perceptions`` where it has that field (the lead's perception layer).
-    declared = {f.name for f in fields(Domain)}
-    extra: dict[str, Any] = {"perceptions": PERCEPTIONS} if "perceptions" in declared else {}
     return Domain(
         name="franka-kitchen",
         description="Gymnasium-Robotics FrankaKitchen-v1 (the D4RL kitchen), via its own env",
@@ -477,5 +396,5 @@ def franka_domain() -> Domain:
         benchmark=BENCHMARK,
         action_bounds=ACTION_BOUNDS,
         step_cost=STEP_COST,
-        **extra,
+        perceptions=PERCEPTIONS,
     )

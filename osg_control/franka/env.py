@@ -42,29 +42,18 @@ import numpy as np
 from osg_control.control.divergence import DivergenceWatch, non_finite_state
 from osg_control.domain.spec import Node, SkillSpec
 from osg_control.environment.actions import checked_action
-from osg_control.environment.options import (
-    GRIPPER_STATES,
-    Bounds,
-    check_facts_hold,
-    check_names,
-    check_start_options,
-    choice_option,
-    facts_option,
-)
+from osg_control.environment.options import check_facts_hold
 from osg_control.environment.poses import quat_rotation, sample_start_pose
 from osg_control.environment.success import GRIPPER_CLOSED_CMD, GRIPPER_OPEN_CMD, success_holds
-from osg_control.errors import DomainError, EnvOptionError, SimulationError
+from osg_control.errors import DomainError
 from osg_control.franka import poses, setup
 from osg_control.franka.arm import (
     ARM_JOINTS,
-    FINGER_JOINTS,
-    TCP_SITE,
     ArmIK,
     FrankaConfig,
+    ServoCommand,
     build_arm_model,
     rotation_step,
-    scale_to_action,
-    servo_response,
 )
 from osg_control.franka.perception import (
     ARM,
@@ -78,11 +67,7 @@ from osg_control.perception.percept import Percept
 ACTION_BOUNDS = np.array(poses.ACTION_BOUNDS)
 """Per-step bound of each action component: 4 cm, 0.2 rad (per 80 ms step), gripper."""
 __all__ = ["ACTION_BOUNDS", "REFERENCE_QUAT", "FrankaKitchenAdapter", "check_kitchen"]
-FINGER_BODIES = ("panda0_leftfinger", "panda0_rightfinger")
-RESET_OPTIONS = ("node", "position", "radius", "angle", "max_steps", "gripper", "facts")
-"""The options ``FrankaKitchenAdapter.reset`` knows; any other name is refused."""
-DRIVE_STEPS = Bounds(integer=True)
-"""The range of the ``max_steps`` reset option (an integer >= 0)."""
+RESET_OPTIONS = setup.RESET_OPTIONS
 
 
 def check_kitchen(env: Any) -> Any:
@@ -157,26 +142,10 @@ class FrankaKitchenAdapter(gym.Env):
         self.posture = np.asarray(self.kitchen.robot_env.init_qpos[:7], dtype=float).copy()
         self.arm_model = build_arm_model(self.kitchen)
         self.ik = ArmIK(self.arm_model, self.config, self.posture)
-        self._kp, self._fraction = servo_response(self.kitchen)
+        self.command = ServoCommand(self.kitchen)
         self._arm_dof = np.array([self.model.joint(j).dofadr[0] for j in ARM_JOINTS])
-        self._arm_qpos = np.array([self.model.joint(j).qposadr[0] for j in ARM_JOINTS])
-        finger_qpos = np.array([self.model.joint(j).qposadr[0] for j in FINGER_JOINTS])
-        robot_bodies = {
-            b for b in range(self.model.nbody) if self.model.body(b).name.startswith("panda0_")
-        }
-        self.sensors = FrankaSensors(
-            self.kitchen,
-            self.ik.tcp_pose,
-            world_of,
-            facts_of,
-            {
-                "arm_qpos": self._arm_qpos,
-                "finger_qpos": finger_qpos,
-                "tcp": self.model.site(TCP_SITE).id,
-                "finger_bodies": [self.model.body(b).id for b in FINGER_BODIES],
-                "robot_bodies": robot_bodies,
-            },
-        )
+        self.sensors = FrankaSensors(self.kitchen, self.ik.tcp_pose, world_of, facts_of)
+        self._arm_qpos = self.sensors.arm_qpos
         self.observation_space = gym.spaces.Box(-np.inf, np.inf, (10,), np.float64)
         self.action_space = gym.spaces.Box(-ACTION_BOUNDS, ACTION_BOUNDS, (7,), np.float64)
         self.action_bounds = ACTION_BOUNDS
@@ -187,6 +156,9 @@ class FrankaKitchenAdapter(gym.Env):
         self._observation: np.ndarray | None = None
         self._percept: Percept | None = None
         self.last_env_info: dict[str, Any] = {}
+        self.anchor_offsets: dict[str, np.ndarray] = {}
+        """Object frames' displacements (``domain.frames``): none, the kitchen's fixtures
+        and its nodes do not move."""
         self.script_rng = np.random.default_rng()
         self._noise_rng = np.random.default_rng()
 
@@ -203,10 +175,6 @@ class FrankaKitchenAdapter(gym.Env):
     def finger_forces(self) -> tuple[float, float]:
         """Truth: summed normal contact force [N] on each finger from things not the robot."""
         return self.sensors.finger_forces()
-
-    def grip_force(self) -> float:
-        """Truth: the squeeze [N], the smaller of the two fingers' contact forces."""
-        return float(min(self.finger_forces()))
 
     def true_state(self) -> np.ndarray:
         """Truth: the 10-D state of the simulator (the ``sim`` percept's state)."""
@@ -299,31 +267,7 @@ class FrankaKitchenAdapter(gym.Env):
                 its domain (checked before anything runs), or ``facts``/``gripper`` that do
                 not hold at the start.
         """
-        options = dict(options or {})
-        check_names(options, RESET_OPTIONS, "reset option")
-        node_name = options.get("node") or (self.skill.start if self.skill else None)
-        if node_name is None and "position" in options:
-            node_name = self.home
-        node = self.nodes[choice_option("node", node_name or self.home, self.nodes)]
-        centre, radius, angle = check_start_options(
-            options.get("position", node.position),
-            options.get("radius", 0.0),
-            options.get("angle", 0.0),
-        )
-        max_steps = options.get("max_steps", 40)
-        if not DRIVE_STEPS.admits(max_steps):
-            raise EnvOptionError(
-                f"reset option max_steps must be {DRIVE_STEPS.describe()}, got {max_steps!r}"
-            )
-        start_gripper = node.gripper if node_name is not None else "open"
-        gripper = choice_option("gripper", options.get("gripper", start_gripper), GRIPPER_STATES)
-        asked = options.get("facts")
-        facts = frozenset() if asked is None else facts_option(asked, self.world_facts)
-        if gripper != start_gripper:
-            raise EnvOptionError(
-                f"reset options contradict each other: gripper {gripper!r}, but the start "
-                f"{node_name or 'of the env'} has the gripper {start_gripper}"
-            )
+        start = setup.start_options(self, options)
         super().reset(seed=seed)
         self.script_rng = np.random.default_rng(seed)
         self._noise_rng = np.random.default_rng(None if seed is None else [seed, 1])
@@ -333,16 +277,20 @@ class FrankaKitchenAdapter(gym.Env):
         self._steps = 0
         if self.skill is not None and self.skill.start in self.setups:
             setup.set_up(self, self.skill.start, seed)
-        if node_name is not None:
+        if start.node_name is not None:
             position, rotation = sample_start_pose(
-                self.np_random, centre, radius, angle, quat_rotation(node.orientation)
+                self.np_random,
+                start.centre,
+                start.radius,
+                start.angle,
+                quat_rotation(start.node.orientation),
             )
             with self.outside_the_skill():  # the drive is not the skill's episode
-                setup.drive_to(self, position, rotation, gripper, max_steps=max_steps)
+                setup.drive_to(self, position, rotation, start.gripper, start.max_steps)
         self._steps = 0
         self._episode_over = False
         world = self.world_state()
-        check_facts_hold(facts, self.facts_of(world), "the env's own reset")
+        check_facts_hold(start.facts, self.facts_of(world), "the env's own reset")
         self._perceive()
         return self.observe(), self._info(world)
 
@@ -352,6 +300,7 @@ class FrankaKitchenAdapter(gym.Env):
         self._observation = observation_vector(obs)
         self.last_env_info = dict(env_info)
         self._gripper_cmd = GRIPPER_OPEN_CMD
+        self.sensors.forget()
 
     @contextmanager
     def outside_the_skill(self) -> Iterator[None]:
@@ -362,17 +311,6 @@ class FrankaKitchenAdapter(gym.Env):
             yield
         finally:
             self.skill = skill
-
-    def drive_to(
-        self,
-        position: np.ndarray,
-        rotation: np.ndarray,
-        gripper: str,
-        max_steps: int = 40,
-        tolerance: float = 0.01,
-    ) -> int:
-        """``franka.setup.drive_to`` (on the true TCP): the steps used."""
-        return setup.drive_to(self, position, rotation, gripper, max_steps, tolerance)
 
     @property
     def steps(self) -> int:
@@ -402,15 +340,11 @@ class FrankaKitchenAdapter(gym.Env):
         """The env's 9-D action for a (clipped) 7-D TCP action at the perceived state."""
         q, pos, rot, bias = self._controlled()
         velocity = self.ik.velocity(q, pos + action[:3], rotation_step(rot, action[3:6]), self.dt)
-        return self._arm_action(velocity, bias)
+        return self.arm_action(velocity, bias)
 
-    def _arm_action(self, velocity: np.ndarray, bias: np.ndarray) -> np.ndarray:
-        """IK joint velocity -> the env's 9-D action: each joint's step offset divided by
-        its servo's one-step response, plus the offset that holds gravity (``bias /
-        kp``), scaled as a whole (see ``servo_response``); fingers +-1."""
-        offset = velocity * self.dt / self._fraction + bias / self._kp
-        finger = -1.0 if self._gripper_cmd == GRIPPER_CLOSED_CMD else 1.0
-        return np.concatenate([scale_to_action(offset, self.dt), [finger, finger]])
+    def arm_action(self, velocity: np.ndarray, bias: np.ndarray) -> np.ndarray:
+        """``ServoCommand.action`` with the gripper's command."""
+        return self.command.action(velocity, bias, self._gripper_cmd == GRIPPER_CLOSED_CMD)
 
     def step(self, action: np.ndarray) -> tuple[np.ndarray, float, bool, bool, dict[str, Any]]:
         """One 80 ms step of the env with the IK's action (see module docstring); a
@@ -464,27 +398,13 @@ class FrankaKitchenAdapter(gym.Env):
 
     # ----------------------------------------------------------------- joint reset
     def joint_reset(self, max_steps: int = 20, tolerance: float = 0.05) -> int:
-        """Drive the perceived joints toward the env's reset posture while the perceived
-        TCP holds its pose (a strong posture task under the frame task); returns the steps
-        used (each step refreshes the percept)."""
-        _q, pos, rot, _bias = self._controlled()
-        previous = np.inf
-        for step in range(max_steps):
-            q, _pos, _rot, bias = self._controlled()
-            error = float(np.abs(q - self.posture).max())
-            if error < tolerance or error > previous - 1e-4:
-                return step
-            previous = error
-            action = None
-            if non_finite_state(self.data, ("qpos",)) is None:
-                velocity = self.ik.velocity(q, pos, rot, self.dt, posture_cost=0.05)
-                action = self._arm_action(velocity, bias)
-            *_, terminated, truncated, info = self._env_step(action, np.zeros(7))
-            if "failure" in info:
-                raise SimulationError(f"joint reset: {info['failure']}")
-            if terminated or truncated:
-                return step + 1
-        return max_steps
+        """``franka.setup.joint_reset`` on the perceived joints: the steps used (each step
+        refreshes the percept).
+
+        Raises:
+            SimulationError: the physics diverged.
+        """
+        return setup.joint_reset(self, max_steps, tolerance)
 
     def render(self) -> Any:  # type: ignore[override]
         """The wrapped env's frame (its own render mode)."""

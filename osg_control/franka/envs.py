@@ -109,7 +109,8 @@ def make_franka_env(
     if env is None:
         import gymnasium
 
-        kwargs: dict[str, Any] = {**(env_kwargs or {}), "tasks_to_complete": list(tasks or TASK_FACTS)}
+        kwargs: dict[str, Any] = dict(env_kwargs or {})
+        kwargs["tasks_to_complete"] = list(tasks or TASK_FACTS)
         if render_mode is not None:
             kwargs["render_mode"] = render_mode
         if max_episode_steps is not None:

@@ -1,26 +1,92 @@
-"""The adapter's reset helpers: set-ups (a skill's start world made by scripts through the
-env's own steps) and the drive to a start pose.
+"""The adapter's multi-step motions: the reset's options, set-ups (a skill's start world
+made by scripts through the env's own steps), the drive to a start pose, and the joint
+reset between skills.
 
-Both prepare an episode's start; they are not the episode. They run on the simulator's
-truth (the true state for the set-up scripts, the true TCP for the drive): an evaluation's
-perception and its noise are the episode's, not theirs.
+Set-ups and the drive prepare an episode's start; they are not the episode. They run on
+the simulator's truth (the true state for the set-up scripts, the true TCP for the drive):
+an evaluation's perception and its noise are the episode's, not theirs. The joint reset is
+part of the episode: it reads the perceived joints (``FrankaKitchenAdapter._controlled``).
 """
 
 from __future__ import annotations
 
+from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
 
-from osg_control.domain.spec import ScriptParams
+from osg_control.domain.spec import Node, ScriptParams
 from osg_control.environment.actions import scale_into
+from osg_control.environment.options import (
+    GRIPPER_STATES,
+    Bounds,
+    check_names,
+    check_start_options,
+    choice_option,
+    facts_option,
+)
 from osg_control.environment.success import GRIPPER_CLOSED_CMD, GRIPPER_OPEN_CMD, effects_hold
-from osg_control.errors import SimulationError
+from osg_control.errors import EnvOptionError, SimulationError
+
+RESET_OPTIONS = ("node", "position", "radius", "angle", "max_steps", "gripper", "facts")
+"""The options ``FrankaKitchenAdapter.reset`` knows; any other name is refused."""
+DRIVE_STEPS = Bounds(integer=True)
+"""The range of the ``max_steps`` reset option (an integer >= 0)."""
 
 NOISE_FREE = ScriptParams(threshold_std=0.0, noise_std=0.0)
 """Algorithm 1 without its noise: a set-up's first attempt."""
 SETUP_ATTEMPTS = 5
 """How often ``reset`` retries a skill's set-up (a noisy script) before giving up."""
+
+
+@dataclass(frozen=True)
+class Start:
+    """The reset's options, checked: where the drive goes (``node_name`` None: no drive)."""
+
+    node_name: str | None
+    node: Node
+    centre: np.ndarray
+    radius: float
+    angle: float
+    max_steps: int
+    gripper: str
+    facts: frozenset[str]
+
+
+def start_options(adapter: Any, options: dict[str, Any] | None) -> Start:
+    """Check the reset options (see ``FrankaKitchenAdapter.reset``) before anything runs.
+
+    Raises:
+        EnvOptionError: an unknown option name (the known ones listed), a value out of its
+            domain, or a ``gripper`` the start does not have.
+    """
+    options = dict(options or {})
+    check_names(options, RESET_OPTIONS, "reset option")
+    skill = adapter.skill
+    node_name = options.get("node") or (skill.start if skill else None)
+    if node_name is None and "position" in options:
+        node_name = adapter.home
+    node = adapter.nodes[choice_option("node", node_name or adapter.home, adapter.nodes)]
+    centre, radius, angle = check_start_options(
+        options.get("position", node.position),
+        options.get("radius", 0.0),
+        options.get("angle", 0.0),
+    )
+    max_steps = options.get("max_steps", 40)
+    if not DRIVE_STEPS.admits(max_steps):
+        raise EnvOptionError(
+            f"reset option max_steps must be {DRIVE_STEPS.describe()}, got {max_steps!r}"
+        )
+    start_gripper = node.gripper if node_name is not None else "open"
+    gripper = choice_option("gripper", options.get("gripper", start_gripper), GRIPPER_STATES)
+    asked = options.get("facts")
+    facts = frozenset() if asked is None else facts_option(asked, adapter.world_facts)
+    if gripper != start_gripper:
+        raise EnvOptionError(
+            f"reset options contradict each other: gripper {gripper!r}, but the start "
+            f"{node_name or 'of the env'} has the gripper {start_gripper}"
+        )
+    return Start(node_name, node, centre, radius, angle, max_steps, gripper, facts)
 
 
 def set_up(adapter: Any, node: str, seed: int | None) -> None:
@@ -79,10 +145,38 @@ def drive_to(
         turn = rotation_error(rot, rotation)
         if np.linalg.norm(error) < tolerance and np.linalg.norm(turn) < 0.05:
             return step
-        action = np.concatenate(
-            [scale_into(error, bounds[0]), scale_into(turn, bounds[3]), [g]]
-        )
+        action = np.concatenate([scale_into(error, bounds[0]), scale_into(turn, bounds[3]), [g]])
         *_, terminated, truncated, _info = adapter.step(action)
+        if terminated or truncated:
+            return step + 1
+    return max_steps
+
+
+def joint_reset(adapter: Any, max_steps: int, tolerance: float) -> int:
+    """Drive the perceived joints toward the env's reset posture while the perceived TCP
+    holds its pose (a strong posture task under the frame task), through the adapter's
+    steps; stop when within ``tolerance`` [rad] or no longer improving; the steps used.
+
+    Raises:
+        SimulationError: the physics diverged.
+    """
+    from osg_control.control.divergence import non_finite_state
+
+    _q, pos, rot, _bias = adapter._controlled()
+    previous = np.inf
+    for step in range(max_steps):
+        q, _pos, _rot, bias = adapter._controlled()
+        error = float(np.abs(q - adapter.posture).max())
+        if error < tolerance or error > previous - 1e-4:
+            return step
+        previous = error
+        action = None
+        if non_finite_state(adapter.data, ("qpos",)) is None:
+            velocity = adapter.ik.velocity(q, pos, rot, adapter.dt, posture_cost=0.05)
+            action = adapter.arm_action(velocity, bias)
+        *_, terminated, truncated, info = adapter._env_step(action, np.zeros(7))
+        if "failure" in info:
+            raise SimulationError(f"joint reset: {info['failure']}")
         if terminated or truncated:
             return step + 1
     return max_steps
