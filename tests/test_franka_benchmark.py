@@ -63,3 +63,34 @@ def test_no_env_step_after_the_episode_is_over_and_never_past_280(index, monkeyp
     assert len(ends) == result["steps"] <= 280
     assert True not in ends[:-1], f"a step after the episode ended ({result})"
     assert ends[-1] or result["failure"] is None
+
+
+@pytest.mark.parametrize(
+    ("extra", "message"),
+    [
+        (["--env-kwargs", "[1]"], "must be a JSON object"),
+        (["--env-kwargs", "{nope"], "not JSON"),
+        (["--perception", "robot"], "does not support perception 'robot'"),
+        (["--perception", "sim", "--noise", "0.02"], "no --noise"),
+        (["--perception", "x-ray"], "unknown perception 'x-ray'"),
+    ],
+)
+def test_bad_benchmark_options_exit_2_with_nothing_run(extra, message, capsys) -> None:
+    try:
+        code = osg(["--domain", "franka-kitchen", "evaluate", "benchmark", *extra])
+    except SystemExit as stop:  # argparse's own refusal of an option's value
+        code = stop.code
+    assert code == 2
+    assert message in capsys.readouterr().err
+
+
+def test_the_benchmark_json_names_its_perception_and_the_env_options(capsys) -> None:
+    argv = ["--domain", "franka-kitchen", "evaluate", "benchmark", "--episodes", "1",
+            "--workers", "1", "--env-kwargs", '{"robot_noise_ratio": 0.01}', "--json"]  # fmt: skip
+    assert osg(argv) == 0
+    import json
+
+    summary = json.loads(capsys.readouterr().out)
+    assert summary["perception"]["name"] == "env" and summary["oracle"] is False
+    assert summary["env_kwargs"] == {"robot_noise_ratio": 0.01}
+    assert summary["max_steps"] <= 280
