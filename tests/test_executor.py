@@ -10,9 +10,10 @@ import pytest
 
 from osg_control.domain.registry import get_domain
 from osg_control.execution.defaults import load_defaults, read_manifest
-from osg_control.execution.executor import RESULT_SCHEMA_VERSION, task_env_config
 from osg_control.execution.executor import Executor as DomainExecutor
+from osg_control.execution.executor import task_env_config
 from osg_control.execution.locate import node_at, skill_on_path
+from osg_control.execution.results import RESULT_SCHEMA_VERSION
 from osg_control.kitchen.env import EnvConfig, KitchenEnv
 from osg_control.kitchen.skills import NODES, SKILLS, SKILLS_BY_NAME
 from osg_control.perception.spec import PerceptionSpec

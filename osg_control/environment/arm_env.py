@@ -66,7 +66,8 @@ from osg_control.environment.options import (
     choice_option,
     facts_option,
 )
-from osg_control.environment.poses import canonical_quat, quat_rotation, sample_start_pose
+from osg_control.environment.poses import quat_rotation, sample_start_pose
+from osg_control.environment.sensing import ArmSensors
 from osg_control.environment.success import GRIPPER_CLOSED_CMD, GRIPPER_OPEN_CMD, success_holds
 from osg_control.errors import EnvOptionError, SimulationError
 from osg_control.perception.percept import Percept
@@ -234,7 +235,10 @@ class ArmEnv(gym.Env):
         self._episode_over = False
         self._renderer: mujoco.Renderer | None = None
         self._sensor_slices = sensor_slices(self.world_sensors)
-        self._fk_data: mujoco.MjData | None = None
+        self.sensors = ArmSensors(
+            self.model, self._arm_qpos, self._finger_qpos, self._gripper_act, self._tcp
+        )
+        """The arm's simulated encoders, gripper and TCP readouts."""
         self._percept: Percept | None = None
         self.anchor_offsets: dict[str, np.ndarray] = {}
         """Each object's true displacement from its nominal place at the last reset (the
@@ -345,16 +349,6 @@ class ArmEnv(gym.Env):
         what the robot believes)."""
         return self.facts_of(self.read_world())
 
-    def _true_obs(self) -> np.ndarray:
-        pos, _ = self._true_tcp()
-        quat = np.zeros(4)
-        mujoco.mju_mat2Quat(quat, self.data.site_xmat[self._tcp])
-        fingers = self.data.qpos[self._finger_qpos]
-        force = abs(float(self.data.actuator_force[self._gripper_act]))
-        return np.concatenate(
-            [pos, canonical_quat(quat), [self._gripper_cmd, force, float(fingers.sum())]]
-        )
-
     def observe(self) -> np.ndarray:
         """The perceived 10-D state of the latest percept (a copy)."""
         return self.percept().state.copy()
@@ -382,43 +376,20 @@ class ArmEnv(gym.Env):
                 f"read_world gives {truth.shape}; declare a sensor for every world field"
             )
         if spec.name == "sim":
-            state, joints, world = self._true_obs(), self.arm_q, truth
+            state, joints, world = (
+                self.sensors.true_state(self.data, self._gripper_cmd),
+                self.arm_q,
+                truth,
+            )
         else:
-            state, joints = self._perceived_state(spec)
+            state, joints = self.sensors.perceived(
+                self.data, self._gripper_cmd, spec, self.np_random
+            )
             world = self.detect_world(
                 state, noisy_world(spec, self.np_random, truth, self._sensor_slices)
             )
         self._percept = Percept(state, joints, world, self.facts_of(world))
         return self._percept
-
-    def _perceived_state(self, spec: PerceptionSpec) -> tuple[np.ndarray, np.ndarray]:
-        """The 10-D state and the joints: the paper's noisy TCP, or the TCP by forward
-        kinematics of noisy encoders with a noisy finger width."""
-        if spec.joint_noise == 0.0 and spec.finger_noise == 0.0:
-            state = self._true_obs()
-            if spec.tcp_noise > 0:
-                state[:3] += self.np_random.normal(0.0, spec.tcp_noise, 3)
-            return state, self.arm_q
-        joints = self.arm_q + self.np_random.normal(0.0, spec.joint_noise, len(ARM_JOINTS))
-        if self._fk_data is None:
-            self._fk_data = mujoco.MjData(self.model)
-        self._fk_data.qpos[self._arm_qpos] = joints
-        mujoco.mj_kinematics(self.model, self._fk_data)
-        quat = np.zeros(4)
-        mujoco.mju_mat2Quat(quat, self._fk_data.site_xmat[self._tcp])
-        fingers = float(self.data.qpos[self._finger_qpos].sum())
-        fingers += float(self.np_random.normal(0.0, spec.finger_noise))
-        force = abs(float(self.data.actuator_force[self._gripper_act]))
-        state = np.concatenate(
-            [
-                self._fk_data.site_xpos[self._tcp],
-                canonical_quat(quat),
-                [self._gripper_cmd, force, fingers],
-            ]
-        )
-        if spec.tcp_noise > 0:
-            state[:3] += self.np_random.normal(0.0, spec.tcp_noise, 3)
-        return state, joints
 
     # ----------------------------------------------------------------- reset
     def reset(

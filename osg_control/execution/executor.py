@@ -24,9 +24,9 @@ from __future__ import annotations
 
 import time
 from collections.abc import Callable, Iterable, Mapping
-from dataclasses import asdict, dataclass, field, replace
+from dataclasses import replace
 from pathlib import Path
-from typing import Any, Protocol
+from typing import Any
 
 import numpy as np
 
@@ -47,6 +47,12 @@ from osg_control.environment.success import success_holds
 from osg_control.errors import SimulationError
 from osg_control.execution.locate import node_at, recorded_world_holds, skill_on_path
 from osg_control.execution.objects import ObjectTracker
+from osg_control.execution.results import (
+    EntryClassifier,
+    ExecutionResult,
+    Policy,
+    SkillOutcome,
+)
 from osg_control.perception.spec import PerceptionSpec
 from osg_control.planning.api import graph_domain, plan_for_goal
 from osg_control.planning.graph import SkillGraph
@@ -61,62 +67,12 @@ EPISODE_ENDED = "the env ended its episode"
 truncated): by Gymnasium's protocol no further step is taken, so the execution ends there
 and succeeds if its goal facts hold."""
 
-RESULT_SCHEMA_VERSION = 1
 ENTRY_MARGIN = 0.5
 """A movement skill is an entry candidate when its classifier probability is at least this
 share of the best one's (``Executor._classify``)."""
 GRASP_GRACE_STEPS = 5
 """Steps a watched fact may be false before the skill is stopped (a grasp's contact may
 flicker for a few steps in the offline data)."""
-
-
-class Policy(Protocol):
-    """Maps a 10-D observation to a 7-D action."""
-
-    def __call__(self, obs: np.ndarray) -> np.ndarray:
-        """The action for one observation."""
-        ...
-
-
-class EntryClassifier(Protocol):
-    """Scores the movement skills that may bring a state onto the graph."""
-
-    classes: tuple[str, ...]
-
-    def predict_proba(self, states: np.ndarray) -> np.ndarray:
-        """Class probabilities (in ``classes`` order) for one state."""
-        ...
-
-
-@dataclass
-class SkillOutcome:
-    """What happened when one option ran."""
-
-    skill: str
-    success: bool
-    steps: int
-    seconds: float
-    reset_steps: int = 0
-    failure: str | None = None
-
-
-@dataclass
-class ExecutionResult:
-    """The structured result of ``Executor.execute`` (stable JSON schema, see ``to_dict``)."""
-
-    goal: list[str]
-    success: bool
-    entry_skill: str | None
-    plan: list[str]
-    outcomes: list[SkillOutcome] = field(default_factory=list)
-    replans: int = 0
-    failure: str | None = None
-    final_facts: list[str] = field(default_factory=list)
-    timings: dict[str, float] = field(default_factory=dict)
-
-    def to_dict(self) -> dict[str, Any]:
-        """A JSON-ready dictionary (``schema_version`` first)."""
-        return {"schema_version": RESULT_SCHEMA_VERSION, **asdict(self)}
 
 
 def task_env_config(perception: PerceptionSpec) -> EnvConfig:

@@ -1,0 +1,84 @@
+"""The arm's simulated sensors: the 10-D state a perception gives, from the simulator.
+
+``ArmSensors`` reads what the robot measures of itself: the TCP pose (true, with the
+paper's noise on its position, or by forward kinematics of noisy joint encoders on a
+scratch copy of the model), the latched gripper command, the gripper motor's force and the
+finger width (with its own noise). The world part of a percept is the domain's
+(``ArmEnv.detect_world`` over ``perception.sensors.noisy_world``).
+"""
+
+from __future__ import annotations
+
+import mujoco
+import numpy as np
+
+from osg_control.environment.poses import canonical_quat
+from osg_control.perception.spec import PerceptionSpec
+
+
+class ArmSensors:
+    """Encoders, gripper and TCP readouts of one arm in one model.
+
+    Args:
+        model: the compiled scene.
+        arm_qpos: the arm joints' qpos addresses (a slice or an index array).
+        finger_qpos: the finger joints' qpos addresses.
+        gripper_actuator: the gripper actuator's id (its force is the grip force).
+        tcp_site: the TCP site's id.
+    """
+
+    def __init__(
+        self,
+        model: mujoco.MjModel,
+        arm_qpos: slice | np.ndarray,
+        finger_qpos: np.ndarray,
+        gripper_actuator: int,
+        tcp_site: int,
+    ) -> None:
+        self.model = model
+        self.arm_qpos = arm_qpos
+        self.finger_qpos = finger_qpos
+        self.gripper_actuator = gripper_actuator
+        self.tcp_site = tcp_site
+        self._fk: mujoco.MjData | None = None
+
+    def true_state(self, data: mujoco.MjData, gripper_cmd: float) -> np.ndarray:
+        """The exact 10-D state (the simulator's TCP site)."""
+        return self._state(data, data, gripper_cmd, float(data.qpos[self.finger_qpos].sum()))
+
+    def perceived(
+        self,
+        data: mujoco.MjData,
+        gripper_cmd: float,
+        spec: PerceptionSpec,
+        rng: np.random.Generator,
+    ) -> tuple[np.ndarray, np.ndarray]:
+        """The perceived 10-D state and arm joints under ``spec``: the TCP by forward
+        kinematics of the encoders (with their noise), the finger width with its noise, then
+        the paper's noise on the TCP position, if any; draws nothing for an exact sensor."""
+        joints = np.array(data.qpos[self.arm_qpos], dtype=float)
+        if spec.joint_noise == 0.0 and spec.finger_noise == 0.0:
+            state = self.true_state(data, gripper_cmd)
+        else:
+            joints = joints + rng.normal(0.0, spec.joint_noise, joints.shape)
+            if self._fk is None:
+                self._fk = mujoco.MjData(self.model)
+            self._fk.qpos[self.arm_qpos] = joints
+            mujoco.mj_kinematics(self.model, self._fk)
+            fingers = float(data.qpos[self.finger_qpos].sum())
+            fingers += float(rng.normal(0.0, spec.finger_noise))
+            state = self._state(self._fk, data, gripper_cmd, fingers)
+        if spec.tcp_noise > 0:
+            state[:3] += rng.normal(0.0, spec.tcp_noise, 3)
+        return state, joints
+
+    def _state(
+        self, pose: mujoco.MjData, data: mujoco.MjData, gripper_cmd: float, fingers: float
+    ) -> np.ndarray:
+        """The 10-D state with the TCP of ``pose`` and the gripper of ``data``."""
+        quat = np.zeros(4)
+        mujoco.mju_mat2Quat(quat, pose.site_xmat[self.tcp_site])
+        force = abs(float(data.actuator_force[self.gripper_actuator]))
+        return np.concatenate(
+            [pose.site_xpos[self.tcp_site], canonical_quat(quat), [gripper_cmd, force, fingers]]
+        )
