@@ -11,7 +11,7 @@
     (:action grab-cube
         :parameters ()
         :precondition (and (at above-cube) (cube-on-counter) (hand-empty))
-        :effect (and (holding-cube) (not (hand-empty)) (at cube-grasped) (not (at above-cube)) (increase (total-cost) 89))
+        :effect (and (holding-cube) (not (hand-empty)) (at cube-grasped) (not (at above-cube)) (increase (total-cost) 62))
     )
      (:action grab-handle
         :parameters ()
@@ -56,7 +56,7 @@
      (:action move-home-to-cube
         :parameters ()
         :precondition (and (at home) (hand-empty))
-        :effect (and (at above-cube) (not (at home)) (increase (total-cost) 1))
+        :effect (and (at above-cube) (not (at home)) (increase (total-cost) 5))
     )
      (:action move-home-to-door
         :parameters ()
@@ -76,7 +76,7 @@
      (:action pick-up-cube
         :parameters ()
         :precondition (and (at cube-grasped) (cube-on-counter) (holding-cube))
-        :effect (and (cube-lifted) (not (cube-on-counter)) (at cube-lifted) (not (at cube-grasped)) (increase (total-cost) 1))
+        :effect (and (cube-lifted) (not (cube-on-counter)) (at cube-lifted) (not (at cube-grasped)) (increase (total-cost) 5))
     )
      (:action place-cube-in-cabinet
         :parameters ()

@@ -96,6 +96,8 @@ class Executor:
             with this gain, carried across the skills of an execution), and locate the
             robot on the graph from it; None uses the raw observation (the paper's
             protocol).
+        goal_aware_entry: choose the entry movement skill by the cost to the goal
+            (``_classify``); False: the classifier's argmax (the paper's executor).
         motion_model: the filter's ``(k_now, k_prev)`` (the defaults' own,
             ``load_executor``; default the kitchen's fit).
         graph: the skill graph whose costs plans minimise: the cost model, e.g. the
@@ -114,6 +116,7 @@ class Executor:
         max_replans: int = 2,
         reset_joints: bool = True,
         filter_gain: float | None = None,
+        goal_aware_entry: bool = True,
         motion_model: tuple[float, float] = MOTION_MODEL,
     ) -> None:
         if not isinstance(graph, SkillGraph):
@@ -134,6 +137,7 @@ class Executor:
         self.max_replans = max_replans
         self.reset_joints = reset_joints
         self.filter_gain = filter_gain
+        self.goal_aware_entry = goal_aware_entry
         self.motion_model = motion_model
         self.on_step: Callable[[SkillEnv], Any] | None = None
         """Called after every env step (e.g. to record video frames)."""
@@ -180,7 +184,7 @@ class Executor:
         if on_path is not None:
             return on_path
         if self.domain.hand_empty in facts:
-            return self._classify(obs, facts, goal)
+            return self._classify(obs, facts, goal if self.goal_aware_entry else None)
         applicable = [s for s in self.skills.values() if s.preconditions <= facts]
         fallback = applicable or list(self.skills.values())
         nodes = shifted_nodes(self.domain, offsets or {})
