@@ -13,6 +13,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from osg_control.domain.frames import in_skill_frame, offsets_of
 from osg_control.environment.arm_env import ACTION_BOUNDS, ArmEnv
 
 START = {"radius": 0.05, "angle": 0.1}
@@ -44,17 +45,28 @@ def peak_joint_speed(
     if env.skill is None:
         raise ValueError("peak_joint_speed needs an env made with skill=...")
     budget = env.skill.max_steps
+    anchor = env.nodes[env.skill.end].anchor
     peak, successes = 0.0, 0
     for episode in range(episodes):
         obs, _ = env.reset(seed=episode, options=START)
         for _ in range(budget):
-            obs, _reward, terminated, truncated, info = env.step(policy(obs))
+            obs, _reward, terminated, truncated, info = env.step(
+                policy(_skill_frame(env, anchor, obs))
+            )
             if terminated or truncated:
                 break
         successes += bool(info["success"])
         env.joint_reset()
         peak = max(peak, env.peak_joint_speed_ratio)
     return SpeedCheck(peak, successes)
+
+
+def _skill_frame(env: ArmEnv, anchor: str | None, obs: np.ndarray) -> np.ndarray:
+    """The observation in the skill's frame: relative to its object as perceived."""
+    if anchor is None:
+        return obs
+    offsets = offsets_of(env.objects, tuple(env.world_sensors), env.percept().world)
+    return in_skill_frame(obs, offsets[anchor])
 
 
 def full_speed_peak(env: ArmEnv, direction: str, steps: int = FULL_SPEED_STEPS) -> float:
