@@ -143,12 +143,25 @@ def test_bundle_round_trip(domain: Domain, tmp_path: Path) -> None:
     assert ModelBundle.read(tmp_path / "nothing") == ModelBundle(tmp_path / "nothing")
 
 
-def test_a_manifest_without_a_perception_reads_as_unrecorded() -> None:
+def test_a_manifest_without_a_perception_reads_as_unrecorded(tmp_path: Path) -> None:
+    kitchen = get_domain("kitchen")
+    assert kitchen.defaults_dir is not None
+    manifest = json.loads((kitchen.defaults_dir / "manifest.json").read_text())
+    for key in ("perception", "noise", "filter_gain", "motion_model"):
+        manifest.pop(key, None)
+    (tmp_path / "manifest.json").write_text(json.dumps(manifest))
+    old = ModelBundle.read(tmp_path, kitchen)
+    assert old.perception is None and old.noise is None and old.motion_model is None
+    assert old.success_rates == load_defaults(kitchen).manifest[RATES_KEY]
+
+
+def test_the_shipped_kitchen_bundle_records_how_its_rates_were_measured() -> None:
     kitchen = get_domain("kitchen")
     assert kitchen.defaults_dir is not None
     shipped = ModelBundle.read(kitchen.defaults_dir, kitchen)
-    assert shipped.perception is None and shipped.noise is None
-    assert shipped.success_rates == load_defaults(kitchen).manifest[RATES_KEY]
+    assert shipped.perception == PerceptionSpec("paper", tcp_noise=0.02)
+    assert shipped.noise == 0.02 and shipped.filter_gain == 0.2
+    assert shipped.motion_model is not None
     assert shipped.provenance["command"].startswith("osg --domain kitchen reproduce")
 
 
