@@ -92,8 +92,7 @@ def shifted_skill(skill: SkillSpec, offset: np.ndarray) -> SkillSpec:
     if not np.any(offset):
         return skill
     waypoints = tuple(
-        replace(w, position=tuple(float(v) for v in np.asarray(w.position) + offset))
-        for w in skill.waypoints
+        replace(w, position=_xyz(np.asarray(w.position) + offset)) for w in skill.waypoints
     )
     return replace(skill, waypoints=waypoints)
 
@@ -103,6 +102,11 @@ def shifted_nodes(domain: Domain, offsets: Offsets) -> dict[str, Node]:
     if not any(np.any(v) for v in offsets.values()):
         return dict(domain.nodes)
     return {
-        name: replace(node, position=tuple(float(v) for v in node_position(domain, name, offsets)))
+        name: replace(node, position=_xyz(node_position(domain, name, offsets)))
         for name, node in domain.nodes.items()
     }
+
+
+def _xyz(values: np.ndarray) -> tuple[float, float, float]:
+    """A position as the three floats a ``Node`` or ``Waypoint`` holds."""
+    return float(values[0]), float(values[1]), float(values[2])

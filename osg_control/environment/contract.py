@@ -48,6 +48,10 @@ class SkillEnv(Protocol):
         """Bring the joints toward the home posture with the TCP held; the steps used."""
         ...
 
+    def render(self) -> Any:
+        """A frame of the scene (``render_mode="rgb_array"``), or None."""
+        ...
+
     def facts(self) -> frozenset[str]:
         """Truth (scoring): the facts that hold in the simulator."""
         ...

@@ -13,6 +13,7 @@ import numpy as np
 
 from osg_control.data.collect import placed_start_options
 from osg_control.domain.frames import sample_placements
+from osg_control.environment.contract import SkillEnv
 from osg_control.execution.executor import Executor
 from osg_control.kitchen.env import KitchenEnv
 from osg_control.kitchen.skills import CUBE
@@ -45,9 +46,11 @@ class CubeKnock:
         self.fired = False
         self._held = 0
 
-    def __call__(self, env: KitchenEnv) -> None:
+    def __call__(self, env: SkillEnv) -> None:
         if self.fired:
             return
+        if not isinstance(env, KitchenEnv):
+            raise TypeError(f"CubeKnock knocks the kitchen's cube, not {type(env).__name__}'s")
         self._held = self._held + 1 if env.world().cube_grasped else 0
         if self._held >= GRASP_SETTLE_STEPS:
             displace_cube(env, self.offset)
