@@ -5,7 +5,9 @@ object does not move, so its estimate is the running mean of its readings. A rea
 than ``JUMP`` from the mean means the object was moved (a grasp that nudged it, a push): the
 mean restarts there. While the robot holds the object (its ``held_fact`` perceived) the
 estimate is frozen where it was picked up: the frame of a skill that carries the object
-(e.g. lifting it) stays where the object lay.
+(e.g. lifting it) stays where the object lay. An object first seen already held (a start
+with it in the hand) is placed at the TCP of that first reading plus the running mean of
+its readings relative to the TCP.
 """
 
 from __future__ import annotations
@@ -29,25 +31,48 @@ class ObjectTracker:
         self.jump = jump
         self._mean: dict[str, np.ndarray] = {}
         self._count: dict[str, int] = {}
+        self._in_hand: dict[str, tuple[np.ndarray, np.ndarray, int]] = {}
+        """Objects first seen already held: the TCP then, and the running mean (and count)
+        of the object's reading relative to the TCP."""
 
     def reset(self) -> None:
         """Forget every estimate (a new episode)."""
         self._mean.clear()
         self._count.clear()
+        self._in_hand.clear()
 
     def update(self, percept: Percept) -> None:
         """Fold in one percept's object readings."""
         readings = offsets_of(self.domain.objects, self.domain.world_fields, percept.world)
         for frame in self.domain.objects:
             name, reading = frame.name, readings[frame.name]
-            if frame.held_fact in percept.facts and name in self._mean:
+            held = frame.held_fact in percept.facts
+            if held and (name not in self._mean or name in self._in_hand):
+                self._fold_in_hand(name, reading, percept.position)
+                continue
+            if held:
                 continue  # held: frozen where it was picked up
+            self._in_hand.pop(name, None)
             mean = self._mean.get(name)
             if mean is None or float(np.linalg.norm(reading - mean)) > self.jump:
                 self._mean[name], self._count[name] = reading, 1
             else:
                 self._count[name] += 1
                 self._mean[name] = mean + (reading - mean) / self._count[name]
+
+    def _fold_in_hand(self, name: str, reading: np.ndarray, tcp: np.ndarray) -> None:
+        """An object first seen held: where it was picked up is the TCP then plus the
+        object's mean place in the hand (the hand carries it, so its reading relative to
+        the TCP averages even while it moves)."""
+        relative = reading - np.array([tcp[0], tcp[1], 0.0])
+        if name not in self._in_hand:
+            self._in_hand[name] = (np.array([tcp[0], tcp[1], 0.0]), relative, 1)
+        else:
+            start, mean, count = self._in_hand[name]
+            count += 1
+            self._in_hand[name] = (start, mean + (relative - mean) / count, count)
+        start, mean, count = self._in_hand[name]
+        self._mean[name], self._count[name] = start + mean, count
 
     def offsets(self) -> dict[str, np.ndarray]:
         """Each object's estimated displacement (copies)."""
