@@ -148,3 +148,20 @@ def test_only_skills_that_touch_the_cube_are_recorded_with_it_moved() -> None:
     assert not touching & {"grab-handle", "slide-door-open", "push-valve-open"}
     episode = run_scripted_episode(KITCHEN, KITCHEN.skill("grab-handle"), 0, 3)
     np.testing.assert_allclose(episode.world_states[0, 2:4], CUBE.nominal, atol=1e-3)
+
+
+def test_an_object_first_seen_in_the_hand_is_placed_where_the_hand_took_it() -> None:
+    """A start holding the cube: its place is the TCP of the first reading plus the cube's
+    mean place in the hand, averaged over the noisy readings while the hand lifts it."""
+    tracker = ObjectTracker(KITCHEN)
+    rng = np.random.default_rng(2)
+    world = np.zeros(len(KITCHEN.world_fields))
+    for step in range(50):
+        tcp = np.array([0.56, -0.25, 0.03 + 0.003 * step])  # lifting
+        reading = world.copy()
+        reading[2:4] = tcp[:2] + [0.004, -0.002] + rng.normal(0, 0.01, 2)
+        state = np.zeros(10)
+        state[:3] = tcp
+        tracker.update(Percept(state, np.zeros(7), reading, frozenset({"holding-cube"})))
+    expected = np.array([0.56 + 0.004 - CUBE.nominal[0], -0.25 - 0.002 - CUBE.nominal[1], 0])
+    assert np.linalg.norm(tracker.offsets()["cube"] - expected) < 0.004
