@@ -43,7 +43,7 @@ def test_an_anchored_node_moves_with_its_object_and_a_fixed_one_does_not() -> No
     np.testing.assert_allclose(obs[:3], [0.56, -0.27, 0.15], atol=0.01)  # the start moved too
     np.testing.assert_array_equal(env.node_position("home"), KITCHEN.nodes["home"].position)
     offsets = offsets_of(KITCHEN.objects, KITCHEN.world_fields, env.world_state())
-    moved = node_position(KITCHEN, "cube-grasped", offsets)
+    moved = node_position(KITCHEN.nodes, "cube-grasped", offsets)
     np.testing.assert_allclose(moved, [0.56, -0.27, 0.03], atol=1e-3)
     assert skill_frame(KITCHEN, KITCHEN.skill("grab-cube")) == "cube"
     assert skill_frame(KITCHEN, KITCHEN.skill("move-cube-to-home")) is None  # ends at home

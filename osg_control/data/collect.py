@@ -74,8 +74,8 @@ def placed_start_options(
     if world:
         options["world"] = world
     if domain.nodes[skill.start].anchor is not None:
-        offsets = placement_offsets(domain, placements)
-        options["position"] = node_position(domain, skill.start, offsets).tolist()
+        offsets = placement_offsets(domain.objects, placements)
+        options["position"] = node_position(domain.nodes, skill.start, offsets).tolist()
     return options
 
 

@@ -28,9 +28,9 @@ def skill_frame(domain: Domain, skill: SkillSpec) -> str | None:
     return domain.nodes[skill.end].anchor
 
 
-def node_position(domain: Domain, name: str, offsets: Offsets) -> np.ndarray:
-    """Where a node is, its anchor's displacement applied."""
-    node = domain.nodes[name]
+def node_position(nodes: Mapping[str, Node], name: str, offsets: Offsets) -> np.ndarray:
+    """Where a node of ``nodes`` is, its anchor's displacement applied."""
+    node = nodes[name]
     position = np.asarray(node.position, dtype=float)
     if node.anchor is not None and node.anchor in offsets:
         position = position + offsets[node.anchor]
@@ -54,6 +54,11 @@ def in_skill_frame(obs: np.ndarray, offset: np.ndarray) -> np.ndarray:
     return shifted
 
 
+def displacement(frame: ObjectFrame, x: float, y: float) -> np.ndarray:
+    """An object's displacement from its nominal place when it lies at (x, y)."""
+    return np.array([x - frame.nominal[0], y - frame.nominal[1], 0.0])
+
+
 def offsets_of(
     objects: Sequence[ObjectFrame], world_fields: Sequence[str], world: np.ndarray
 ) -> dict[str, np.ndarray]:
@@ -62,7 +67,7 @@ def offsets_of(
     found = {}
     for frame in objects:
         x, y = (float(world[index[f]]) for f in frame.position_fields)
-        found[frame.name] = np.array([x - frame.nominal[0], y - frame.nominal[1], 0.0])
+        found[frame.name] = displacement(frame, x, y)
     return found
 
 
@@ -76,12 +81,12 @@ def sample_placements(domain: Domain, rng: np.random.Generator) -> dict[str, np.
 
 
 def placement_offsets(
-    domain: Domain, placements: Mapping[str, np.ndarray]
+    objects: Sequence[ObjectFrame], placements: Mapping[str, np.ndarray]
 ) -> dict[str, np.ndarray]:
-    """The displacement of each placed object from its nominal place."""
-    nominal = {frame.name: frame.nominal for frame in domain.objects}
+    """The displacement of each placed object (name -> position) from its nominal place."""
+    frames = {frame.name: frame for frame in objects}
     return {
-        name: np.array([pos[0] - nominal[name][0], pos[1] - nominal[name][1], 0.0])
+        name: displacement(frames[name], float(pos[0]), float(pos[1]))
         for name, pos in placements.items()
     }
 
@@ -102,7 +107,7 @@ def shifted_nodes(domain: Domain, offsets: Offsets) -> dict[str, Node]:
     if not any(np.any(v) for v in offsets.values()):
         return dict(domain.nodes)
     return {
-        name: replace(node, position=_xyz(node_position(domain, name, offsets)))
+        name: replace(node, position=_xyz(node_position(domain.nodes, name, offsets)))
         for name, node in domain.nodes.items()
     }
 

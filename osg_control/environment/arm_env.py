@@ -53,7 +53,7 @@ from osg_control.control.servo import (
     servo_speed_band,
     velocity_limited_target,
 )
-from osg_control.domain.frames import offsets_of
+from osg_control.domain.frames import node_position, offsets_of
 from osg_control.domain.spec import Node, ObjectFrame, SkillSpec
 from osg_control.environment.actions import checked_action
 from osg_control.environment.options import (
@@ -285,11 +285,7 @@ class ArmEnv(gym.Env):
 
     def node_position(self, name: str) -> np.ndarray:
         """Where a node is in the world as reset (its anchor's true displacement applied)."""
-        node = self.nodes[name]
-        position = np.asarray(node.position, dtype=float)
-        if node.anchor is not None and node.anchor in self.anchor_offsets:
-            position = position + self.anchor_offsets[node.anchor]
-        return position
+        return node_position(self.nodes, name, self.anchor_offsets)
 
     def detect_world(self, state: np.ndarray, world: np.ndarray) -> np.ndarray:
         """The perceived world with its ``detected`` fields recomputed from the percepts

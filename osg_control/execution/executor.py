@@ -275,7 +275,7 @@ class Executor:
             objects.update(percept)
             position = (percept.state if tracker is None else tracker.read(obs))[:3]
             goal = replace(
-                end, position=tuple(node_position(self.domain, end.name, objects.offsets()))
+                end, position=tuple(node_position(self.domain.nodes, end.name, objects.offsets()))
             )
             if success_holds(skill, goal, position, percept.state[7], percept.facts):
                 return SkillOutcome(skill.name, True, step, time.perf_counter() - started), obs

@@ -84,7 +84,7 @@ def skill_on_path(
             continue
         start_node = domain.nodes[skill.start]
         path = shifted_skill(skill, skill_offset(domain, skill, offsets))
-        stops = [(tuple(node_position(domain, skill.start, offsets)), start_node.gripper)]
+        stops = [(tuple(node_position(domain.nodes, skill.start, offsets)), start_node.gripper)]
         stops += [(w.position, w.gripper) for w in path.waypoints]
         for (start, leg_gripper), (end, _) in zip(stops, stops[1:], strict=False):
             if leg_gripper != gripper:

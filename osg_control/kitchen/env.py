@@ -14,6 +14,7 @@ from typing import Any
 import mujoco
 import numpy as np
 
+from osg_control.domain.frames import placement_offsets
 from osg_control.domain.spec import SkillSpec
 from osg_control.environment.arm_env import ArmEnv, EnvConfig
 from osg_control.errors import SkillSpecError, lookup
@@ -84,8 +85,7 @@ class KitchenEnv(ArmEnv):
         """The cube's displacement when ``world`` places it (``cube_pos``)."""
         if world.get("cube_pos") is None:
             return {}
-        x, y = (float(v) for v in np.asarray(world["cube_pos"], dtype=float)[:2])
-        return {"cube": np.array([x - CUBE.nominal[0], y - CUBE.nominal[1], 0.0])}
+        return placement_offsets(self.objects, {"cube": np.asarray(world["cube_pos"], float)})
 
     def placement_world(
         self, placements: dict[str, np.ndarray], holding: str | None
