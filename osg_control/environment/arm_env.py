@@ -457,9 +457,10 @@ class ArmEnv(gym.Env):
         self._succeeded = False
         self._episode_over = False
         self.peak_joint_speed_ratio = 0.0
-        self.anchor_offsets = offsets_of(self.objects, tuple(self.world_sensors), self.read_world())
-        self._perceive()
-        return self.observe(), self._info()
+        world = self.read_world()
+        self.anchor_offsets = offsets_of(self.objects, tuple(self.world_sensors), world)
+        self._perceive(world)
+        return self.observe(), self._info(world)
 
     def _place(
         self,
