@@ -22,7 +22,6 @@ import numpy as np
 import pytest
 
 from osg_control.cli import main
-from osg_control.commands.train import checkpoint_bytes
 from osg_control.data.collect import collect_skill
 from osg_control.data.datasets import CHECKSUM_ATTR, Episode, load_dataset, write_episodes
 from osg_control.data.minari_export import export_minari
@@ -31,6 +30,7 @@ from osg_control.domain.registry import get_domain
 from osg_control.errors import EXIT_CODES, DatasetError, OutputError
 from osg_control.learning.td3bc import TD3BCConfig
 from osg_control.pipeline.collect import collection_bytes
+from osg_control.pipeline.train import checkpoint_bytes
 from tests.datagen import chained_dataset, write_synthetic_dataset
 from tests.filesystems import tmpfs
 

@@ -4,9 +4,9 @@ from __future__ import annotations
 
 import json
 
-from osg_control.commands.reproduce import untrained_skills
 from osg_control.domain.registry import get_domain
 from osg_control.learning.checkpoints import sha256_file
+from osg_control.pipeline.resume import untrained_skills
 
 
 def _fake_run(tmp_path, domain, steps=300, seed=0):

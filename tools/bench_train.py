@@ -28,11 +28,11 @@ from typing import Any
 import numpy as np
 import torch
 
-from osg_control.commands.train import load_skill_input
 from osg_control.data.datasets import ACTION_DIM, OBS_DIM, Episode, write_episodes
 from osg_control.kitchen.skills import SKILLS, SkillSpec
 from osg_control.learning.td3bc import ACTION_SCALE, TD3BC, BatchedReplay, TD3BCConfig
 from osg_control.paths import cache_dir
+from osg_control.pipeline.train import load_skill_input
 from osg_control.seeding import skill_seed
 
 D3RLPY_UPDATES_PER_S = 127.0

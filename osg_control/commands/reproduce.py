@@ -1,7 +1,7 @@
 """``osg reproduce``: the whole pipeline from nothing to Tables I-V, with a report.
 
 A shell over ``osg_control.pipeline.reproduction`` (arguments, printing, exit codes). Stages:
-collect -> train (TD3+BC, all skills batched) -> Table I -> its measured success rates into
+collect -> train (TD3+BC, all skills batched) -> filter fit -> Table I -> its rates into
 the manifest -> skill graph + PDDL with those rates as costs -> classifier -> Table II ->
 Table III -> Tables IV/V -> report. Each stage's time is printed and recorded. The output
 directory's ``defaults/`` has the layout of the shipped defaults (``skills/``,
@@ -26,9 +26,8 @@ from osg_control.commands import (
 )
 from osg_control.domain.base import Domain
 from osg_control.pipeline.bundle import DEPLOYMENT_NOISE
-from osg_control.pipeline.resume import untrained_skills
 
-__all__ = ["DEPLOYMENT_NOISE", "check_against_shipped", "register", "run", "untrained_skills"]
+__all__ = ["check_against_shipped", "register", "run"]
 
 
 def register(subparsers: argparse._SubParsersAction) -> None:

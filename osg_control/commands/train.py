@@ -1,7 +1,7 @@
 """``osg train``: learn skills from their data sets with TD3+BC, all batched in one process.
 
-A shell over ``osg_control.pipeline.train`` (arguments, printing, exit codes); the names
-it re-exports (``load_skill_input``, ``checkpoint_bytes``, ``train_with_progress``...) live
+A shell over ``osg_control.pipeline.train`` (arguments, printing, exit codes); the
+training functions (``train_skills``, ``load_skill_input``, ``checkpoint_bytes``...) live
 there.
 """
 
@@ -15,34 +15,11 @@ from osg_control.commands import domain_of
 from osg_control.paths import cache_dir
 from osg_control.pipeline.train import (
     DEFAULT_STEPS,
-    LOG_EVERY,
-    SIDECAR_BYTES,
-    SkillInput,
     TrainedSkills,
-    check_finite_losses,
-    checkpoint_bytes,
     format_training,
-    load_skill_input,
-    save_checkpoints,
     skill_names,
     train_skills,
-    train_with_progress,
 )
-
-__all__ = [
-    "DEFAULT_STEPS",
-    "LOG_EVERY",
-    "SIDECAR_BYTES",
-    "SkillInput",
-    "check_finite_losses",
-    "checkpoint_bytes",
-    "load_skill_input",
-    "register",
-    "run",
-    "save_checkpoints",
-    "skill_names",
-    "train_with_progress",
-]
 
 
 def _positive_int(text: str) -> int:
