@@ -1,6 +1,6 @@
 """Simulated joint speeds stay within the URDF velocity limits on every physics substep: the
-servo's target is clamped near the measured joints and the drive saturates a joint's speed
-at its limit (``control.servo``), the default (``EnvConfig(limit_joint_speed=True)``).
+drive's stiffness is capped and the drive saturates a joint's speed at its limit
+(``control.servo``), the default (``EnvConfig(limit_joint_speed=True)``).
 Without it the shipped policies peak at 2-3x the limits
 (``test_without_the_limit_speeds_exceed_the_limits``)."""
 
@@ -9,8 +9,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from osg_control.control.ik import urdf_velocity_limits
-from osg_control.control.servo import SPEED_MARGIN, servo_speed_band, velocity_limited_target
+from osg_control.control.robot import ARM_JOINTS, urdf_velocity_limits
+from osg_control.control.servo import DAMPING_SUFFIX, SPEED_MARGIN
 from osg_control.domain.registry import get_domain
 from osg_control.evaluation.joint_speeds import full_speed_peak, peak_joint_speed
 from osg_control.execution.defaults import load_defaults
@@ -22,19 +22,26 @@ PEAK_TOLERANCE = 1.0 + 1e-9
 """Allowed peak |qvel| / limit: the limit itself, up to the rounding of ``limit / limit``."""
 
 
-def test_the_target_is_clamped_to_the_band_around_the_joints() -> None:
-    target = velocity_limited_target(np.array([1.0, -2.0, 0.05]), np.zeros(3), np.full(3, 0.1))
-    np.testing.assert_allclose(target, [0.1, -0.1, 0.05])
-
-
-def test_the_band_caps_the_servos_velocity_set_point_below_the_limits() -> None:
-    env = KitchenEnv()
+def test_the_capped_stiffness_caps_the_servos_velocity_set_point_below_the_limits() -> None:
+    model = KitchenEnv().model
     limits = urdf_velocity_limits()
-    band = servo_speed_band(env.model, env._arm_act, limits)
-    kp = env.model.actuator_gainprm[env._arm_act, 0]
-    kv = -env.model.actuator_biasprm[env._arm_act, 2]
-    # The servo's torque kp (target - q) - kv qdot vanishes at qdot = (kp / kv) (target - q).
-    np.testing.assert_allclose(kp / kv * band, SPEED_MARGIN * limits)
+    stiffness = [model.actuator(joint).id for joint in ARM_JOINTS]
+    damping = [model.actuator(joint + DAMPING_SUFFIX).id for joint in ARM_JOINTS]
+    cap = model.actuator_forcerange[stiffness, 1]
+    kv = model.actuator_gainprm[damping, 0]
+    np.testing.assert_array_equal(model.actuator_forcerange[stiffness, 0], -cap)
+    np.testing.assert_array_equal(model.actuator_biasprm[stiffness, 2], 0.0)  # no damping
+    np.testing.assert_array_equal(model.actuator_biasprm[damping, 2], -kv)
+    # The drive's torque min(kp (target - q), cap) - kv qdot vanishes at qdot = cap / kv.
+    np.testing.assert_allclose(cap / kv, SPEED_MARGIN * limits)
+    joints = [model.joint(joint).id for joint in ARM_JOINTS]
+    assert model.jnt_actfrclimited[joints].all()  # the motors' effort bounds the sum
+
+
+def test_the_unlimited_servo_lifts_the_cap() -> None:
+    env = KitchenEnv(config=EnvConfig(limit_joint_speed=False))
+    assert not env.model.actuator_forcelimited[env._arm_act].any()
+    assert KitchenEnv().model.actuator_forcelimited[KitchenEnv()._arm_act].all()
 
 
 @pytest.fixture(scope="module")

@@ -11,10 +11,10 @@ import mujoco
 import numpy as np
 import pytest
 
-from osg_control.control.ik import urdf_velocity_limits
-from osg_control.control.servo import saturate_joint_speeds, velocity_limited_target
+from osg_control.control.robot import urdf_velocity_limits
+from osg_control.control.servo import saturate_joint_speeds
 from osg_control.domain.registry import get_domain
-from osg_control.environment.arm_env import EnvConfig
+from osg_control.environment.arm_env import ACTION_BOUNDS, EnvConfig
 from osg_control.errors import EnvOptionError, SimulationError
 from osg_control.evaluation.joint_speeds import FULL_SPEED_STEPS
 from osg_control.execution.defaults import load_defaults
@@ -259,14 +259,12 @@ def test_saturation_sets_the_speed_to_the_limit_and_the_position_to_match(
 
 
 def _servo_alone(env: KitchenEnv, target: np.ndarray) -> tuple[np.ndarray, np.ndarray, bool]:
-    """The clamped servo's substeps without the saturation (the physics before it): the
-    final qpos, qvel, and whether an arm joint ran faster than its limit on a substep."""
+    """The capped drive's substeps one by one without the saturation: the final qpos, qvel,
+    and whether an arm joint ran faster than its limit on a substep."""
     limits = urdf_velocity_limits()
     exceeded = False
+    env.data.ctrl[env._arm_act] = target
     for _ in range(env.n_substeps):
-        env.data.ctrl[env._arm_act] = velocity_limited_target(
-            target, env.data.qpos[env._arm_qpos], env._servo_band
-        )
         mujoco.mj_step(env.model, env.data)
         exceeded |= bool(np.any(np.abs(env.data.qvel[env._arm_dof]) > limits))
     return env.data.qpos.copy(), env.data.qvel.copy(), exceeded
@@ -289,6 +287,28 @@ def test_the_drive_acts_exactly_on_the_steps_where_a_joint_exceeds_its_limit() -
         exceeded_steps += exceeded
     assert 0 < exceeded_steps < FULL_SPEED_STEPS
     assert env.peak_joint_speed_ratio <= 1.0 + 1e-9
+
+
+def test_a_control_step_in_one_call_is_the_substep_loop_bit_for_bit() -> None:
+    """MuJoCo runs a control step in one call; where the speed sensors' history shows a
+    joint over its limit the env reruns up to that substep and saturates: the physics and
+    the reported peaks equal a substep-by-substep loop's (full-speed moves saturate)."""
+    fast, loop = KitchenEnv(), KitchenEnv()
+    loop._speed_watch.available = False  # the fallback: substep by substep
+    fast.reset(seed=3)
+    loop.reset(seed=3)
+    rng = np.random.default_rng(1)
+    saturated = 0
+    for step in range(120):
+        action = rng.uniform(-1.0, 1.0, 7) * ACTION_BOUNDS
+        if step % 40 < 20:
+            action[:3] = ACTION_BOUNDS[:3] * np.sign(action[:3])  # full speed
+        fast_info, loop_info = fast.step(action)[4], loop.step(action)[4]
+        np.testing.assert_array_equal(fast.data.qpos, loop.data.qpos)
+        np.testing.assert_array_equal(fast.data.qvel, loop.data.qvel)
+        assert fast_info["joint_speed_ratio"] == loop_info["joint_speed_ratio"]
+        saturated += fast_info["joint_speed_ratio"] >= 1.0 - 1e-12
+    assert saturated > 0  # the rerun path was taken
 
 
 def test_full_speed_joint_motion_per_step_stays_within_the_limits() -> None:

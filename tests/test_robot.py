@@ -116,7 +116,8 @@ def test_home_keyframe_is_home_q() -> None:
     key = model.key(robot.HOME_KEY)
     np.testing.assert_allclose(key.qpos[:7], HOME_Q)
     np.testing.assert_allclose(key.ctrl[:7], HOME_Q)
-    assert model.nu == 8  # seven arm servos and the gripper
+    np.testing.assert_array_equal(key.ctrl[7:14], 0.0)  # the damping actuators hold still
+    assert model.nu == 15  # seven stiffness and seven damping actuators, the gripper
 
 
 # ------------------------------------------------------------------ model lookup errors

@@ -3,12 +3,12 @@
 The classes are the movement skills, ordered along the skill graph (``class_order``) so that
 skills sharing a start or end node sit next to each other; the corrected accuracy of
 ``osg_control.classifier.metrics`` relies on that order. Every step of ``<DIR>/<skill>.h5``
-contributes its ``observations`` row (the state before the step) labelled with the index of
-its skill in that order, up to the step that reaches the skill's end node (the steps
-recorded after it, holding the node, are on the graph and not the classifier's business).
-The train/test split is by episode, within each data set, so no test state shares an
-episode with a training state.
-"""
+contributes its ``observations`` row (the state before the step) and its motion input (the
+commands before it, ``classifier.motion``) labelled with the index of its skill in that
+order, up to the step that reaches the skill's end node (the steps recorded after it,
+holding the node, are on the graph and not the classifier's business). The train/test split
+is by episode, within each data set, so no test state shares an episode with a training
+state."""
 
 from __future__ import annotations
 
@@ -20,6 +20,7 @@ from pathlib import Path
 
 import numpy as np
 
+from osg_control.classifier.motion import motion_features
 from osg_control.data.datasets import Dataset, load_dataset
 from osg_control.domain.base import Domain
 from osg_control.domain.frames import offsets_of, skill_frame, skill_offset
@@ -102,18 +103,25 @@ def class_starts(domain: Domain, classes: Sequence[str]) -> np.ndarray:
 
 @dataclass(frozen=True)
 class LabelledStates:
-    """States with their class labels.
+    """States with their motion inputs and class labels.
 
     Attributes:
         observations: (N, 10) float32 states.
+        motion: (N, ``MOTION_FEATURES``) float32 motion inputs (``classifier.motion``).
         labels: (N,) int64 class indices.
     """
 
     observations: np.ndarray
+    motion: np.ndarray
     labels: np.ndarray
 
     def __len__(self) -> int:
         return len(self.labels)
+
+    @property
+    def inputs(self) -> np.ndarray:
+        """The classifier's inputs: each state followed by its motion input."""
+        return np.concatenate([self.observations, self.motion], axis=1)
 
 
 @dataclass(frozen=True)
@@ -169,6 +177,7 @@ def held_out_episodes(num_episodes: int, test_fraction: float, seed: int, skill:
 def _merge(parts: list[LabelledStates]) -> LabelledStates:
     return LabelledStates(
         observations=np.concatenate([p.observations for p in parts]).astype(np.float32),
+        motion=np.concatenate([p.motion for p in parts]).astype(np.float32),
         labels=np.concatenate([p.labels for p in parts]).astype(np.int64),
     )
 
@@ -244,13 +253,16 @@ def load_classifier_data(
             else world_frame_observations(domain, dataset)
         )
         observations = recorded[approach]
+        motion = motion_features(dataset.arrays["actions"], dataset.episode_starts)[approach]
         in_test = np.repeat(
             held_out_episodes(dataset.num_episodes, test_fraction, seed, skill),
             dataset.episode_lengths,
         )[approach]
         labels = np.full(len(observations), label, dtype=np.int64)
-        train_parts.append(LabelledStates(observations[~in_test], labels[~in_test]))
-        test_parts.append(LabelledStates(observations[in_test], labels[in_test]))
+        train_parts.append(
+            LabelledStates(observations[~in_test], motion[~in_test], labels[~in_test])
+        )
+        test_parts.append(LabelledStates(observations[in_test], motion[in_test], labels[in_test]))
         digests[skill] = sha256_file(path)
     return ClassifierData(
         classes=tuple(classes),

@@ -1,10 +1,11 @@
 """The state->skill classifier at run time: numpy forward pass and checkpoint files.
 
-An MLP (10 -> 256 -> 256 -> classes, ReLU) on normalised states, trained by
-``osg_control.classifier.train``. Prediction needs no torch. A checkpoint is a folder with
-``classifier.safetensors`` (the layer weights) and ``classifier.json`` (classes, normalisation,
-training configuration, seed, data-set digests, package version); nothing is pickled.
-"""
+An MLP (22 -> 256 -> 256 -> classes, ReLU) on the normalised 10-D state and its 12-D motion
+input (``classifier.motion``: the previous TCP command and a decaying memory of the
+commands), trained by ``osg_control.classifier.train``. Prediction needs no torch. A
+checkpoint is a folder with ``classifier.safetensors`` (the layer weights) and
+``classifier.json`` (classes, normalisation, training configuration, seed, data-set digests,
+package version); nothing is pickled."""
 
 from __future__ import annotations
 
@@ -25,6 +26,7 @@ from osg_control.classifier.data import (
     load_classifier_data,
 )
 from osg_control.classifier.metrics import EvaluationReport, evaluate_predictions
+from osg_control.classifier.motion import MOTION_FEATURES
 from osg_control.data.datasets import OBS_DIM
 from osg_control.domain.base import Domain
 from osg_control.errors import CheckpointError
@@ -35,12 +37,17 @@ from osg_control.learning.checkpoints import check_finite, sha256_file
 WEIGHTS_FILE = "classifier.safetensors"
 SIDECAR_FILE = "classifier.json"
 CHECKPOINT_FORMAT = "osg-state-classifier"
-CHECKPOINT_VERSION = 1
+CHECKPOINT_VERSION = 2
+"""2: the inputs are the state and its motion input (version 1 read the state alone)."""
+INPUT_DIM = OBS_DIM + MOTION_FEATURES
 _STRUCTURAL_KEYS = ("format", "format_version", "classes", "normalisation", "weights_sha256")
 
 
-def _as_state_batch(states: np.ndarray | Sequence[float]) -> np.ndarray:
-    """Validate states and return them as a (B, 10) float32 array.
+def _as_input_batch(
+    states: np.ndarray | Sequence[float], motion: np.ndarray | Sequence[float] | None
+) -> np.ndarray:
+    """Validate states (10,) or (B, 10) and their motion inputs (12,) or (B, 12); None:
+    at rest (zeros). Returns the (B, 22) float32 inputs.
 
     Raises:
         ValueError: wrong shape or a NaN/inf entry, with the offending shape or rows.
@@ -49,21 +56,35 @@ def _as_state_batch(states: np.ndarray | Sequence[float]) -> np.ndarray:
     if array.ndim not in (1, 2) or array.shape[-1] != OBS_DIM:
         raise ValueError(f"state must have shape ({OBS_DIM},) or (B, {OBS_DIM}), got {array.shape}")
     batch = array.reshape(-1, OBS_DIM)
-    bad_rows = np.flatnonzero(~np.isfinite(batch).all(axis=1))
+    if motion is None:
+        moves = np.zeros((len(batch), MOTION_FEATURES))
+    else:
+        moves = np.asarray(motion, dtype=np.float64)
+        if moves.shape[-1:] != (MOTION_FEATURES,) or moves.reshape(-1, MOTION_FEATURES).shape[
+            0
+        ] != len(batch):
+            raise ValueError(
+                f"motion must have shape ({MOTION_FEATURES},) or (B, {MOTION_FEATURES}) for "
+                f"{len(batch)} state(s), got {moves.shape}"
+            )
+        moves = moves.reshape(-1, MOTION_FEATURES)
+    inputs = np.concatenate([batch, moves], axis=1)
+    bad_rows = np.flatnonzero(~np.isfinite(inputs).all(axis=1))
     if len(bad_rows):
         raise ValueError(f"state contains NaN or inf (row(s) {bad_rows[:10].tolist()})")
-    return batch.astype(np.float32)
+    return inputs.astype(np.float32)
 
 
 @dataclass
 class StateClassifier:
-    """A trained classifier: maps a 10-D state to the movement skill it belongs to.
+    """A trained classifier: maps a 10-D state (and its motion input) to the movement skill
+    it belongs to.
 
     Attributes:
         classes: class names; output ``i`` is ``classes[i]``.
         layers: (weight (out, in), bias (out,)) float32 per linear layer; ReLU between.
-        mean: (10,) input mean subtracted before the first layer.
-        std: (10,) positive input scale divided by after subtracting the mean.
+        mean: (22,) input mean subtracted before the first layer.
+        std: (22,) positive input scale divided by after subtracting the mean.
         info: training record written to the sidecar: ``config``, ``seed``, ``datasets``
             (sha256 by skill), ``training`` and, once loaded, ``package_version``.
     """
@@ -75,21 +96,21 @@ class StateClassifier:
     info: dict[str, Any] = field(default_factory=dict)
 
     def __post_init__(self) -> None:
-        """Check that the arrays chain from 10 inputs to one output per class.
+        """Check that the arrays chain from ``INPUT_DIM`` inputs to one output per class.
 
         Raises:
             ValueError: naming the mismatched array.
         """
-        if self.mean.shape != (OBS_DIM,) or self.std.shape != (OBS_DIM,):
+        if self.mean.shape != (INPUT_DIM,) or self.std.shape != (INPUT_DIM,):
             raise ValueError(
-                f"normalisation must be ({OBS_DIM},) vectors, got {self.mean.shape} and "
+                f"normalisation must be ({INPUT_DIM},) vectors, got {self.mean.shape} and "
                 f"{self.std.shape}"
             )
         if not (np.all(np.isfinite(self.mean)) and np.all(np.isfinite(self.std))):
             raise ValueError("normalisation contains NaN or inf")
         if not np.all(self.std > 0):
             raise ValueError("normalisation std must be positive")
-        width = OBS_DIM
+        width = INPUT_DIM
         for i, (weight, bias) in enumerate(self.layers):
             if weight.ndim != 2 or weight.shape[1] != width or bias.shape != (weight.shape[0],):
                 raise ValueError(
@@ -100,11 +121,15 @@ class StateClassifier:
         if width != len(self.classes):
             raise ValueError(f"the last layer has {width} outputs for {len(self.classes)} classes")
 
-    def logits(self, states: np.ndarray | Sequence[float]) -> np.ndarray:
+    def logits(
+        self, states: np.ndarray | Sequence[float], motion: np.ndarray | None = None
+    ) -> np.ndarray:
         """Unnormalised class scores.
 
         Args:
             states: (10,) or (B, 10).
+            motion: their motion inputs, (12,) or (B, 12) (``classifier.motion``); None:
+                at rest.
 
         Returns:
             (B, n_classes) float32 (B = 1 for a single state).
@@ -112,17 +137,20 @@ class StateClassifier:
         Raises:
             ValueError: wrong shape or NaN/inf in the states.
         """
-        x = (_as_state_batch(states) - self.mean) / self.std
+        x = (_as_input_batch(states, motion) - self.mean) / self.std
         for weight, bias in self.layers[:-1]:
             x = np.maximum(x @ weight.T + bias, 0.0)
         weight, bias = self.layers[-1]
         return np.asarray(x @ weight.T + bias, dtype=np.float32)
 
-    def predict_proba(self, states: np.ndarray | Sequence[float]) -> np.ndarray:
+    def predict_proba(
+        self, states: np.ndarray | Sequence[float], motion: np.ndarray | None = None
+    ) -> np.ndarray:
         """Class probabilities (softmax of the logits).
 
         Args:
             states: (10,) or (B, 10).
+            motion: their motion inputs (``logits``); None: at rest.
 
         Returns:
             (n_classes,) for a single state, else (B, n_classes); rows sum to 1.
@@ -130,16 +158,19 @@ class StateClassifier:
         Raises:
             ValueError: wrong shape or NaN/inf in the states.
         """
-        logits = self.logits(states)
+        logits = self.logits(states, motion)
         exp = np.exp(logits - logits.max(axis=1, keepdims=True))
         proba = exp / exp.sum(axis=1, keepdims=True)
         return proba[0] if np.ndim(states) == 1 else proba
 
-    def predict_index(self, states: np.ndarray | Sequence[float]) -> np.ndarray:
+    def predict_index(
+        self, states: np.ndarray | Sequence[float], motion: np.ndarray | None = None
+    ) -> np.ndarray:
         """Most likely class index of each state.
 
         Args:
             states: (10,) or (B, 10).
+            motion: their motion inputs (``logits``); None: at rest.
 
         Returns:
             (B,) int64 (B = 1 for a single state).
@@ -147,13 +178,16 @@ class StateClassifier:
         Raises:
             ValueError: wrong shape or NaN/inf in the states.
         """
-        return np.argmax(self.logits(states), axis=1).astype(np.int64)
+        return np.argmax(self.logits(states, motion), axis=1).astype(np.int64)
 
-    def predict(self, states: np.ndarray | Sequence[float]) -> str | list[str]:
+    def predict(
+        self, states: np.ndarray | Sequence[float], motion: np.ndarray | None = None
+    ) -> str | list[str]:
         """Most likely skill name.
 
         Args:
             states: (10,) or (B, 10).
+            motion: their motion inputs (``logits``); None: at rest.
 
         Returns:
             The skill name for a single state, else a list of B names.
@@ -161,7 +195,7 @@ class StateClassifier:
         Raises:
             ValueError: wrong shape or NaN/inf in the states.
         """
-        names = [self.classes[i] for i in self.predict_index(states)]
+        names = [self.classes[i] for i in self.predict_index(states, motion)]
         return names[0] if np.ndim(states) == 1 else names
 
     def save(self, directory: Path) -> Path:
@@ -280,7 +314,7 @@ def evaluate(
     return evaluate_predictions(
         states.observations,
         states.labels,
-        model.predict_index(states.observations),
+        model.predict_index(states.observations, states.motion),
         model.classes,
         starts,
     )

@@ -16,8 +16,7 @@ from torch import nn
 from tqdm import tqdm
 
 from osg_control.classifier.data import ClassifierData
-from osg_control.classifier.model import StateClassifier
-from osg_control.data.datasets import OBS_DIM
+from osg_control.classifier.model import INPUT_DIM, StateClassifier
 from osg_control.errors import TrainingError
 
 MIN_STD = 1e-6
@@ -62,7 +61,7 @@ def normalisation(observations: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Per-input mean and scale of the training states.
 
     Args:
-        observations: (N, 10) training states, N >= 1.
+        observations: (N, ``INPUT_DIM``) training inputs, N >= 1.
 
     Returns:
         (mean, std) as (10,) float32; a std below ``MIN_STD`` is replaced by 1.
@@ -90,7 +89,7 @@ def _fit(
     """Initialise and train the net on normalised inputs; return it and each epoch's loss."""
     with torch.random.fork_rng(devices=[]):
         torch.manual_seed(config.seed)
-        net = _build_net([OBS_DIM, *config.hidden, n_classes])
+        net = _build_net([INPUT_DIM, *config.hidden, n_classes])
     generator = torch.Generator().manual_seed(config.seed)
     optimizer = torch.optim.Adam(net.parameters(), lr=config.learning_rate)
     loss_fn = nn.CrossEntropyLoss()
@@ -133,8 +132,9 @@ def train_classifier(
     """
     if len(data.train) == 0:
         raise ValueError("no training states")
-    mean, std = normalisation(data.train.observations)
-    inputs = torch.from_numpy((data.train.observations - mean) / std)
+    train_inputs = data.train.inputs
+    mean, std = normalisation(train_inputs)
+    inputs = torch.from_numpy((train_inputs - mean) / std)
     targets = torch.from_numpy(data.train.labels)
     previous_threads = torch.get_num_threads()
     torch.set_num_threads(config.threads)

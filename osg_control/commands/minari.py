@@ -32,18 +32,35 @@ def add_verbs(verbs: argparse._SubParsersAction) -> None:
 
     imported = verbs.add_parser(
         "import",
-        help="turn a Minari data set into a data set file for one skill",
-        description="The Minari data set needs 10-D Box observations and 7-D Box actions.",
+        help="turn a Minari data set into data set files: one skill's, or (D4RL kitchen "
+        "layout, franka-kitchen) one per skill",
+        description="The project layout needs 10-D Box observations and 7-D Box actions and "
+        "writes one skill's file (--skill, --out FILE). The D4RL kitchen layout (a Dict "
+        "observation space with 'observation' and 'achieved_goal', 9-D joint actions: "
+        "D4RL/kitchen/complete-v2, mixed-v2, partial-v2) needs --domain franka-kitchen and "
+        "writes <OUT>/<skill>.h5 per skill, segmenting each episode at its task completions.",
     )
     imported.add_argument("source", help="a Minari data set folder, or its id under the root")
-    imported.add_argument("--skill", required=True, help="the skill the data is for")
-    imported.add_argument("--out", type=Path, required=True, help="file to write (<skill>.h5)")
+    imported.add_argument("--skill", help="the skill the data is for (project layout only)")
+    imported.add_argument(
+        "--out",
+        type=Path,
+        required=True,
+        help="file to write (<skill>.h5); with the D4RL layout the folder for the files",
+    )
+    imported.add_argument(
+        "--layout",
+        default="auto",
+        help="the source's layout: project (this package's states and actions), one of the "
+        "domain's outside layouts (franka-kitchen: d4rl), or auto (default: the domain's "
+        "layout that recognises the source, else project)",
+    )
     imported.add_argument(
         "--success",
         choices=["rewards", "predicate"],
-        default="rewards",
-        help="success steps from positive rewards (default) or from the skill's predicate "
-        "over the recorded states (needs infos/world_states)",
+        default=None,
+        help="project layout: success steps from positive rewards (default) or from the "
+        "skill's predicate over the recorded states (needs infos/world_states)",
     )
     imported.add_argument("--json", action="store_true")
     imported.set_defaults(func=run_import)
@@ -62,17 +79,45 @@ def run_export(args: argparse.Namespace) -> int:
 
 
 def run_import(args: argparse.Namespace) -> int:
-    """Import and print the new data set's summary."""
+    """Import and print the new data set's summary (an outside layout: its importer's)."""
+    from osg_control.errors import UsageError
+
+    domain = domain_of(args)
+    layouts = {layout.name: layout for layout in domain.dataset_layouts}
+    name = args.layout
+    if name == "auto":
+        found = [layout.name for layout in domain.dataset_layouts if layout.detects(args.source)]
+        name = found[0] if found else "project"
+    if name != "project":
+        if name not in layouts:
+            raise UsageError(
+                f"domain {domain.name!r} imports no {name!r} layout (its layouts: project"
+                + "".join(f", {known}" for known in layouts)
+                + ")"
+            )
+        if args.skill or args.success:
+            raise UsageError(
+                f"--skill and --success apply to the project layout; the {name} layout "
+                "writes every skill its episodes hold, with its own successes"
+            )
+        summary = layouts[name].imports(domain, args.source, args.out)
+        if args.json:
+            print(json.dumps(summary.to_json(), indent=2))
+        else:
+            print("\n".join(summary.lines()))
+        return 0
+    if not args.skill:
+        raise UsageError("--skill is required for a project-layout Minari data set")
     from osg_control.data.minari_import import import_minari
 
-    summary = dataset_summary(
-        import_minari(domain_of(args), args.source, args.skill, args.out, args.success)
+    imported = dataset_summary(
+        import_minari(domain, args.source, args.skill, args.out, args.success or "rewards")
     )
     if args.json:
-        print(json.dumps(summary, indent=2))
+        print(json.dumps(imported, indent=2))
     else:
         print(
-            f"{summary['path']}: skill {summary['skill']}, {summary['episodes']} episodes, "
-            f"success rate {summary['success_rate']:.2f}"
+            f"{imported['path']}: skill {imported['skill']}, {imported['episodes']} episodes, "
+            f"success rate {imported['success_rate']:.2f}"
         )
     return 0

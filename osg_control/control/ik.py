@@ -50,7 +50,14 @@ import numpy as np
 import qpsolvers
 from scipy import sparse
 
-from osg_control.control.robot import HOME_Q, TCP_FRAME, TCP_SITE, load_pinocchio_arm, panda_spec
+from osg_control.control.robot import (
+    HOME_Q,
+    TCP_FRAME,
+    TCP_SITE,
+    load_pinocchio_arm,
+    panda_spec,
+    urdf_velocity_limits,
+)
 from osg_control.errors import ControllerError
 
 SOLVERS: tuple[str, ...] = ("daqp", "osqp")
@@ -265,11 +272,6 @@ BACKENDS: dict[str, Callable[[IKConfig], Backend]] = {
     "mink": MinkBackend,
     "pinocchio": PinocchioBackend,
 }
-
-
-def urdf_velocity_limits() -> np.ndarray:
-    """Per-joint velocity limits [rad/s] read from the URDF (via Pinocchio's parser)."""
-    return np.asarray(load_pinocchio_arm().velocityLimit, dtype=float).copy()
 
 
 class _DaqpSolver:

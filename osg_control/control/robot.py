@@ -1,8 +1,9 @@
 """The Franka Panda from example-robot-data's ``panda.urdf``, for MuJoCo and Pinocchio alike.
 
 Both simulators load the *same* URDF file, so the kinematics agree by construction (a test
-checks TCP pose and Jacobian to 1e-9). MuJoCo gets position actuators, gravity
-compensation, a TCP site and a home keyframe added through ``mujoco.MjSpec``; Pinocchio gets
+checks TCP pose and Jacobian to 1e-9). MuJoCo gets speed-capped joint drives
+(``control.servo``), gravity compensation, a TCP site and a home keyframe added through
+``mujoco.MjSpec``; Pinocchio gets
 an arm-only model (fingers locked) whose ``panda_hand_tcp`` frame is the TCP.
 """
 
@@ -20,6 +21,7 @@ import mujoco
 import numpy as np
 
 from osg_control.control.mujoco_log import install_warning_handler
+from osg_control.control.servo import add_speed_capped_drives
 from osg_control.errors import ModelNotFoundError
 
 install_warning_handler()
@@ -32,6 +34,8 @@ HOME_Q = np.array([0.0, -0.785398, 0.0, -2.35619, 0.0, 1.5707, 0.785398])
 """Home arm configuration [rad] (the SRDF's ``default`` group state)."""
 FINGER_OPEN = 0.04
 """Finger joint travel when open [m] (each finger; distance between fingers is twice this)."""
+CONTROL_HZ = 20.0
+"""The rate of the arm's control loop [Hz]: one IK solve and servo target per 50 ms."""
 HOME_KEY = "arm-home"
 """The MuJoCo keyframe of ``HOME_Q`` (fingers open) in every model built here."""
 
@@ -124,15 +128,11 @@ def panda_spec(with_fingers: bool = True) -> mujoco.MjSpec:
             spec.delete(spec.body(name))
         for equality in list(spec.equalities):
             spec.delete(equality)
-    for name, kp, kv, limit in zip(ARM_JOINTS, _ARM_KP, _ARM_KV, _ARM_FORCE_LIMIT, strict=True):
-        joint = spec.joint(name)
-        joint.armature = 0.1
-        actuator = spec.add_actuator(name=name, target=name, trntype=mujoco.mjtTrn.mjTRN_JOINT)
-        actuator.set_to_position(kp=kp, kv=kv)
-        actuator.ctrlrange = joint.range
-        actuator.ctrllimited = True
-        actuator.forcerange = [-limit, limit]
-        actuator.forcelimited = True
+    for name in ARM_JOINTS:
+        spec.joint(name).armature = 0.1
+    add_speed_capped_drives(
+        spec, ARM_JOINTS, _ARM_KP, _ARM_KV, _ARM_FORCE_LIMIT, urdf_velocity_limits()
+    )
     qpos_home = list(HOME_Q)
     if with_fingers:
         gripper = spec.add_actuator(
@@ -149,7 +149,8 @@ def panda_spec(with_fingers: bool = True) -> mujoco.MjSpec:
             spec.joint(name).armature = 0.1
             spec.joint(name).damping = [20.0, 0.0, 0.0]
         qpos_home += [FINGER_OPEN, FINGER_OPEN]
-    ctrl_home = list(HOME_Q) + ([FINGER_OPEN] if with_fingers else [])
+    # The stiffness actuators' targets, the damping actuators' zero velocities, the gripper.
+    ctrl_home = list(HOME_Q) + [0.0] * len(ARM_JOINTS) + ([FINGER_OPEN] if with_fingers else [])
     spec.add_key(name=HOME_KEY, qpos=qpos_home, ctrl=ctrl_home)
     return spec
 
@@ -166,3 +167,13 @@ def load_pinocchio_arm():  # type: ignore[no-untyped-def]
     locked = [full.getJointId(name) for name in FINGER_JOINTS]
     q_ref = pin.neutral(full)
     return pin.buildReducedModel(full, locked, q_ref)
+
+
+@cache
+def _velocity_limits() -> tuple[float, ...]:
+    return tuple(float(v) for v in load_pinocchio_arm().velocityLimit)
+
+
+def urdf_velocity_limits() -> np.ndarray:
+    """Per-joint velocity limits [rad/s] read from the URDF (via Pinocchio's parser)."""
+    return np.array(_velocity_limits())

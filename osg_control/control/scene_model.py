@@ -14,12 +14,14 @@ import numpy as np
 
 from osg_control.control.robot import (
     ARM_JOINTS,
+    CONTROL_HZ,
     FINGER_JOINTS,
     FINGER_OPEN,
     HOME_KEY,
     HOME_Q,
     panda_spec,
 )
+from osg_control.control.servo import add_speed_sensors
 
 _EMPTY_PREFIX = "Attaching a spec with an empty prefix"
 """MuJoCo's warning for ``attach(prefix="")``: the robot's URDF names are unique in a scene,
@@ -28,13 +30,16 @@ so no prefix is needed."""
 
 def with_panda(scene: mujoco.MjSpec) -> mujoco.MjSpec:
     """Attach the Panda (fingers included, its own keyframes dropped: the scene's keyframe
-    must cover the scene's joints too) at the world origin of ``scene``; returns ``scene``."""
+    must cover the scene's joints too) at the world origin of ``scene``, with its joints'
+    speed sensors keeping one control step of substeps (``servo.SpeedWatch``); returns
+    ``scene``."""
     robot = panda_spec(with_fingers=True)
     for key in list(robot.keys):
         robot.delete(key)
     with warnings.catch_warnings():
         warnings.filterwarnings("ignore", message=_EMPTY_PREFIX)
         scene.attach(robot, frame=scene.worldbody.add_frame(), prefix="")
+    add_speed_sensors(scene, ARM_JOINTS, round(1.0 / (CONTROL_HZ * scene.option.timestep)))
     return scene
 
 

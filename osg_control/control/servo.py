@@ -1,20 +1,31 @@
-"""A velocity-limited position servo: the arm's joint targets within the URDF speed limits.
+"""The arm's speed-capped joint drive, built into the MuJoCo model, and its speed watch.
 
 The IK bounds each control step's joint motion by the URDF velocity limits, but a position
 servo handed the whole step at once chases it with a velocity peak well above them (up to
 2.7x). MuJoCo's position servo applies ``kp (target - q) - kv qdot``, i.e. a velocity servo
-of gain ``kv`` toward the set-point ``(kp / kv) (target - q)``. Clamping the target on every
-physics substep to within ``SPEED_MARGIN * limit * kv / kp`` of the measured joint caps that
-set-point below the limit: far from the target a joint runs at the capped speed, near it
-the position servo takes over as before.
+of gain ``kv`` toward the set-point ``(kp / kv) (target - q)``. Capping the stiffness term at
+``SPEED_MARGIN * limit * kv`` caps that set-point below the limit: far from the target a
+joint runs at the capped speed, near it the position servo takes over as before.
+
+The drive is two actuators per joint (``add_speed_capped_drive``): the stiffness
+``kp (target - q)`` with its force range at that cap, and the damping ``-kv qdot`` (a
+velocity actuator at zero, ``DAMPING_SUFFIX``); the joint's actuator force range holds
+their sum within the motor's effort, as the single servo's force range did. The force is
+``clamp(clamp(kp (target - q), +-cap) - kv qdot, +-effort)``, the same law as clamping the
+servo's target to within ``cap / kp`` of the joint before every physics substep (how it was
+done in Python before), so MuJoCo runs a whole control step in one call. The two differ in
+floating-point rounding only (the sum is formed in another order), and the implicit
+integrator's velocity derivative is ``-kv`` in both.
 
 The arm's inertial coupling still overshoots that set-point (up to 1.2x the limit under
 full-speed commands), so the joint drive also saturates the speed, as the Franka's joint
 controllers limit their joints' velocities: after a physics substep in which a joint ran
 faster than its limit, ``saturate_joint_speeds`` sets its velocity to the limit and its
-position to where the substep would have taken it at that speed. On a substep in which no
-joint exceeds its limit nothing is written, so such physics is bit for bit that of the servo
-alone.
+position to where the substep would have taken it at that speed. ``SpeedWatch`` reads every
+substep's joint speeds from MuJoCo's sensor history (``add_speed_sensors``) after substeps
+run in one call; when one exceeded a limit the env goes back to the start of the call, runs
+up to that substep again, saturates and goes on, so the physics is bit for bit that of a
+substep-by-substep loop that saturates after each substep.
 
 A ramped target (interpolated across the substeps) was tried first: the servo follows a
 ramp about ``kv / kp`` (16 ms) behind, and the IK, which starts each step from the measured
@@ -23,6 +34,8 @@ restored the speed but overshot the limits by up to 1.6x when a step reversed a 
 """
 
 from __future__ import annotations
+
+from collections.abc import Sequence
 
 import mujoco
 import numpy as np
@@ -33,23 +46,122 @@ coupling makes a joint overshoot its set-point (the skills shipped before the li
 at 1.23x the limit with a cap of 1.0 and at 0.99x with 0.8; the skills trained with it peak
 at 0.80-0.95x, push-valve-open, pushing the valve lever, at 1.034x before the speed
 saturation, full-speed +x commands at 1.20x; ``tools/joint_speeds.py``)."""
+DAMPING_SUFFIX = "_damping"
+"""Name suffix of a joint's damping actuator (the stiffness actuator has the joint's name)."""
+SPEED_SENSOR_SUFFIX = "_speed"
+"""Name suffix of a joint's velocity sensor with a history of the last substeps."""
 
 
-def servo_speed_band(
-    model: mujoco.MjModel, actuators: np.ndarray | slice, velocity_limits: np.ndarray
-) -> np.ndarray:
-    """How far [rad] a position actuator's target may lead its joint (n,): the distance at
-    which its velocity set-point reaches ``SPEED_MARGIN`` of the limit, ``kv / kp`` times it
-    (MuJoCo's ``kp = gainprm[0]``, ``kv = -biasprm[2]``)."""
-    lead_time = -model.actuator_biasprm[actuators, 2] / model.actuator_gainprm[actuators, 0]
-    return SPEED_MARGIN * np.asarray(velocity_limits) * lead_time
+def add_speed_capped_drives(
+    spec: mujoco.MjSpec,
+    joints: Sequence[str],
+    kp: Sequence[float],
+    kv: Sequence[float],
+    effort: Sequence[float],
+    speed_limit: Sequence[float] | np.ndarray,
+) -> None:
+    """Add the joints' drives to ``spec`` (see the module doc): first a stiffness actuator
+    per joint, named after it (target in the joint's range, force capped at
+    ``SPEED_MARGIN * speed_limit * kv``), then a damping actuator per joint
+    (``-kv qdot``, named ``joint + DAMPING_SUFFIX``); each joint's actuator force range is
+    ``+-effort``."""
+    rows = list(zip(joints, kp, kv, effort, speed_limit, strict=True))
+    for joint, gain, damping, _, limit in rows:
+        cap = SPEED_MARGIN * limit * damping
+        stiffness = spec.add_actuator(name=joint, target=joint, trntype=mujoco.mjtTrn.mjTRN_JOINT)
+        stiffness.set_to_position(kp=gain, kv=0.0)
+        stiffness.ctrlrange = spec.joint(joint).range
+        stiffness.ctrllimited = True
+        stiffness.forcerange = [-cap, cap]
+        stiffness.forcelimited = True
+    for joint, _, damping, limit_force, _ in rows:
+        actuator = spec.add_actuator(
+            name=joint + DAMPING_SUFFIX, target=joint, trntype=mujoco.mjtTrn.mjTRN_JOINT
+        )
+        actuator.set_to_velocity(kv=damping)
+        spec.joint(joint).actfrcrange = [-limit_force, limit_force]
+        spec.joint(joint).actfrclimited = True
 
 
-def velocity_limited_target(target: np.ndarray, joints: np.ndarray, band: np.ndarray) -> np.ndarray:
-    """``target`` clamped to within ``band`` of the measured ``joints`` (see the module doc);
-    ``np.clip``'s arithmetic without its wrapper's overhead, which on the physics loop's
-    7-vectors cost more than the clamp (2.9 against 1.9 us per substep)."""
-    return np.minimum(np.maximum(target, joints - band), joints + band)
+def uncap_drive(model: mujoco.MjModel, joints: Sequence[str]) -> None:
+    """Lift the stiffness cap of ``joints``' drives in ``model`` (the unlimited servo, for
+    comparison only: ``EnvConfig.limit_joint_speed=False``)."""
+    for joint in joints:
+        model.actuator_forcelimited[model.actuator(joint).id] = 0
+
+
+def add_speed_sensors(spec: mujoco.MjSpec, joints: Sequence[str], samples: int) -> None:
+    """Add a velocity sensor per joint keeping its last ``samples`` readings (one per
+    physics substep: MuJoCo records each at the start of a substep, before integrating)."""
+    for joint in joints:
+        spec.add_sensor(
+            name=joint + SPEED_SENSOR_SUFFIX,
+            type=mujoco.mjtSensor.mjSENS_JOINTVEL,
+            objtype=mujoco.mjtObj.mjOBJ_JOINT,
+            objname=joint,
+            nsample=samples,
+        )
+
+
+class SpeedWatch:
+    """Each substep's peak ``|qdot| / limit`` over the joints, for the substeps just run in
+    one ``mj_step`` call, read from the speed sensors' history and the current velocities.
+
+    ``available`` is False when the model lacks the sensors or their history is shorter
+    than ``substeps`` (the env then watches substep by substep).
+    """
+
+    def __init__(
+        self,
+        model: mujoco.MjModel,
+        joints: Sequence[str],
+        dofs: slice | np.ndarray,
+        limits: np.ndarray,
+        substeps: int,
+    ) -> None:
+        self._dofs = dofs
+        self._inverse_limits = 1.0 / np.asarray(limits, dtype=float)
+        self.available = False
+        ids = [
+            mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_SENSOR, joint + SPEED_SENSOR_SUFFIX)
+            for joint in joints
+        ]
+        if min(ids) < 0 or any(int(model.sensor_history[i, 0]) < substeps for i in ids):
+            return
+        self.available = True
+        self._samples = int(model.sensor_history[ids[0], 0])
+        # A sensor's history: [header, cursor (the newest slot), times (n), values (n)].
+        self._cursor = int(model.sensor_historyadr[ids[0]]) + 1
+        self._values = np.array([int(model.sensor_historyadr[i]) + 2 + self._samples for i in ids])
+        self._cache: dict[tuple[int, int], np.ndarray] = {}
+
+    def ratios(self, data: mujoco.MjData, substeps: int) -> np.ndarray:
+        """The peak speed ratio after each of the last ``substeps`` substeps, oldest first.
+
+        A sample is read at the start of a substep: the newest ``substeps - 1`` samples are
+        the velocities after the first ``substeps - 1``; the last is ``data.qvel``.
+        """
+        rows = self._rows(int(data.history[self._cursor]), substeps)
+        during = np.abs(data.history[rows]) * self._inverse_limits[:, None]
+        after = np.abs(data.qvel[self._dofs]) * self._inverse_limits
+        return np.append(during.max(axis=0), after.max())
+
+    def peak(self, data: mujoco.MjData, substeps: int) -> float:
+        """The largest of ``ratios(data, substeps)``, without forming them."""
+        rows = self._rows(int(data.history[self._cursor]), substeps)
+        during = np.abs(data.history[rows]) * self._inverse_limits[:, None]
+        fastest = float(during.max(initial=0.0))
+        return max(fastest, float((np.abs(data.qvel[self._dofs]) * self._inverse_limits).max()))
+
+    def _rows(self, newest: int, substeps: int) -> np.ndarray:
+        """History indices (joints x substeps - 1) of the samples after the first
+        ``substeps - 1`` substeps, when the newest sample is in slot ``newest``."""
+        key = (newest, substeps)
+        rows = self._cache.get(key)
+        if rows is None:
+            slots = (newest + np.arange(2 - substeps, 1)) % self._samples
+            rows = self._cache[key] = self._values[:, None] + slots[None, :]
+        return rows
 
 
 def saturate_joint_speeds(

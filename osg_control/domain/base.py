@@ -16,7 +16,7 @@ import math
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any
+from typing import Any, Protocol
 
 import numpy as np
 
@@ -69,6 +69,34 @@ EnvFactory = Callable[..., Any]
 (``osg_control.environment.ArmEnv`` or one with its methods)."""
 
 
+class ImportSummary(Protocol):
+    """What an outside layout's import did."""
+
+    def to_json(self) -> dict[str, Any]:
+        """The summary as a JSON-ready dict (``--json``)."""
+        ...
+
+    def lines(self) -> list[str]:
+        """The summary for humans, one line each."""
+        ...
+
+
+@dataclass(frozen=True)
+class DatasetLayout:
+    """An outside data-set layout a domain imports (``osg datasets import --layout NAME``).
+
+    Attributes:
+        name: the ``--layout`` value.
+        detects: whether a Minari data set (folder or id) has this layout (``auto``).
+        imports: ``(domain, source, out folder) -> summary``: writes the domain's data set
+            files; refuses a malformed source before writing anything.
+    """
+
+    name: str
+    detects: Callable[[str], bool]
+    imports: Callable[[Domain, str, Path], ImportSummary]
+
+
 @dataclass(frozen=True)
 class Domain:
     """One scene and its skill graph, as data for the generic core (see module docstring).
@@ -105,6 +133,7 @@ class Domain:
         step_cost: plan cost per step of a skill's Algorithm 1 budget, added to its
             ``round(-ln p * 1000)`` (0: plans minimise failure only; a domain whose env has
             an episode step limit prefers the shorter of two likely plans with it).
+        dataset_layouts: outside data-set layouts it imports (``DatasetLayout``).
     """
 
     name: str
@@ -129,6 +158,7 @@ class Domain:
     benchmark: Benchmark | None = None
     action_bounds: tuple[float, ...] = (0.02, 0.02, 0.02, 0.1, 0.1, 0.1, 1.0)
     step_cost: float = 0.0
+    dataset_layouts: tuple[DatasetLayout, ...] = ()
     skills_by_name: dict[str, SkillSpec] = field(init=False, repr=False, compare=False)
 
     def __post_init__(self) -> None:

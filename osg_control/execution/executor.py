@@ -30,6 +30,7 @@ from typing import Any
 
 import numpy as np
 
+from osg_control.classifier.motion import MotionMemory
 from osg_control.control.divergence import is_divergence
 from osg_control.control.estimator import MOTION_MODEL, TcpTracker
 from osg_control.domain.base import Domain
@@ -73,6 +74,10 @@ share of the best one's (``Executor._classify``)."""
 GRASP_GRACE_STEPS = 5
 """Steps a watched fact may be false before the skill is stopped (a grasp's contact may
 flicker for a few steps in the offline data)."""
+
+
+GRIPPER_OPEN_STEPS = 5
+"""Control steps that open an empty but closed gripper in place."""
 
 
 def task_env_config(perception: PerceptionSpec) -> EnvConfig:
@@ -141,6 +146,8 @@ class Executor:
         self.motion_model = motion_model
         self.on_step: Callable[[SkillEnv], Any] | None = None
         """Called after every env step (e.g. to record video frames)."""
+        self.motion = MotionMemory()
+        """The TCP commands sent since ``execute`` began: the classifier's motion input."""
 
     def plan(
         self,
@@ -204,7 +211,9 @@ class Executor:
         included). A start near home then enters toward the cube for a cube task instead of
         toward the valve and back.
         """
-        proba = np.asarray(self.classifier.predict_proba(obs), dtype=float).reshape(-1)
+        proba = np.asarray(
+            self.classifier.predict_proba(obs, self.motion.features()), dtype=float
+        ).reshape(-1)
         classes = self.classifier.classes
         allowed = np.array([recorded_world_holds(self.skills[c], facts) for c in classes])
         if not allowed.any():
@@ -264,6 +273,7 @@ class Executor:
             action = policy(in_skill_frame(seen, offset))
             if tracker is not None:
                 tracker.acted(action)
+            self.motion.commanded(action)
             obs, _reward, terminated, truncated, info = env.step(action)
             if self.on_step is not None:
                 self.on_step(env)
@@ -308,6 +318,7 @@ class Executor:
         episode on the simulator's truth, e.g. ``env.facts()``, outside)."""
         goal = sorted(set(goal))
         started = time.perf_counter()
+        self.motion = MotionMemory()  # the arm is taken to be at rest
         facts = env.percept().facts
         result = ExecutionResult(goal=goal, success=False, entry_skill=None, plan=[])
         tracker = (
@@ -322,6 +333,7 @@ class Executor:
                 break
             if self.domain.hand_empty in facts and obs[7] != GRIPPER_OPEN_CMD:
                 obs, result.failure = _open_gripper(env)
+                self.motion.still(GRIPPER_OPEN_STEPS)
                 if result.failure:
                     break
             t0 = time.perf_counter()
@@ -386,6 +398,7 @@ class Executor:
             if self.reset_joints and index < len(sequence) - 1:
                 try:
                     outcome.reset_steps = env.joint_reset()
+                    self.motion.still(outcome.reset_steps)
                 except SimulationError as err:
                     return obs, f"joint reset after {name}: {err}"
                 if env.episode_over:
@@ -397,7 +410,7 @@ class Executor:
         return obs, None
 
 
-def _open_gripper(env: SkillEnv, steps: int = 5) -> tuple[np.ndarray, str | None]:
+def _open_gripper(env: SkillEnv, steps: int = GRIPPER_OPEN_STEPS) -> tuple[np.ndarray, str | None]:
     """Open an empty but closed gripper in place (recovery before a movement skill, whose
     termination needs it open); returns the observation and a divergence, if any."""
     obs = env.observe()

@@ -25,8 +25,9 @@ class EntryClassifier(Protocol):
 
     classes: tuple[str, ...]
 
-    def predict_proba(self, states: np.ndarray) -> np.ndarray:
-        """Class probabilities (in ``classes`` order) for one state."""
+    def predict_proba(self, states: np.ndarray, motion: np.ndarray | None = None) -> np.ndarray:
+        """Class probabilities (in ``classes`` order) for one state and its motion input
+        (``classifier.motion``; None: at rest)."""
         ...
 
 

@@ -17,11 +17,12 @@ grasp / pull / release for the microwave and the hinge cabinet
 from __future__ import annotations
 
 from dataclasses import replace
+from pathlib import Path
 from typing import Any
 
 import numpy as np
 
-from osg_control.domain.base import Domain, StartRegion, Task
+from osg_control.domain.base import DatasetLayout, Domain, ImportSummary, StartRegion, Task
 from osg_control.domain.spec import MOVEMENT, Node, SkillSpec, Waypoint
 from osg_control.franka.burners import BURNER_NODES, BURNER_SKILLS
 from osg_control.franka.hinge import HINGE_NODES, HINGE_SKILLS
@@ -397,4 +398,19 @@ def franka_domain() -> Domain:
         action_bounds=ACTION_BOUNDS,
         step_cost=STEP_COST,
         perceptions=PERCEPTIONS,
+        dataset_layouts=(DatasetLayout("d4rl", _is_d4rl, _import_d4rl),),
     )
+
+
+def _is_d4rl(source: str) -> bool:
+    """``franka.d4rl_source.is_d4rl_layout`` (imported when first asked)."""
+    from osg_control.franka.d4rl_source import is_d4rl_layout
+
+    return is_d4rl_layout(source)
+
+
+def _import_d4rl(domain: Domain, source: str, out: Path) -> ImportSummary:
+    """``franka.d4rl_import.import_d4rl`` (imported when first used: it reads h5py data)."""
+    from osg_control.franka.d4rl_import import import_d4rl
+
+    return import_d4rl(domain, source, out)
