@@ -80,3 +80,16 @@ def test_pool_workers_exit_when_osg_collect_is_killed(tmp_path: Path, sig: int) 
         for pid in workers:
             if _alive(pid):
                 os.kill(pid, signal.SIGKILL)
+
+
+def test_long_jobs_default_to_the_machines_cpus() -> None:
+    import os
+
+    from osg_control.cli import build_parser, main
+    from osg_control.parallel.machine import machine_cpus
+
+    cpus = machine_cpus()
+    assert cpus == len(os.sched_getaffinity(0)) >= 1
+    args = build_parser(["reproduce"]).parse_args(["reproduce", "--out", "x"])
+    assert (args.workers, args.threads) == (cpus, cpus)
+    assert main(["reproduce", "--out", "x", "--threads", "0"]) == 2

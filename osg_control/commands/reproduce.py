@@ -25,6 +25,7 @@ from osg_control.commands import (
     perception_of,
 )
 from osg_control.domain.base import Domain
+from osg_control.parallel.machine import machine_cpus
 from osg_control.pipeline.bundle import DEPLOYMENT_NOISE
 
 __all__ = ["check_against_shipped", "register", "run"]
@@ -36,7 +37,22 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     parser.add_argument("--quick", action="store_true", help="a few-minute smoke run")
     parser.add_argument("--out", type=Path, default=Path("osg-reproduction"))
     parser.add_argument("--seed", type=int, default=0)
-    parser.add_argument("--workers", type=int, default=2)
+    cpus = machine_cpus()
+    parser.add_argument(
+        "--workers",
+        type=int,
+        default=cpus,
+        help=f"processes for collection and the tables (default: this machine's CPUs, {cpus}; "
+        "the figures do not depend on it)",
+    )
+    parser.add_argument(
+        "--threads",
+        type=int,
+        default=cpus,
+        help=f"torch CPU threads for training (default: this machine's CPUs, {cpus}; the "
+        "shipped defaults were trained with 2, and another count may change the weights by "
+        "rounding)",
+    )
     parser.add_argument(
         "--noise",
         type=float,
@@ -110,6 +126,12 @@ def run(args: argparse.Namespace) -> int:
     """
     domain = domain_of(args)
     perception = perception_of(args, domain, default_noise=DEPLOYMENT_NOISE)  # refused: exit 2
+    if args.threads < 1 or args.workers < 1:
+        from osg_control.errors import UsageError
+
+        raise UsageError(
+            f"--workers and --threads must be >= 1, got {args.workers} and {args.threads}"
+        )
     if args.compare is not None:
         from osg_control.evaluation.check import figures_file, read_figures
 
@@ -126,6 +148,7 @@ def run(args: argparse.Namespace) -> int:
         perception=perception,
         reach_perception=perception_of(args, domain),
         filter_gain=args.filter,
+        train_threads=args.threads,
         command=manifest_command(domain.name, args),
         invocation="osg " + " ".join(map(shlex.quote, sys.argv[1:])),
     )
