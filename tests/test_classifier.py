@@ -38,6 +38,7 @@ from osg_control.cli import main
 from osg_control.data.datasets import ACTION_DIM, OBS_DIM, Episode, write_episodes
 from osg_control.domain.registry import get_domain
 from osg_control.errors import CheckpointError, DatasetError
+from osg_control.execution.defaults import load_defaults
 from osg_control.kitchen.skills import (
     MOVEMENT_SKILLS,
     NODES,
@@ -404,3 +405,40 @@ def test_cli_defaults_to_cache_dir_and_reports_errors(
     assert str(tmp_path / "kitchen" / "classifier" / SIDECAR_FILE) in capsys.readouterr().err
     assert main(["classifier", "train"]) == 1
     assert str(tmp_path / "kitchen" / "data") in capsys.readouterr().err
+
+
+def test_motion_features_of_the_data_are_what_the_run_time_memory_gives() -> None:
+    """Training inputs (``motion_features`` of recorded actions) and the executor's input
+    (``MotionMemory`` fed the same commands) follow one rule; zero at each episode start."""
+    from osg_control.classifier.motion import MOTION_FEATURES, MotionMemory, motion_features
+
+    rng = np.random.default_rng(0)
+    actions = rng.uniform(-0.02, 0.02, (12, 7))
+    features = motion_features(actions, np.array([0, 7]))
+    assert features.shape == (12, MOTION_FEATURES)
+    np.testing.assert_array_equal(features[[0, 7]], 0.0)  # each episode starts at rest
+    for start, stop in ((0, 7), (7, 12)):
+        memory = MotionMemory()
+        for step in range(start, stop):
+            np.testing.assert_allclose(features[step], memory.features(), atol=1e-7)
+            memory.commanded(actions[step])
+    memory.still(100)  # a long joint reset: back to rest
+    np.testing.assert_allclose(memory.features(), 0.0, atol=1e-6)
+
+
+def test_the_motion_input_tells_a_skill_from_its_reverse_on_the_shipped_classifier() -> None:
+    """Halfway between home and the door, the state alone is ambiguous; the commanded
+    direction of travel decides (the shipped classifier, trained with the motion input)."""
+    from osg_control.classifier.motion import MotionMemory
+
+    classifier = load_defaults(KITCHEN).classifier
+    home = np.array(KITCHEN.nodes["home"].position)
+    door = np.array(KITCHEN.nodes["door-front"].position)
+    state = np.concatenate([(home + door) / 2, [0.0, 1.0, 0.0, 0.0], [1.0, 0.0, 0.08]])
+    chosen = {}
+    for name, direction in (("to-door", door - home), ("to-home", home - door)):
+        memory = MotionMemory()
+        for _ in range(10):
+            memory.commanded(np.append(0.02 * direction / np.linalg.norm(direction), [0] * 4))
+        chosen[name] = classifier.predict(state, memory.features())
+    assert chosen == {"to-door": "move-home-to-door", "to-home": "move-door-to-home"}

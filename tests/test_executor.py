@@ -218,7 +218,7 @@ class _Scores:
 
     classes = ("move-cabinet-to-cube", "move-home-to-cube", "move-door-to-home")
 
-    def predict_proba(self, states: np.ndarray) -> np.ndarray:
+    def predict_proba(self, states: np.ndarray, motion: np.ndarray | None = None) -> np.ndarray:
         return np.array([0.6, 0.3, 0.1])
 
 
@@ -281,7 +281,7 @@ class _HomeSplit:
 
     classes = tuple(s.name for s in KITCHEN.movement_skills)
 
-    def predict_proba(self, states: np.ndarray) -> np.ndarray:
+    def predict_proba(self, states: np.ndarray, motion: np.ndarray | None = None) -> np.ndarray:
         shares = {"move-home-to-valve": 0.49, "move-home-to-cube": 0.31, "move-home-to-door": 0.2}
         return np.array([shares.get(name, 0.0) for name in self.classes])
 

@@ -11,12 +11,12 @@
     (:action grab-cube
         :parameters ()
         :precondition (and (at above-cube) (cube-on-counter) (hand-empty))
-        :effect (and (holding-cube) (not (hand-empty)) (at cube-grasped) (not (at above-cube)) (increase (total-cost) 62))
+        :effect (and (holding-cube) (not (hand-empty)) (at cube-grasped) (not (at above-cube)) (increase (total-cost) 67))
     )
      (:action grab-handle
         :parameters ()
         :precondition (and (at door-front) (door-closed) (hand-empty))
-        :effect (and (holding-handle) (not (hand-empty)) (at handle) (not (at door-front)) (increase (total-cost) 10))
+        :effect (and (holding-handle) (not (hand-empty)) (at handle) (not (at door-front)) (increase (total-cost) 25))
     )
      (:action leave-valve
         :parameters ()
@@ -76,7 +76,7 @@
      (:action pick-up-cube
         :parameters ()
         :precondition (and (at cube-grasped) (cube-on-counter) (holding-cube))
-        :effect (and (cube-lifted) (not (cube-on-counter)) (at cube-lifted) (not (at cube-grasped)) (increase (total-cost) 5))
+        :effect (and (cube-lifted) (not (cube-on-counter)) (at cube-lifted) (not (at cube-grasped)) (increase (total-cost) 174))
     )
      (:action place-cube-in-cabinet
         :parameters ()
@@ -86,7 +86,7 @@
      (:action push-valve-open
         :parameters ()
         :precondition (and (at valve-lever) (hand-empty) (valve-closed))
-        :effect (and (valve-open) (not (valve-closed)) (at valve-pushed) (not (at valve-lever)) (increase (total-cost) 78))
+        :effect (and (valve-open) (not (valve-closed)) (at valve-pushed) (not (at valve-lever)) (increase (total-cost) 111))
     )
      (:action release-cube
         :parameters ()
