@@ -8,7 +8,8 @@ Prints, in one run:
   the TCP pose at configurations around home;
 - ``KitchenEnv.step`` calls per second with small random actions;
 - the env step's overhead over its physics: each env step is followed by a timed block of
-  ``n_substeps`` raw ``mujoco.mj_step`` calls on the same model and data, and
+  ``n_substeps`` substeps in one ``mujoco.mj_step`` call (the physics' own ceiling) on the
+  same model and data, and
   ``overhead = (median env step - median physics) / median physics`` (the IK, action
   checks, observation and world-state readout).
 
@@ -181,7 +182,7 @@ def main(argv: list[str] | None = None) -> dict[str, Any]:
         f"(median {env['env_step_median_us']:.0f} us, p90 {env['env_step_p90_us']:.0f} us)"
     )
     print(
-        f"physics alone ({env['n_substeps']:.0f} x mj_step): median "
+        f"physics alone ({env['n_substeps']:.0f} substeps, one mj_step call): median "
         f"{env['physics_median_us']:.0f} us"
     )
     print(
