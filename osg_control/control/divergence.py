@@ -24,19 +24,24 @@ DIVERGED = "physics diverged"
 """The prefix of every divergence message (the executor stops on it instead of replanning)."""
 
 
+_WARNING_INDEX = np.array([int(w) for w in DIVERGENCE_WARNINGS])
+
+
 class DivergenceWatch:
     """Snapshot of the warning counters and clock of ``data``; ``check`` compares to it."""
 
     def __init__(self, data: mujoco.MjData) -> None:
         self.data = data
         self.time = float(data.time)
-        self.counts = [int(data.warning[w].number) for w in DIVERGENCE_WARNINGS]
+        # All counters in one read (``warning[w].number`` one by one cost 6 us a step).
+        self.counts = data.warning.number[_WARNING_INDEX].copy()
 
     def check(self) -> str | None:
         """The divergence since the snapshot, as a message starting ``DIVERGED``; else None."""
-        for warning, count in zip(DIVERGENCE_WARNINGS, self.counts, strict=True):
-            if int(self.data.warning[warning].number) > count:
-                return f"{DIVERGED}: MuJoCo reported {warning.name} and reset the state"
+        grown = np.flatnonzero(self.data.warning.number[_WARNING_INDEX] > self.counts)
+        if grown.size:
+            warning = DIVERGENCE_WARNINGS[int(grown[0])]
+            return f"{DIVERGED}: MuJoCo reported {warning.name} and reset the state"
         if self.data.time < self.time:
             return f"{DIVERGED}: MuJoCo reset the state"
         return non_finite_state(self.data)
