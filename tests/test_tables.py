@@ -155,3 +155,18 @@ def test_evaluate_tasks_resumes_after_an_interrupt(tmp_path: Path, monkeypatch) 
     resumed = task_table(**args, resume_dir=tmp_path)
     assert resumed == clean
     assert len(ran) == 16 - CHUNK_JOBS  # the first chunk was kept
+
+
+@pytest.mark.parametrize("index", [0, 1, 2])
+def test_one_run_scores_every_replanning_budget_as_its_own_run(index: int) -> None:
+    """Tables IV/V run each episode once with the largest budget: the score for budget 0 is
+    the score of an episode run with no replanning at all (same seeds, same first attempt),
+    under the paper's 2 cm noise, where first attempts fail (episode 0 replans)."""
+    from osg_control.perception.spec import PerceptionSpec
+
+    seen = PerceptionSpec("paper", tcp_noise=0.02)
+    start = evaluate.StartEpisode("kitchen", "open-pick-up", None, 5, seen, 0, 5, index)
+    both = evaluate.run_task_episode(evaluate.TaskEpisode(start, "open-pick-up", (0, 2), 0.2))
+    alone = evaluate.run_task_episode(evaluate.TaskEpisode(start, "open-pick-up", (0,), 0.2))
+    assert both[0] == alone[0]
+    assert both[1][0] >= both[0][0] and both[1][1] >= both[0][1]  # more budget: no less

@@ -312,10 +312,21 @@ class Executor:
             failure=f"timeout after {skill.max_steps} steps",
         ), obs
 
-    def execute(self, goal: Iterable[str], env: SkillEnv, obs: np.ndarray) -> ExecutionResult:
+    def execute(
+        self,
+        goal: Iterable[str],
+        env: SkillEnv,
+        obs: np.ndarray,
+        after_attempt: Callable[[int, ExecutionResult], Any] | None = None,
+    ) -> ExecutionResult:
         """Reach ``goal`` from the env's current state (``obs`` is its latest observation),
         deciding from the percepts; ``success`` is what the robot believes (score an
-        episode on the simulator's truth, e.g. ``env.facts()``, outside)."""
+        episode on the simulator's truth, e.g. ``env.facts()``, outside).
+
+        ``after_attempt(attempt, result)``, if given, is called when an attempt's skill
+        sequence has ended, before anything else moves: where an executor with
+        ``max_replans = attempt`` would have stopped (Tables IV/V score every budget from
+        one run this way)."""
         goal = sorted(set(goal))
         started = time.perf_counter()
         self.motion = MotionMemory()  # the arm is taken to be at rest
@@ -349,6 +360,8 @@ class Executor:
                 env, ([entry] if entry else []) + plan, obs, result, tracker, objects
             )
             facts = env.percept().facts
+            if after_attempt is not None:
+                after_attempt(attempt, result)
             if not failed:
                 result.success = set(goal) <= facts
                 if not result.success:
