@@ -60,9 +60,7 @@ def _as_input_batch(
         moves = np.zeros((len(batch), MOTION_FEATURES))
     else:
         moves = np.asarray(motion, dtype=np.float64)
-        if moves.shape[-1:] != (MOTION_FEATURES,) or moves.reshape(-1, MOTION_FEATURES).shape[
-            0
-        ] != len(batch):
+        if moves.shape[-1:] != (MOTION_FEATURES,) or moves.size != len(batch) * MOTION_FEATURES:
             raise ValueError(
                 f"motion must have shape ({MOTION_FEATURES},) or (B, {MOTION_FEATURES}) for "
                 f"{len(batch)} state(s), got {moves.shape}"

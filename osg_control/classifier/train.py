@@ -64,7 +64,7 @@ def normalisation(observations: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         observations: (N, ``INPUT_DIM``) training inputs, N >= 1.
 
     Returns:
-        (mean, std) as (10,) float32; a std below ``MIN_STD`` is replaced by 1.
+        (mean, std) as (``INPUT_DIM``,) float32; a std below ``MIN_STD`` is replaced by 1.
     """
     mean = observations.mean(axis=0, dtype=np.float64)
     std = observations.std(axis=0, dtype=np.float64)

@@ -3,8 +3,8 @@
 Both simulators load the *same* URDF file, so the kinematics agree by construction (a test
 checks TCP pose and Jacobian to 1e-9). MuJoCo gets speed-capped joint drives
 (``control.servo``), gravity compensation, a TCP site and a home keyframe added through
-``mujoco.MjSpec``; Pinocchio gets
-an arm-only model (fingers locked) whose ``panda_hand_tcp`` frame is the TCP.
+``mujoco.MjSpec``; Pinocchio gets an arm-only model (fingers locked) whose
+``panda_hand_tcp`` frame is the TCP.
 """
 
 from __future__ import annotations
@@ -36,6 +36,13 @@ FINGER_OPEN = 0.04
 """Finger joint travel when open [m] (each finger; distance between fingers is twice this)."""
 CONTROL_HZ = 20.0
 """The rate of the arm's control loop [Hz]: one IK solve and servo target per 50 ms."""
+
+
+def substeps_per_control_step(timestep: float) -> int:
+    """Physics substeps of ``timestep`` [s] in one control step (``CONTROL_HZ``)."""
+    return round(1.0 / (CONTROL_HZ * timestep))
+
+
 HOME_KEY = "arm-home"
 """The MuJoCo keyframe of ``HOME_Q`` (fingers open) in every model built here."""
 

@@ -14,12 +14,12 @@ import numpy as np
 
 from osg_control.control.robot import (
     ARM_JOINTS,
-    CONTROL_HZ,
     FINGER_JOINTS,
     FINGER_OPEN,
     HOME_KEY,
     HOME_Q,
     panda_spec,
+    substeps_per_control_step,
 )
 from osg_control.control.servo import add_speed_sensors
 
@@ -39,7 +39,7 @@ def with_panda(scene: mujoco.MjSpec) -> mujoco.MjSpec:
     with warnings.catch_warnings():
         warnings.filterwarnings("ignore", message=_EMPTY_PREFIX)
         scene.attach(robot, frame=scene.worldbody.add_frame(), prefix="")
-    add_speed_sensors(scene, ARM_JOINTS, round(1.0 / (CONTROL_HZ * scene.option.timestep)))
+    add_speed_sensors(scene, ARM_JOINTS, substeps_per_control_step(scene.option.timestep))
     return scene
 
 

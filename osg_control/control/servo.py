@@ -147,11 +147,8 @@ class SpeedWatch:
         return np.append(during.max(axis=0), after.max())
 
     def peak(self, data: mujoco.MjData, substeps: int) -> float:
-        """The largest of ``ratios(data, substeps)``, without forming them."""
-        rows = self._rows(int(data.history[self._cursor]), substeps)
-        during = np.abs(data.history[rows]) * self._inverse_limits[:, None]
-        fastest = float(during.max(initial=0.0))
-        return max(fastest, float((np.abs(data.qvel[self._dofs]) * self._inverse_limits).max()))
+        """The largest of ``ratios(data, substeps)``: the peak over the call's substeps."""
+        return float(self.ratios(data, substeps).max())
 
     def _rows(self, newest: int, substeps: int) -> np.ndarray:
         """History indices (joints x substeps - 1) of the samples after the first

@@ -47,6 +47,7 @@ from osg_control.control.robot import (
     HOME_KEY,
     HOME_Q,
     TCP_SITE,
+    substeps_per_control_step,
     urdf_velocity_limits,
 )
 from osg_control.control.servo import (
@@ -211,7 +212,7 @@ class ArmEnv(gym.Env):
         self.data = mujoco.MjData(self.model)
         self.ik = DiffIKController(self.config.ik)
         self._reset_ik: DiffIKController | None = None
-        self.n_substeps = round(1.0 / (CONTROL_HZ * self.model.opt.timestep))
+        self.n_substeps = substeps_per_control_step(self.model.opt.timestep)
         self._arm_qpos = _as_slice([self.model.joint(j).qposadr[0] for j in ARM_JOINTS])
         self._arm_dof = _as_slice([self.model.joint(j).dofadr[0] for j in ARM_JOINTS])
         self._arm_act = _as_slice([self.model.actuator(j).id for j in ARM_JOINTS])
