@@ -22,7 +22,7 @@ from osg_control.domain.registry import get_domain
 from osg_control.errors import EXIT_CODES, CheckpointError, DatasetError, TrainingError
 from osg_control.learning.checkpoints import checkpoint_paths, load_checkpoint, save_checkpoint
 from osg_control.learning.td3bc import TD3BC, BatchedReplay
-from osg_control.pipeline.train import train_with_progress
+from osg_control.pipeline.training_loop import train_with_progress
 from tests.datagen import write_synthetic_dataset
 
 KITCHEN = get_domain("kitchen")
@@ -151,7 +151,7 @@ def test_training_stops_on_a_non_finite_loss(tmp_path):
 
 
 def test_finite_losses_pass():
-    from osg_control.pipeline.train import check_finite_losses
+    from osg_control.pipeline.training_loop import check_finite_losses
 
     check_finite_losses({"critic_loss": torch.tensor([0.1, 2.0])}, 1, ["a", "b"])
     with pytest.raises(TrainingError, match=r"\['b'\]"):

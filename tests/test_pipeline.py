@@ -34,10 +34,15 @@ from osg_control.pipeline import (
     reproduce,
     train_missing,
 )
+from osg_control.pipeline.held_out import HeldOutCheck
+from osg_control.pipeline.training_loop import EarlyStop
 from osg_control.planning.costs import RATES_KEY, measured_graph
 from osg_control.planning.pddl_io import skill_cost
 
-TINY = Scale(episodes=16, train_steps=150, table_i_episodes=3, reach_episodes=1, task_episodes=1)
+TINY = Scale(
+    episodes=16, train_steps=150, table_i_episodes=3, reach_episodes=1, task_episodes=1,
+    check_every=50, patience=1, check_episodes=2,
+)  # fmt: skip
 MANIFEST_KEYS = {
     "domain", "command", "seed", "scale", "package_version", "git_commit", "datasets_sha256",
     "perception", "filter_gain", "success_rates", "success_rates_from", "motion_model",
@@ -117,7 +122,15 @@ def test_a_rerun_keeps_the_checkpoints_trained_on_these_data(
 ) -> None:
     skills = run.bundle.policies_dir
     before = {p.name: p.read_bytes() for p in skills.iterdir()}
-    kept = train_missing(domain, run.datasets.directory, skills, TINY.train_steps, seed=0)
+    rule = TINY.early_stopping()
+    assert rule is not None
+    check = HeldOutCheck(
+        domain, TINY.check_episodes, 0, 1, run.bundle.perception, 0.2, run.bundle.motion_model
+    )
+    kept = train_missing(
+        domain, run.datasets.directory, skills, TINY.train_steps, seed=0,
+        early_stop=EarlyStop(rule, check),
+    )  # fmt: skip
     assert kept is None
     assert {p.name: p.read_bytes() for p in skills.iterdir()} == before
 

@@ -93,6 +93,48 @@ def _scripted_success(task: tuple[str, str, int, int]) -> bool:
     return run_scripted_episode(domain, domain.skill(task[1]), task[2], task[3]).success
 
 
+def learned_rates(
+    domain: Domain,
+    policy_dir: str | Path,
+    names: Sequence[str],
+    noise_levels: Sequence[float],
+    episodes: int,
+    seed: int = 0,
+    executor: TaskExecutor | None = None,
+    perception: PerceptionSpec | None = None,
+    filter_gain: float | None = None,
+    randomize: bool = False,
+    filter_motion: tuple[float, float] = MOTION_MODEL,
+    first_cell: int = 0,
+    progress: bool = False,
+) -> np.ndarray:
+    """The success rate of each learned skill at each noise level, (skills, levels).
+
+    Noise level ``k`` draws its episodes as cell ``first_cell + k`` (``episode_rng``):
+    Table I's columns are cells 0, 1, ...; a check on other episodes (training's held-out
+    checks) starts elsewhere. See ``skill_table`` for the other arguments.
+
+    Raises:
+        CheckpointError: a skill checkpoint missing.
+    """
+    require_skills(policy_dir, names)
+    executor = executor or LocalExecutor(1)
+    perception = perception or PerceptionSpec()
+    cells = [(name, k, float(noise)) for name in names for k, noise in enumerate(noise_levels)]
+
+    def job(cell: tuple[str, int, float], i: int) -> SkillEpisode:
+        name, k, noise = cell
+        seen = at_noise(perception, noise)
+        return SkillEpisode(
+            domain.name, name, str(policy_dir), seen, seed, first_cell + k, i, filter_gain,
+            randomize, filter_motion,
+        )  # fmt: skip
+
+    outcomes = executor.map(run_skill_episode, grid(cells, episodes, job))
+    rates = cell_means(outcomes, len(cells), episodes, "learned", progress)
+    return rates.reshape(len(names), len(noise_levels))
+
+
 def skill_table(
     domain: Domain,
     policy_dir: str | Path,
@@ -129,23 +171,12 @@ def skill_table(
     names = list(skills or domain.skills_by_name)
     for name in names:
         domain.skill(name)
-    require_skills(policy_dir, names)
     executor = executor or LocalExecutor(workers)
     perception = perception or PerceptionSpec()
-    cells = [(name, k, float(noise)) for name in names for k, noise in enumerate(noise_levels)]
-
-    def job(cell: tuple[str, int, float], i: int) -> SkillEpisode:
-        name, k, noise = cell
-        seen = at_noise(perception, noise)
-        return SkillEpisode(
-            domain.name, name, str(policy_dir), seen, seed, k, i, filter_gain, randomize,
-            filter_motion,
-        )  # fmt: skip
-
-    tasks = grid(cells, episodes, job)
-    outcomes = executor.map(run_skill_episode, tasks)
-    rates = cell_means(outcomes, len(cells), episodes, "learned", progress)
-    rates = rates.reshape(len(names), len(noise_levels))
+    rates = learned_rates(
+        domain, policy_dir, names, noise_levels, episodes, seed, executor, perception,
+        filter_gain, randomize, filter_motion, progress=progress,
+    )  # fmt: skip
     scripted_tasks = grid(names, scripted_episodes, lambda n, i: (domain.name, n, seed + 1, i))
     scripted = executor.map(_scripted_success, scripted_tasks)
     scripted_rates = cell_means(scripted, len(names), scripted_episodes, "scripted", progress)

@@ -248,6 +248,13 @@ class BatchedReplay:
             torch.Generator(device=self.device).manual_seed(seed + 1) for seed in seeds
         ]
 
+    def keep(self, skills: Sequence[int]) -> None:
+        """Go on sampling for the skills at positions ``skills`` only (in that order); each
+        keeps its generator, so its batches continue as they would have."""
+        self._sizes = [self._sizes[k] for k in skills]
+        self._offsets = self._offsets[list(skills)]
+        self._generators = [self._generators[k] for k in skills]
+
     def sample(self) -> Batch:
         """Draw ``batch_size`` transitions (uniformly, with replacement) for every skill.
 
@@ -444,6 +451,22 @@ class TD3BC:
             logs.update(actor_loss=actor_loss.detach(), bc_loss=bc_loss.detach(), lam=lam)
         return logs
 
+    def keep(self, skills: Sequence[int]) -> None:
+        """Go on training the skills at positions ``skills`` only (in that order): their
+        actors, critics, targets and Adam states are kept, the others dropped, so each kept
+        skill's update continues as before (but for the last bits of batched kernels)."""
+        positions = list(skills)
+        twins = positions + [self.num_skills + k for k in positions]  # critic-major
+        self.actor_target = [p[positions].clone() for p in self.actor_target]
+        self.critic_target = [p[twins].clone() for p in self.critic_target]
+        self.actor, self.actor_optimizer = _kept_optimised(
+            self.actor, self.actor_optimizer, positions
+        )
+        self.critic, self.critic_optimizer = _kept_optimised(
+            self.critic, self.critic_optimizer, twins
+        )
+        self.num_skills = len(positions)
+
     def actor_layers(self, skill: int) -> list[tuple[np.ndarray, np.ndarray]]:
         """One skill's actor as numpy arrays (for checkpoints).
 
@@ -456,3 +479,21 @@ class TD3BC:
         """
         arrays = [p[skill].detach().cpu().numpy().copy() for p in self.actor]
         return [(w, b.reshape(-1)) for w, b in zip(arrays[::2], arrays[1::2], strict=True)]
+
+
+def _kept_optimised(
+    params: list[torch.Tensor], optimizer: torch.optim.Adam, rows: list[int]
+) -> tuple[list[torch.Tensor], torch.optim.Adam]:
+    """The stacked parameters' ``rows`` as new leaves, with an Adam optimiser holding the
+    same settings and those rows of its moment estimates (and its step counts)."""
+    kept = [p.detach()[rows].clone().requires_grad_() for p in params]
+    group = {k: v for k, v in optimizer.param_groups[0].items() if k != "params"}
+    kept_optimizer = torch.optim.Adam(kept, **group)
+    for old, new in zip(params, kept, strict=True):
+        state = optimizer.state.get(old)
+        if state:
+            kept_optimizer.state[new] = {
+                key: value if value.ndim == 0 else value[rows].clone()
+                for key, value in state.items()
+            }
+    return kept, kept_optimizer

@@ -1,7 +1,8 @@
 """The whole pipeline, from nothing to Tables I-V and a report.
 
-Stages, each timed: collect -> train (TD3+BC, all skills batched; kept when already trained
-on these data) -> filter (the TCP filter's motion model fitted on the data) -> Table I ->
+Stages, each timed: collect -> filter (the TCP filter's motion model fitted on the data) ->
+train (TD3+BC, all skills batched, each stopped when its held-out success stops improving;
+kept when already trained on these data) -> Table I ->
 the measured success rates into the bundle's manifest -> graph + PDDL with those rates as
 costs -> classifier -> Table II -> Table III -> Tables IV/V -> report. The output folder's
 ``defaults/`` is a model bundle with the layout of the shipped defaults (``skills/``,
@@ -25,6 +26,7 @@ from osg_control.evaluation.evaluate import format_reach_table, format_task_tabl
 from osg_control.evaluation.report import write_report
 from osg_control.evaluation.skill_table import format_skill_table
 from osg_control.io_safety import check_output_dir
+from osg_control.learning.early_stopping import EarlyStopping
 from osg_control.paths import PACKAGE_DIR
 from osg_control.perception.spec import PerceptionSpec
 from osg_control.pipeline.bundle import SKILLS_DIR, ModelBundle
@@ -35,6 +37,7 @@ from osg_control.pipeline.classifier import (
 )
 from osg_control.pipeline.collect import DataSets, collect_datasets, format_collection
 from osg_control.pipeline.export import ExportedPlan, export_measured_pddl, format_export
+from osg_control.pipeline.held_out import HeldOutCheck
 from osg_control.pipeline.motion import fit_filter_motion, format_motion
 from osg_control.pipeline.tables import (
     DEPLOYMENT_NOISE,
@@ -47,6 +50,7 @@ from osg_control.pipeline.tables import (
     tables_iv_v,
 )
 from osg_control.pipeline.train import TrainedSkills, format_training, train_missing
+from osg_control.pipeline.training_loop import EarlyStop
 
 T = TypeVar("T")
 Log = Callable[[str], None]
@@ -57,19 +61,42 @@ DEFAULTS_DIR = "defaults"
 
 @dataclass(frozen=True)
 class Scale:
-    """How big each stage is."""
+    """How big each stage is.
+
+    Attributes:
+        episodes: collected per skill.
+        train_steps: TD3+BC updates per skill (with early stopping: the most).
+        table_i_episodes, reach_episodes, task_episodes: per cell of Tables I, III, IV/V.
+        check_every: updates between training's held-out checks (None: no early stopping,
+            every skill trains ``train_steps``).
+        patience: checks without improvement after which a skill stops.
+        check_episodes: held-out episodes per skill per check.
+    """
 
     episodes: int
     train_steps: int
     table_i_episodes: int
     reach_episodes: int
     task_episodes: int
+    check_every: int | None = None
+    patience: int = 2
+    check_episodes: int = 50
+
+    def early_stopping(self) -> EarlyStopping | None:
+        """The training stage's stopping rule, if any."""
+        if self.check_every is None:
+            return None
+        return EarlyStopping(self.check_every, self.patience)
 
 
 FULL = Scale(
-    episodes=300, train_steps=10000, table_i_episodes=200, reach_episodes=200, task_episodes=100
-)
-QUICK = Scale(episodes=40, train_steps=300, table_i_episodes=4, reach_episodes=2, task_episodes=1)
+    episodes=300, train_steps=10000, table_i_episodes=200, reach_episodes=200, task_episodes=100,
+    check_every=1000, patience=2, check_episodes=50,
+)  # fmt: skip
+QUICK = Scale(
+    episodes=40, train_steps=300, table_i_episodes=4, reach_episodes=2, task_episodes=1,
+    check_every=100, patience=1, check_episodes=2,
+)  # fmt: skip
 
 
 class StageError(OSGError):
@@ -225,13 +252,13 @@ def reproduce(config: ReproduceConfig, log: Log | None = None) -> Reproduction:
                 progress=config.progress),
         format_collection,
     )  # fmt: skip
+    motion = stages.run("filter", partial(fit_filter_motion, domain, data_dir), format_motion)
     trained = stages.run(
         "train",
         partial(train_missing, domain, data_dir, defaults / SKILLS_DIR, scale.train_steps, seed,
-                threads=config.train_threads),
+                threads=config.train_threads, early_stop=_early_stop(config, motion)),
         _format_trained,
     )  # fmt: skip
-    motion = stages.run("filter", partial(fit_filter_motion, domain, data_dir), format_motion)
     bundle = ModelBundle(
         defaults,
         perception=config.perception,
@@ -294,6 +321,19 @@ def reproduce(config: ReproduceConfig, log: Log | None = None) -> Reproduction:
     }
     written = write_report(figures, out, domain.published)
     return Reproduction(out, bundle, datasets, trained, exported, classifier, figures, written)
+
+
+def _early_stop(config: ReproduceConfig, motion: tuple[float, float]) -> EarlyStop | None:
+    """The train stage's early stopping: the scale's rule, checked at Table I's deployment
+    column (its perception, filter and the fitted motion model) on held-out episodes."""
+    rule = config.scale.early_stopping()
+    if rule is None:
+        return None
+    check = HeldOutCheck(
+        config.domain, config.scale.check_episodes, config.seed, config.workers,
+        config.perception, config.filter_gain, motion,
+    )  # fmt: skip
+    return EarlyStop(rule, check)
 
 
 def _format_trained(trained: TrainedSkills | None) -> str:

@@ -4,35 +4,63 @@ from __future__ import annotations
 
 import json
 from pathlib import Path
+from typing import Any
 
 from osg_control.domain.base import Domain
 from osg_control.domain.spec import SkillSpec
 from osg_control.learning.checkpoints import sha256_file
 
 
-def untrained_skills(domain: Domain, data: Path, skills: Path, steps: int, seed: int) -> list[str]:
+def untrained_skills(
+    domain: Domain,
+    data: Path,
+    skills: Path,
+    steps: int,
+    seed: int,
+    early_stopping: dict[str, Any] | None = None,
+) -> list[str]:
     """The domain's skills whose checkpoint in ``skills`` was not trained by this stage's
-    command on these very data sets (steps, seed, spec and the data set's sha256 in its
-    sidecar). A rerun into the same folder keeps the checkpoints only if there are none:
+    command on these very data sets (seed, spec and the data set's sha256 in its sidecar;
+    ``steps`` updates, or with ``early_stopping`` (``EarlyStop.record``) that rule with a
+    budget of ``steps``). A rerun into the same folder keeps the checkpoints only if there are none:
     any other retrains every skill (``train_missing``), because weights trained in a
     smaller batch of skills differ in the last bits from the batch of all (measured: three
     skills retrained alone differed from a fresh run's), and a reproduction must be a fresh
     run's bytes."""
-    return [skill.name for skill in domain.skills if not _trained(skill, data, skills, steps, seed)]
+    rule = None if early_stopping is None else json.loads(json.dumps(early_stopping))
+    return [
+        skill.name
+        for skill in domain.skills
+        if not _trained(skill, data, skills, steps, seed, rule)
+    ]
 
 
-def _trained(skill: SkillSpec, data: Path, skills: Path, steps: int, seed: int) -> bool:
+def _trained(
+    skill: SkillSpec,
+    data: Path,
+    skills: Path,
+    steps: int,
+    seed: int,
+    early_stopping: dict[str, Any] | None,
+) -> bool:
     try:
         meta = json.loads((skills / f"{skill.name}.json").read_text())
         dataset_sha256 = sha256_file(data / f"{skill.name}.h5")
     except (OSError, ValueError):
         return False
     expected = {
-        "steps": steps,
         "seed": seed,
         "skill_spec": json.loads(skill.to_json()),
         "dataset_sha256": dataset_sha256,
     }
     if not isinstance(meta, dict) or any(meta.get(k) != v for k, v in expected.items()):
         return False
-    return (skills / f"{skill.name}.safetensors").exists()
+    config = meta.get("train_config")
+    stopped = config.get("early_stopping") if isinstance(config, dict) else None
+    if early_stopping is None:
+        budget_matches = stopped is None and meta.get("steps") == steps
+    else:
+        budget_matches = isinstance(stopped, dict) and (
+            stopped.get("rule") == early_stopping and stopped.get("max_updates") == steps
+        )
+    return budget_matches and (skills / f"{skill.name}.safetensors").exists()

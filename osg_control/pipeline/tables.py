@@ -90,6 +90,13 @@ def table_i(
     )
 
 
+def deployment_noise(perception: PerceptionSpec) -> float:
+    """The TCP noise [m] of Table I's deployment column under ``perception``: the paper's
+    ``DEPLOYMENT_NOISE`` under its protocol, else none added (the last column)."""
+    levels = table_i_noise_levels(perception)
+    return DEPLOYMENT_NOISE if DEPLOYMENT_NOISE in levels else levels[-1]
+
+
 def deployment_column(table: dict[str, Any]) -> int:
     """The index of Table I's column at ``DEPLOYMENT_NOISE`` (the last column without it)."""
     noise = list(table["noise"])

@@ -1,6 +1,10 @@
 """Stage 2, train: TD3+BC skills from their data sets, all batched in one process
 (``train_skills``), or only when the checkpoints there were not trained by this very
-command on these very data (``train_missing``, ``resume.untrained_skills``)."""
+command on these very data (``train_missing``, ``resume.untrained_skills``).
+
+With ``EarlyStop`` each skill leaves the batch once its held-out success stops improving
+(``learning.early_stopping``) and keeps its best checked weights; the batch shrinks, and an
+update costs in proportion to the skills left in it."""
 
 from __future__ import annotations
 
@@ -12,14 +16,13 @@ from typing import Any
 
 import numpy as np
 import torch
-from tqdm import tqdm
 
 from osg_control.data.datasets import ACTION_DIM, OBS_DIM, load_dataset
 from osg_control.domain.base import Domain
 from osg_control.domain.spec import SkillSpec, skill_from_json
-from osg_control.errors import DatasetError, OSGError, SkillSpecError, TrainingError
+from osg_control.errors import DatasetError, OSGError, SkillSpecError
 from osg_control.io_safety import check_output_dir
-from osg_control.learning.checkpoints import Checkpoint, save_checkpoint, sha256_file
+from osg_control.learning.checkpoints import Checkpoint, Layer, save_checkpoint, sha256_file
 from osg_control.learning.td3bc import (
     ACTION_SCALE,
     TD3BC,
@@ -29,11 +32,15 @@ from osg_control.learning.td3bc import (
     prepare_skill_data,
 )
 from osg_control.pipeline.resume import untrained_skills
+from osg_control.pipeline.training_loop import (
+    EarlyStop,
+    SkillOutcome,
+    train_early_stopped,
+    train_fixed,
+)
 from osg_control.seeding import skill_seed
 
 DEFAULT_STEPS = 100_000
-LOG_EVERY = 100
-"""Updates between refreshes of the progress bar's losses."""
 SIDECAR_BYTES = 16 * 2**10
 """Room allowed per checkpoint for its JSON sidecar and safetensors header (about 3 kB)."""
 
@@ -55,10 +62,12 @@ class TrainedSkills:
     Attributes:
         directory: the checkpoint folder.
         device, threads: where it ran (torch's CPU threads).
-        steps, seed: updates per skill and the run seed.
-        seconds: the training time (loading and saving excluded).
-        skills: per skill, its name, checkpoint and data set paths, data set hash and
-            final losses.
+        steps, seed: the update budget per skill and the run seed.
+        seconds: the training time (loading and saving excluded; held-out checks included).
+        check_seconds: of which the held-out checks (0 without early stopping).
+        skills: per skill, its name, checkpoint and data set paths, data set hash, the
+            updates of its weights (``updates``) and those it ran (``trained_updates``),
+            its held-out checks (with early stopping) and its losses there.
     """
 
     directory: Path
@@ -67,19 +76,26 @@ class TrainedSkills:
     steps: int
     seed: int
     seconds: float
+    check_seconds: float = 0.0
     skills: list[dict[str, Any]] = field(default_factory=list)
+
+    @property
+    def skill_updates(self) -> int:
+        """Updates run over all skills."""
+        return sum(int(row["trained_updates"]) for row in self.skills)
 
     def to_dict(self) -> dict[str, Any]:
         """The summary ``osg train --json`` prints."""
-        seconds = max(self.seconds, 1e-9)
+        updating = max(self.seconds - self.check_seconds, 1e-9)
         return {
             "device": self.device,
             "threads": self.threads,
             "steps": self.steps,
             "seed": self.seed,
             "seconds": self.seconds,
-            "updates_per_s": self.steps / seconds,
-            "skill_updates_per_s": self.steps * len(self.skills) / seconds,
+            "check_seconds": self.check_seconds,
+            "skill_updates": self.skill_updates,
+            "skill_updates_per_s": self.skill_updates / updating,
             "skills": self.skills,
         }
 
@@ -125,70 +141,53 @@ def checkpoint_bytes(config: TD3BCConfig, skills: int) -> int:
     return skills * (4 * params + SIDECAR_BYTES)
 
 
-def check_finite_losses(logs: dict[str, torch.Tensor], step: int, names: list[str]) -> None:
-    """Stop training when a loss is NaN or infinite (its weights are garbage from then on).
-
-    Raises:
-        TrainingError: naming the loss, the skills and the update; nothing is saved.
-    """
-    for key, value in logs.items():
-        bad = ~torch.isfinite(value)
-        if bool(bad.any()):
-            skills = [names[k] for k in torch.nonzero(bad.reshape(-1)).reshape(-1).tolist()]
-            raise TrainingError(
-                f"{key} is non-finite at update {step} for skill(s) {skills}; training stopped, "
-                "no checkpoint written (check the data sets for extreme values)"
-            )
-
-
-def train_with_progress(
-    trainer: TD3BC, replay: BatchedReplay, steps: int, names: list[str] | None = None
-) -> dict[str, torch.Tensor]:
-    """Run ``steps`` updates under a progress bar (updates/s, losses averaged over skills).
-
-    Returns:
-        The latest per-skill (K,) value of every log key (actor keys from the last actor step).
-    """
-    logs: dict[str, torch.Tensor] = {}
-    names = names or [str(k) for k in range(trainer.num_skills)]
-    desc = f"train {trainer.num_skills} skill(s)"
-    with tqdm(total=steps, desc=desc, unit="update", mininterval=0.5) as bar:
-        for step in range(1, steps + 1):
-            logs.update(trainer.train_step(replay.sample()))
-            if step % LOG_EVERY == 0 or step == steps:
-                check_finite_losses(logs, step, names)
-                shown = ("critic_loss", "actor_loss", "bc_loss")
-                postfix = {key: f"{logs[key].mean().item():.4g}" for key in shown if key in logs}
-                bar.set_postfix(postfix, refresh=False)
-            bar.update()
-    return logs
+def _checkpoint(
+    item: SkillInput,
+    layers: list[Layer],
+    trainer: TD3BC,
+    updates: int,
+    seed: int,
+    early_stopping: dict[str, Any] | None = None,
+) -> Checkpoint:
+    """A skill's checkpoint with ``layers`` after ``updates`` (``early_stopping``: its
+    record in ``train_config``)."""
+    train_config = trainer.config.to_json_dict()
+    if early_stopping is not None:
+        train_config["early_stopping"] = early_stopping
+    return Checkpoint(
+        skill=item.spec,
+        layers=layers,
+        obs_mean=item.data.obs_mean,
+        obs_std=item.data.obs_std,
+        action_scale=item.data.action_scale,
+        train_config=train_config,
+        steps=updates,
+        seed=seed,
+        dataset_sha256=item.dataset_sha256,
+    )
 
 
 def save_checkpoints(
     out_dir: Path,
     inputs: list[SkillInput],
     trainer: TD3BC,
-    logs: dict[str, torch.Tensor],
+    outcomes: list[SkillOutcome],
     seed: int,
+    steps: int,
+    stop: EarlyStop | None = None,
 ) -> list[dict[str, Any]]:
-    """Write every trained skill's checkpoint (``seed``: the run's).
+    """Write every trained skill's checkpoint (``seed``: the run's; ``steps``: its budget).
 
     Returns:
-        Per skill: its name, checkpoint and data set paths, data set hash and final logs.
+        Per skill: its name, checkpoint and data set paths, data set hash, updates, held-out
+        checks (with ``stop``) and logs.
     """
     results = []
-    for k, item in enumerate(inputs):
-        checkpoint = Checkpoint(
-            skill=item.spec,
-            layers=trainer.actor_layers(k),
-            obs_mean=item.data.obs_mean,
-            obs_std=item.data.obs_std,
-            action_scale=item.data.action_scale,
-            train_config=trainer.config.to_json_dict(),
-            steps=trainer.steps,
-            seed=seed,
-            dataset_sha256=item.dataset_sha256,
-        )
+    for item, outcome in zip(inputs, outcomes, strict=True):
+        record = None
+        if stop is not None and outcome.progress is not None:
+            record = outcome.progress.to_json_dict(stop.record(), steps)
+        checkpoint = _checkpoint(item, outcome.layers, trainer, outcome.updates, seed, record)
         weights, sidecar = save_checkpoint(out_dir, checkpoint)
         results.append(
             {
@@ -197,7 +196,10 @@ def save_checkpoints(
                 "sidecar": str(sidecar),
                 "dataset": str(item.dataset_path),
                 "dataset_sha256": item.dataset_sha256,
-                **{key: float(value[k]) for key, value in sorted(logs.items())},
+                "updates": outcome.updates,
+                "trained_updates": outcome.trained_updates,
+                **({"held_out": record["checks"]} if record else {}),
+                **outcome.logs,
             }
         )
     return results
@@ -212,6 +214,7 @@ def train_skills(
     seed: int = 0,
     device: str = "cpu",
     threads: int | None = None,
+    early_stop: EarlyStop | None = None,
 ) -> TrainedSkills:
     """Train skills batched with TD3+BC and write their checkpoints.
 
@@ -221,10 +224,12 @@ def train_skills(
         out_dir: the checkpoint folder (checked for room before any data is loaded).
         names: skill names (default: all of the domain's); each skill's weights do not
             depend on the others but for their last bits.
-        steps: updates per skill.
+        steps: updates per skill (with ``early_stop``: the most).
         seed: the run seed (each skill's seed derives from it and the skill's name).
         device: ``cpu`` or ``cuda``.
         threads: torch CPU threads (None: torch's default); set process-wide.
+        early_stop: stop each skill when its held-out success stops improving (None:
+            every skill trains ``steps`` updates).
 
     Raises:
         OSGError: ``cuda`` without CUDA.
@@ -245,7 +250,21 @@ def train_skills(
     replay = BatchedReplay([i.data for i in inputs], config.batch_size, seeds, device)
     trainer = TD3BC(config, seeds, device=device)
     start = time.perf_counter()
-    logs = train_with_progress(trainer, replay, steps, names)
+    check_seconds = 0.0
+    if early_stop is None:
+        outcomes = train_fixed(trainer, replay, steps, names)
+    else:
+
+        def snapshot(folder: Path, layers: dict[str, list[Layer]], updates: int) -> None:
+            for item in inputs:
+                if item.spec.name in layers:
+                    save_checkpoint(
+                        folder, _checkpoint(item, layers[item.spec.name], trainer, updates, seed)
+                    )
+
+        outcomes, check_seconds = train_early_stopped(
+            trainer, replay, names, steps, early_stop, snapshot
+        )
     seconds = time.perf_counter() - start
     return TrainedSkills(
         directory=out,
@@ -254,20 +273,31 @@ def train_skills(
         steps=steps,
         seed=seed,
         seconds=seconds,
-        skills=save_checkpoints(out, inputs, trainer, logs, seed),
+        check_seconds=check_seconds,
+        skills=save_checkpoints(out, inputs, trainer, outcomes, seed, steps, early_stop),
     )
 
 
 def format_training(trained: TrainedSkills) -> str:
-    """One line per skill (losses, sidecar) and a total."""
-    lines = [
-        f"{r['skill']}: critic loss {r['critic_loss']:.4g}, "
-        f"bc loss {r.get('bc_loss', float('nan')):.4g} -> {r['sidecar']}"
-        for r in trained.skills
-    ]
+    """One line per skill (updates, held-out checks, losses, sidecar) and a total."""
+    lines = []
+    for r in trained.skills:
+        checks = r.get("held_out")
+        held_out = (
+            " (held-out " + ", ".join(f"{u}: {rate:.2f}" for u, rate in checks) + ")"
+            if checks
+            else ""
+        )
+        lines.append(
+            f"{r['skill']}: {r['updates']} updates{held_out}, critic loss "
+            f"{r['critic_loss']:.4g}, bc loss {r.get('bc_loss', float('nan')):.4g} -> "
+            f"{r['sidecar']}"
+        )
     summary = trained.to_dict()
+    checks = f", held-out checks {trained.check_seconds:.1f} s" if trained.check_seconds else ""
     lines.append(
-        f"{len(trained.skills)} skill(s) x {trained.steps} updates in {trained.seconds:.1f} s "
+        f"{len(trained.skills)} skill(s), {trained.skill_updates} skill-updates of at most "
+        f"{trained.steps} each, in {trained.seconds:.1f} s{checks} "
         f"({summary['skill_updates_per_s']:.0f} skill-updates/s) on {trained.device}"
     )
     return "\n".join(lines)
@@ -281,10 +311,12 @@ def train_missing(
     seed: int = 0,
     device: str = "cpu",
     threads: int | None = None,
+    early_stop: EarlyStop | None = None,
 ) -> TrainedSkills | None:
     """Train every skill batched unless all of them already have checkpoints trained with
-    these steps and seed on these data sets (``untrained_skills``); None when nothing was
-    trained. See ``train_skills`` for the arguments and errors."""
-    if not untrained_skills(domain, Path(data_dir), Path(out_dir), steps, seed):
+    these steps, seed and stopping rule on these data sets (``untrained_skills``); None
+    when nothing was trained. See ``train_skills`` for the arguments and errors."""
+    record = None if early_stop is None else early_stop.record()
+    if not untrained_skills(domain, Path(data_dir), Path(out_dir), steps, seed, record):
         return None
-    return train_skills(domain, data_dir, out_dir, None, steps, seed, device, threads)
+    return train_skills(domain, data_dir, out_dir, None, steps, seed, device, threads, early_stop)
