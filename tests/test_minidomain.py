@@ -128,3 +128,29 @@ def test_cli_run(trained: Path, capsys: pytest.CaptureFixture[str]) -> None:
     assert cli.main([*argv, "--models", str(trained), "--json"]) == 0
     report = json.loads(capsys.readouterr().out)
     assert report["success_rate"] == 1.0 and report["episodes"][0]["plan"] == PLAN
+
+
+def test_cli_train_stops_each_skill_on_its_held_out_success(
+    domain: Domain, trained: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    out = tmp_path / "skills"
+    argv = ["--domain", DOMAIN_NAME, "train", "--skill", "all", "--steps", "900"]
+    argv += ["--data", str(trained / "data"), "--out", str(out), "--threads", "1", "--json"]
+    argv += ["--early-stop", "--check-every", "300", "--patience", "1", "--check-episodes", "4"]
+    argv += ["--workers", "1", "--filter"]
+    capsys.readouterr()
+    assert cli.main(argv) == 0
+    summary = json.loads(capsys.readouterr().out)
+    assert summary["skill_updates"] == sum(r["trained_updates"] for r in summary["skills"])
+    assert summary["skill_updates"] <= 900 * len(domain.skills) and summary["check_seconds"] > 0
+    for row in summary["skills"]:
+        checks = row["held_out"]
+        assert [u for u, _ in checks] == list(range(300, row["trained_updates"] + 1, 300))
+        best = max(rate for _, rate in checks)
+        assert row["updates"] == max(u for u, rate in checks if rate == best)  # latest best
+        sidecar = json.loads((out / f"{row['skill']}.json").read_text())
+        record = sidecar["train_config"]["early_stopping"]
+        assert sidecar["steps"] == row["updates"] and record["max_updates"] == 900
+        assert record["rule"]["patience"] == 1 and record["rule"]["held_out"]["episodes"] == 4
+        assert record["rule"]["held_out"]["filter_gain"] == 0.2
+    assert set(load_policies(out)) == {s.name for s in domain.skills}

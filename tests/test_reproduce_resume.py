@@ -47,3 +47,26 @@ def test_any_difference_retrains_that_skill(tmp_path) -> None:
     (skills / f"{first}.safetensors").unlink()  # a checkpoint missing
     (skills / f"{second}.json").write_text("{not json")  # a corrupt sidecar
     assert untrained_skills(domain, data, skills, 300, 0) == [first, second]
+
+
+def _stopped_early(skills, domain, rule, budget) -> None:
+    """Rewrite every sidecar as an early-stopped run's (``rule``, ``budget``)."""
+    for skill in domain.skills:
+        path = skills / f"{skill.name}.json"
+        sidecar = json.loads(path.read_text())
+        sidecar["steps"] = 3000  # the kept weights' updates, not the budget
+        sidecar["train_config"] = {"early_stopping": {"rule": rule, "max_updates": budget}}
+        path.write_text(json.dumps(sidecar))
+
+
+def test_early_stopped_checkpoints_are_kept_only_under_the_same_rule_and_budget(tmp_path) -> None:
+    domain = get_domain("kitchen")
+    everything = [skill.name for skill in domain.skills]
+    data, skills = _fake_run(tmp_path, domain)
+    rule = {"check_every": 1000, "patience": 2, "held_out": {"episodes": 50, "noise": (0.02,)}}
+    _stopped_early(skills, domain, json.loads(json.dumps(rule)), 10000)
+    assert untrained_skills(domain, data, skills, 10000, 0, rule) == []  # tuples as lists
+    assert untrained_skills(domain, data, skills, 20000, 0, rule) == everything  # budget
+    assert untrained_skills(domain, data, skills, 10000, 0, {**rule, "patience": 3}) == everything
+    assert untrained_skills(domain, data, skills, 10000, 0) == everything  # a fixed-steps run
+    assert untrained_skills(domain, data, skills, 3000, 0) == everything

@@ -37,7 +37,7 @@ def domain_of(args: argparse.Namespace) -> Domain:
     return get_domain(args.domain)
 
 
-def add_filter_argument(parser: argparse.ArgumentParser) -> None:
+def add_filter_argument(parser: argparse._ActionsContainer) -> None:
     """Add ``--filter [GAIN]``: run the policies on filtered TCP estimates (see
     ``osg_control.control.estimator``); absent means raw observations, the paper's protocol."""
     from osg_control.control.estimator import DEFAULT_GAIN
@@ -54,7 +54,7 @@ def add_filter_argument(parser: argparse.ArgumentParser) -> None:
     )
 
 
-def add_perception_arguments(parser: argparse.ArgumentParser) -> None:
+def add_perception_arguments(parser: argparse._ActionsContainer) -> None:
     """Add ``--perception NAME`` and ``--object-noise SIGMA`` (``perception.spec``)."""
     from osg_control.perception.spec import OBJECT_NOISE, PERCEPTIONS
 

@@ -4,7 +4,9 @@ In run order (``reproduce`` runs them all; ``osg train`` and ``osg reproduce`` a
 over them):
 
 - ``collect_datasets(domain, out, episodes, seed, workers) -> DataSets`` (``collect``)
-- ``train_skills(domain, data_dir, out_dir, names, steps, seed) -> TrainedSkills``, and
+- ``train_skills(domain, data_dir, out_dir, names, steps, seed, early_stop=...) ->
+  TrainedSkills`` (fixed updates, or each skill stopped when its held-out success stops
+  improving: ``training_loop``, ``held_out``), and
   ``train_missing(...) -> TrainedSkills | None``, which keeps checkpoints already trained
   on these data (``untrained_skills``) (``train``)
 - ``table_i(domain, skills_dir, episodes, ...) -> dict``, then
@@ -54,6 +56,7 @@ _EXPORTS: dict[str, str] = {
     "Scale": "reproduction",
     "FULL": "reproduction",
     "QUICK": "reproduction",
+    "with_early_stopping": "reproduction",
     "ReproduceConfig": "reproduction",
     "Reproduction": "reproduction",
     "StageError": "reproduction",
@@ -90,6 +93,7 @@ __all__ = [
     "train_skills",
     "train_state_classifier",
     "untrained_skills",
+    "with_early_stopping",
 ]
 
 

@@ -17,6 +17,8 @@ from osg_control.parallel import LocalExecutor
 from osg_control.perception.spec import PerceptionSpec
 from osg_control.pipeline.tables import deployment_noise
 
+CHECK_EPISODES = 50
+"""Held-out episodes per skill per check by default (the full reproduction's)."""
 HELD_OUT_CELL = 1000
 """The episode cell of the checks (``evaluate.episode_rng``); Table I's columns are cells
 0, 1, 2, so no check episode is a Table I episode."""

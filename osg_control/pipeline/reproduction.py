@@ -1,8 +1,8 @@
 """The whole pipeline, from nothing to Tables I-V and a report.
 
 Stages, each timed: collect -> filter (the TCP filter's motion model fitted on the data) ->
-train (TD3+BC, all skills batched, each stopped when its held-out success stops improving;
-kept when already trained on these data) -> Table I ->
+train (TD3+BC, all skills batched, optionally each stopped when its held-out success stops
+improving; kept when already trained on these data) -> Table I ->
 the measured success rates into the bundle's manifest -> graph + PDDL with those rates as
 costs -> classifier -> Table II -> Table III -> Tables IV/V -> report. The output folder's
 ``defaults/`` is a model bundle with the layout of the shipped defaults (``skills/``,
@@ -37,7 +37,7 @@ from osg_control.pipeline.classifier import (
 )
 from osg_control.pipeline.collect import DataSets, collect_datasets, format_collection
 from osg_control.pipeline.export import ExportedPlan, export_measured_pddl, format_export
-from osg_control.pipeline.held_out import HeldOutCheck
+from osg_control.pipeline.held_out import CHECK_EPISODES, HeldOutCheck
 from osg_control.pipeline.motion import fit_filter_motion, format_motion
 from osg_control.pipeline.tables import (
     DEPLOYMENT_NOISE,
@@ -80,7 +80,7 @@ class Scale:
     task_episodes: int
     check_every: int | None = None
     patience: int = 2
-    check_episodes: int = 50
+    check_episodes: int = CHECK_EPISODES
 
     def early_stopping(self) -> EarlyStopping | None:
         """The training stage's stopping rule, if any."""
@@ -90,13 +90,22 @@ class Scale:
 
 
 FULL = Scale(
-    episodes=300, train_steps=10000, table_i_episodes=200, reach_episodes=200, task_episodes=100,
-    check_every=1000, patience=2, check_episodes=50,
-)  # fmt: skip
-QUICK = Scale(
-    episodes=40, train_steps=300, table_i_episodes=4, reach_episodes=2, task_episodes=1,
-    check_every=100, patience=1, check_episodes=2,
-)  # fmt: skip
+    episodes=300, train_steps=10000, table_i_episodes=200, reach_episodes=200, task_episodes=100
+)
+QUICK = Scale(episodes=40, train_steps=300, table_i_episodes=4, reach_episodes=2, task_episodes=1)
+EARLY_STOP_EVERY = 0.1
+"""``with_early_stopping``'s checks, as a fraction of the training budget (1,000 of 10,000)."""
+
+
+def with_early_stopping(scale: Scale, patience: int = 2) -> Scale:
+    """``scale`` with training stopped early per skill, checked every tenth of its budget
+    on a quarter of Table I's episodes per cell (at least 2; ``FULL``: every 1,000 updates,
+    50 episodes) (``osg reproduce --early-stop``). Off in ``FULL``: measured on the kitchen,
+    it trains in 36 % of the updates at the same Table I, but the door tasks of Tables IV/V
+    lose 2-3 points (docs/learning.md#early-stopping)."""
+    every = max(1, round(scale.train_steps * EARLY_STOP_EVERY))
+    episodes = max(2, scale.table_i_episodes // 4)
+    return replace(scale, check_every=every, patience=patience, check_episodes=episodes)
 
 
 class StageError(OSGError):
