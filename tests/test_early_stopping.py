@@ -76,6 +76,17 @@ def test_skills_kept_in_a_batch_train_as_in_the_full_batch() -> None:
             np.testing.assert_allclose(b_cut, b_full, rtol=0, atol=1e-6)
 
 
+def _write_snapshot(folder: Path, layers: dict[str, Any], updates: int) -> None:
+    """Checkpoints of the kitchen skills named in ``layers`` (unit normalisation)."""
+    domain = get_domain("kitchen")
+    for name, weights in layers.items():
+        checkpoint = Checkpoint(
+            domain.skill(name), weights, np.zeros(OBS), np.ones(OBS), np.ones(ACT), {}, updates,
+            0, "0" * 64,
+        )  # fmt: skip
+        save_checkpoint(folder, checkpoint)
+
+
 class ScriptedRates:
     """Held-out rates scripted per skill and check; records the weights each check read."""
 
@@ -97,22 +108,10 @@ class ScriptedRates:
 
 def test_training_rounds_stop_each_skill_by_the_rule_and_keep_its_best_checked_weights() -> None:
     trainer, replay = _batch([40, 50])
-    spec = {s.name: s for s in get_domain("kitchen").skills}
     names = ["grab-cube", "release-cube"]
     check = ScriptedRates({"grab-cube": [0.2, 0.9, 0.6, 0.6], "release-cube": [1.0, 1.0, 1.0]}, 4)
-
-    def snapshot(folder: Path, layers: dict[str, Any], updates: int) -> None:
-        for name, weights in layers.items():
-            save_checkpoint(
-                folder,
-                Checkpoint(
-                    spec[name], weights, np.zeros(OBS), np.ones(OBS), np.ones(ACT), {}, updates,
-                    0, "0" * 64,
-                ),
-            )  # fmt: skip
-
     stop = EarlyStop(EarlyStopping(check_every=4, patience=2), check)
-    outcomes, seconds = train_early_stopped(trainer, replay, names, 100, stop, snapshot)
+    outcomes, seconds = train_early_stopped(trainer, replay, names, 100, stop, _write_snapshot)
     assert seconds >= 0.0
     # release-cube: 1.0, then two ties -> stops at 12, keeps the latest weights (12).
     # grab-cube: best 0.9 at 8, then two checks without improvement -> stops at 16.
@@ -129,17 +128,6 @@ def test_training_rounds_stop_each_skill_by_the_rule_and_keep_its_best_checked_w
 def test_training_rounds_end_at_the_budget() -> None:
     trainer, replay = _batch([40])
     check = ScriptedRates({"grab-cube": [0.1, 0.2, 0.3]}, 4)
-    spec = get_domain("kitchen").skill("grab-cube")
-
-    def snapshot(folder: Path, layers: dict[str, Any], updates: int) -> None:
-        save_checkpoint(
-            folder,
-            Checkpoint(
-                spec, layers["grab-cube"], np.zeros(OBS), np.ones(OBS), np.ones(ACT), {},
-                updates, 0, "0" * 64,
-            ),
-        )  # fmt: skip
-
     stop = EarlyStop(EarlyStopping(check_every=4, patience=2), check)
-    (outcome,), _ = train_early_stopped(trainer, replay, ["grab-cube"], 12, stop, snapshot)
+    (outcome,), _ = train_early_stopped(trainer, replay, ["grab-cube"], 12, stop, _write_snapshot)
     assert (outcome.updates, outcome.trained_updates, trainer.steps) == (12, 12, 12)
