@@ -141,14 +141,22 @@ class SpeedWatch:
         A sample is read at the start of a substep: the newest ``substeps - 1`` samples are
         the velocities after the first ``substeps - 1``; the last is ``data.qvel``.
         """
-        rows = self._rows(int(data.history[self._cursor]), substeps)
-        during = np.abs(data.history[rows]) * self._inverse_limits[:, None]
-        after = np.abs(data.qvel[self._dofs]) * self._inverse_limits
-        return np.append(during.max(axis=0), after.max())
+        return np.append(self._during(data, substeps).max(axis=0), self._after(data))
 
     def peak(self, data: mujoco.MjData, substeps: int) -> float:
-        """The largest of ``ratios(data, substeps)``: the peak over the call's substeps."""
-        return float(self.ratios(data, substeps).max())
+        """The largest of ``ratios(data, substeps)``: the peak over the call's substeps
+        (the same maximum, without building the per-substep vector)."""
+        during = self._during(data, substeps)  # empty for one substep
+        return max(float(during.max(initial=0.0)), self._after(data))
+
+    def _during(self, data: mujoco.MjData, substeps: int) -> np.ndarray:
+        """The speed ratios (joints x substeps - 1) after the first ``substeps - 1``."""
+        rows = self._rows(int(data.history[self._cursor]), substeps)
+        return np.abs(data.history[rows]) * self._inverse_limits[:, None]
+
+    def _after(self, data: mujoco.MjData) -> float:
+        """The peak speed ratio now (``data.qvel``): the last substep's."""
+        return float((np.abs(data.qvel[self._dofs]) * self._inverse_limits).max())
 
     def _rows(self, newest: int, substeps: int) -> np.ndarray:
         """History indices (joints x substeps - 1) of the samples after the first

@@ -560,10 +560,11 @@ class ArmEnv(gym.Env):
             self._step_speed_ratio = 0.0  # nothing simulated
         self._steps += 1
         world = self.read_world()
+        facts = self.facts_of(world)
         reward = 0.0
         terminated = False
         if failure is None and self.skill is not None and not self._succeeded:
-            if self._truth_success(self.skill, world):
+            if self._truth_success(self.skill, facts):
                 self._succeeded = True
                 reward = 1.0
                 terminated = True
@@ -572,7 +573,7 @@ class ArmEnv(gym.Env):
         budget = self.skill.max_steps if self.skill else self.config.max_steps
         truncated = not terminated and budget is not None and self._steps >= budget
         self._episode_over = self._episode_over or terminated or truncated
-        info = self._info(world)
+        info = self._info(world, facts)
         info["percept"] = self._perceive(world)
         info["action_applied"] = action
         info["joint_speed_ratio"] = self._step_speed_ratio
@@ -648,21 +649,24 @@ class ArmEnv(gym.Env):
         skill = skill or self.skill
         if skill is None:
             return False
-        return self._truth_success(skill, self.read_world() if world is None else world)
+        facts = self.facts_of(self.read_world() if world is None else world)
+        return self._truth_success(skill, facts)
 
-    def _truth_success(self, skill: SkillSpec, world: np.ndarray) -> bool:
+    def _truth_success(self, skill: SkillSpec, facts: frozenset[str]) -> bool:
+        """The success predicate with ``facts``: the true world's."""
         end = replace(self.nodes[skill.end], position=tuple(self.node_position(skill.end)))
-        return success_holds(
-            skill, end, self._true_tcp()[0], self._gripper_cmd, self.facts_of(world)
-        )
+        return success_holds(skill, end, self._true_tcp()[0], self._gripper_cmd, facts)
 
-    def _info(self, world: np.ndarray | None = None) -> dict[str, Any]:
+    def _info(
+        self, world: np.ndarray | None = None, facts: frozenset[str] | None = None
+    ) -> dict[str, Any]:
         """The step's information: ``world`` and ``world_facts`` are the simulator's truth,
-        for scoring and for labelling scripted data, never for deciding (``percept``)."""
+        for scoring and for labelling scripted data, never for deciding (``percept``);
+        ``facts``: ``world``'s, if the caller has them already."""
         world = self.read_world() if world is None else world
         return {
             "world": world,
-            "world_facts": sorted(self.facts_of(world)),
+            "world_facts": sorted(self.facts_of(world) if facts is None else facts),
             "steps": self._steps,
             "success": self._succeeded,
             "arm_q": self.arm_q,

@@ -18,6 +18,10 @@ CABINET_INTERIOR_HIGH = np.array([0.84, 0.56, 0.70])
 """Axis-aligned bounds of the cabinet's interior [m], world frame; the floor's top is at
 0.10 m, the low bound 3 cm under it so that a resting cube (centre 0.1225 m) seen through
 the robot perception's 1 cm pose noise stays inside (a counter cube, 0.0225 m, stays out)."""
+_CABINET_BOUNDS = tuple(
+    zip(CABINET_INTERIOR_LOW.tolist(), CABINET_INTERIOR_HIGH.tolist(), strict=True)
+)
+"""(low, high) per axis as floats: compared several times every control step."""
 COUNTER_REST_MARGIN = 0.03
 """How far above its resting height [m] the cube still counts on the counter: three times
 the robot perception's 1 cm pose noise (a lifted cube is 5 cm up or more)."""
@@ -61,9 +65,10 @@ class WorldState:
     @property
     def cube_in_cabinet(self) -> bool:
         """The cube rests in the cabinet: its centre inside the interior box, not grasped."""
-        pos = np.asarray(self.cube_pos)
-        inside = np.all(pos > CABINET_INTERIOR_LOW) and np.all(pos < CABINET_INTERIOR_HIGH)
-        return bool(inside and not self.cube_grasped)
+        inside = all(
+            low < p < high for p, (low, high) in zip(self.cube_pos, _CABINET_BOUNDS, strict=True)
+        )
+        return inside and not self.cube_grasped
 
     @property
     def cube_on_counter(self) -> bool:
