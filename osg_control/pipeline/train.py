@@ -95,6 +95,8 @@ class TrainedSkills:
             "seconds": self.seconds,
             "check_seconds": self.check_seconds,
             "skill_updates": self.skill_updates,
+            "updates_per_s": max((int(r["trained_updates"]) for r in self.skills), default=0)
+            / updating,
             "skill_updates_per_s": self.skill_updates / updating,
             "skills": self.skills,
         }
