@@ -346,6 +346,7 @@ class Executor:
                 obs, result.failure = _open_gripper(env)
                 self.motion.still(GRIPPER_OPEN_STEPS)
                 if result.failure:
+                    result.success = set(goal) <= env.percept().facts
                     break
             t0 = time.perf_counter()
             seen = obs if tracker is None else tracker.read(obs)
@@ -425,12 +426,19 @@ class Executor:
 
 def _open_gripper(env: SkillEnv, steps: int = GRIPPER_OPEN_STEPS) -> tuple[np.ndarray, str | None]:
     """Open an empty but closed gripper in place (recovery before a movement skill, whose
-    termination needs it open); returns the observation and a divergence, if any."""
+    termination needs it open); returns the observation and a divergence, or the env's
+    episode ending (its time limit: no step is taken after it), if any."""
     obs = env.observe()
     for _ in range(steps):
-        obs, *_, info = env.step(np.array([0.0, 0.0, 0.0, 0.0, 0.0, 0.0, GRIPPER_OPEN_CMD]))
+        if env.episode_over:
+            return obs, f"opening the gripper: {EPISODE_ENDED}"
+        obs, _reward, _terminated, truncated, info = env.step(
+            np.array([0.0, 0.0, 0.0, 0.0, 0.0, 0.0, GRIPPER_OPEN_CMD])
+        )
         if "failure" in info:
             return obs, f"opening the gripper: {info['failure']}"
+        if truncated:
+            return obs, f"opening the gripper: {TIME_LIMIT}"
     return obs, None
 
 
