@@ -34,8 +34,7 @@ from osg_control.pipeline import (
     reproduce,
     train_missing,
 )
-from osg_control.pipeline.held_out import HeldOutCheck
-from osg_control.pipeline.training_loop import EarlyStop
+from osg_control.pipeline.reproduction import training_early_stop
 from osg_control.planning.costs import RATES_KEY, measured_graph
 from osg_control.planning.pddl_io import skill_cost
 
@@ -58,11 +57,14 @@ def domain() -> Domain:
 
 @pytest.fixture(scope="module")
 def run(domain: Domain, tmp_path_factory: pytest.TempPathFactory) -> Reproduction:
-    out = tmp_path_factory.mktemp("pipeline")
-    config = ReproduceConfig(
+    return reproduce(_tiny_config(domain, tmp_path_factory.mktemp("pipeline")))
+
+
+def _tiny_config(domain: Domain, out: Path) -> ReproduceConfig:
+    """The end-to-end run's configuration (TINY, one worker, the filter)."""
+    return ReproduceConfig(
         domain, out, TINY, workers=1, train_threads=1, filter_gain=0.2, progress=False
     )
-    return reproduce(config)
 
 
 def _pddl_costs(path: Path) -> dict[str, int]:
@@ -122,15 +124,11 @@ def test_a_rerun_keeps_the_checkpoints_trained_on_these_data(
 ) -> None:
     skills = run.bundle.policies_dir
     before = {p.name: p.read_bytes() for p in skills.iterdir()}
-    rule = TINY.early_stopping()
-    assert rule is not None
-    check = HeldOutCheck(
-        domain, TINY.check_episodes, 0, 1, run.bundle.perception, 0.2, run.bundle.motion_model
-    )
+    early_stop = training_early_stop(_tiny_config(domain, run.out), run.bundle.motion_model)
+    assert early_stop is not None
     kept = train_missing(
-        domain, run.datasets.directory, skills, TINY.train_steps, seed=0,
-        early_stop=EarlyStop(rule, check),
-    )  # fmt: skip
+        domain, run.datasets.directory, skills, TINY.train_steps, seed=0, early_stop=early_stop
+    )
     assert kept is None
     assert {p.name: p.read_bytes() for p in skills.iterdir()} == before
 

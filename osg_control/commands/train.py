@@ -17,13 +17,11 @@ from osg_control.commands import (
     domain_of,
     perception_of,
 )
-from osg_control.control.estimator import MOTION_MODEL
 from osg_control.domain.base import Domain
-from osg_control.learning.early_stopping import EarlyStopping
+from osg_control.learning.early_stopping import CHECK_EPISODES, EarlyStopping
 from osg_control.parallel.machine import machine_cpus
 from osg_control.paths import cache_dir
 from osg_control.pipeline.bundle import DEPLOYMENT_NOISE
-from osg_control.pipeline.held_out import CHECK_EPISODES
 from osg_control.pipeline.train import (
     DEFAULT_STEPS,
     TrainedSkills,
@@ -133,6 +131,7 @@ def early_stop_of(args: argparse.Namespace, domain: Domain, data_dir: Path) -> E
     perception = perception_of(args, domain, default_noise=DEPLOYMENT_NOISE)
     if not args.early_stop:
         return None
+    from osg_control.control.estimator import MOTION_MODEL
     from osg_control.pipeline.held_out import HeldOutCheck
     from osg_control.pipeline.motion import fit_filter_motion
 

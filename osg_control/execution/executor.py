@@ -289,8 +289,8 @@ class Executor:
             )
             if success_holds(skill, goal, position, percept.state[7], percept.facts):
                 return SkillOutcome(skill.name, True, step, time.perf_counter() - started), obs
-            if truncated or terminated:
-                ended = TIME_LIMIT if truncated else EPISODE_ENDED
+            ended = _episode_end(terminated, truncated)
+            if ended:
                 return SkillOutcome(
                     skill.name, False, step, time.perf_counter() - started, failure=ended
                 ), obs
@@ -346,7 +346,8 @@ class Executor:
                 obs, result.failure = _open_gripper(env)
                 self.motion.still(GRIPPER_OPEN_STEPS)
                 if result.failure:
-                    result.success = set(goal) <= env.percept().facts
+                    if not is_divergence(result.failure):  # the env's episode is over
+                        result.success = set(goal) <= env.percept().facts
                     break
             t0 = time.perf_counter()
             seen = obs if tracker is None else tracker.read(obs)
@@ -427,19 +428,24 @@ class Executor:
 def _open_gripper(env: SkillEnv, steps: int = GRIPPER_OPEN_STEPS) -> tuple[np.ndarray, str | None]:
     """Open an empty but closed gripper in place (recovery before a movement skill, whose
     termination needs it open); returns the observation and a divergence, or the env's
-    episode ending (its time limit: no step is taken after it), if any."""
+    episode ending (no step is taken after it), if any."""
     obs = env.observe()
     for _ in range(steps):
-        if env.episode_over:
-            return obs, f"opening the gripper: {EPISODE_ENDED}"
-        obs, _reward, _terminated, truncated, info = env.step(
+        obs, _reward, terminated, truncated, info = env.step(
             np.array([0.0, 0.0, 0.0, 0.0, 0.0, 0.0, GRIPPER_OPEN_CMD])
         )
-        if "failure" in info:
-            return obs, f"opening the gripper: {info['failure']}"
-        if truncated:
-            return obs, f"opening the gripper: {TIME_LIMIT}"
+        failure = info.get("failure") or _episode_end(terminated, truncated)
+        if failure:
+            return obs, f"opening the gripper: {failure}"
     return obs, None
+
+
+def _episode_end(terminated: bool, truncated: bool) -> str | None:
+    """The failure of a step that ended the env's episode (``TIME_LIMIT`` when truncated),
+    else None: by Gymnasium's protocol no step may follow it."""
+    if truncated:
+        return TIME_LIMIT
+    return EPISODE_ENDED if terminated else None
 
 
 def load_executor(domain: Domain, directory: str | Path | None = None, **kwargs: Any) -> Executor:

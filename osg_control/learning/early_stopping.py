@@ -15,6 +15,9 @@ from __future__ import annotations
 from dataclasses import asdict, dataclass, field
 from typing import Any
 
+CHECK_EPISODES = 50
+"""Held-out episodes per skill per check by default (the full reproduction's)."""
+
 
 @dataclass(frozen=True)
 class EarlyStopping:

@@ -6,7 +6,7 @@ TCP filter), so the weights a skill keeps are chosen on other episodes than thos
 from __future__ import annotations
 
 from collections.abc import Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
@@ -17,8 +17,6 @@ from osg_control.parallel import LocalExecutor
 from osg_control.perception.spec import PerceptionSpec
 from osg_control.pipeline.tables import deployment_noise
 
-CHECK_EPISODES = 50
-"""Held-out episodes per skill per check by default (the full reproduction's)."""
 HELD_OUT_CELL = 1000
 """The episode cell of the checks (``evaluate.episode_rng``); Table I's columns are cells
 0, 1, 2, so no check episode is a Table I episode."""
@@ -42,28 +40,26 @@ class HeldOutCheck:
     episodes: int
     seed: int = 0
     workers: int = 1
-    perception: PerceptionSpec | None = None
+    perception: PerceptionSpec = field(default_factory=PerceptionSpec)
     filter_gain: float | None = None
     filter_motion: tuple[float, float] = MOTION_MODEL
 
     def __call__(self, policy_dir: Path, names: Sequence[str]) -> dict[str, float]:
         """Each named skill's success rate from ``policy_dir`` on the held-out episodes."""
-        perception = self.perception or PerceptionSpec()
         rates = learned_rates(
-            self.domain, policy_dir, names, (deployment_noise(perception),), self.episodes,
-            self.seed, LocalExecutor(self.workers), perception, self.filter_gain,
+            self.domain, policy_dir, names, (deployment_noise(self.perception),), self.episodes,
+            self.seed, LocalExecutor(self.workers), self.perception, self.filter_gain,
             filter_motion=self.filter_motion, first_cell=HELD_OUT_CELL,
         )  # fmt: skip
         return {name: float(rates[i, 0]) for i, name in enumerate(names)}
 
     def describe(self) -> dict[str, Any]:
         """What the checks ran under (recorded with the stopping rule)."""
-        perception = self.perception or PerceptionSpec()
         return {
             "episodes": self.episodes,
             "seed": self.seed,
             "cell": HELD_OUT_CELL,
-            "perception": perception.to_dict(),
-            "tcp_noise": deployment_noise(perception),
+            "perception": self.perception.to_dict(),
+            "tcp_noise": deployment_noise(self.perception),
             "filter_gain": self.filter_gain,
         }

@@ -26,7 +26,7 @@ from osg_control.evaluation.evaluate import format_reach_table, format_task_tabl
 from osg_control.evaluation.report import write_report
 from osg_control.evaluation.skill_table import format_skill_table
 from osg_control.io_safety import check_output_dir
-from osg_control.learning.early_stopping import EarlyStopping
+from osg_control.learning.early_stopping import CHECK_EPISODES, EarlyStopping
 from osg_control.paths import PACKAGE_DIR
 from osg_control.perception.spec import PerceptionSpec
 from osg_control.pipeline.bundle import SKILLS_DIR, ModelBundle
@@ -37,7 +37,7 @@ from osg_control.pipeline.classifier import (
 )
 from osg_control.pipeline.collect import DataSets, collect_datasets, format_collection
 from osg_control.pipeline.export import ExportedPlan, export_measured_pddl, format_export
-from osg_control.pipeline.held_out import CHECK_EPISODES, HeldOutCheck
+from osg_control.pipeline.held_out import HeldOutCheck
 from osg_control.pipeline.motion import fit_filter_motion, format_motion
 from osg_control.pipeline.tables import (
     DEPLOYMENT_NOISE,
@@ -265,7 +265,7 @@ def reproduce(config: ReproduceConfig, log: Log | None = None) -> Reproduction:
     trained = stages.run(
         "train",
         partial(train_missing, domain, data_dir, defaults / SKILLS_DIR, scale.train_steps, seed,
-                threads=config.train_threads, early_stop=_early_stop(config, motion)),
+                threads=config.train_threads, early_stop=training_early_stop(config, motion)),
         _format_trained,
     )  # fmt: skip
     bundle = ModelBundle(
@@ -332,7 +332,7 @@ def reproduce(config: ReproduceConfig, log: Log | None = None) -> Reproduction:
     return Reproduction(out, bundle, datasets, trained, exported, classifier, figures, written)
 
 
-def _early_stop(config: ReproduceConfig, motion: tuple[float, float]) -> EarlyStop | None:
+def training_early_stop(config: ReproduceConfig, motion: tuple[float, float]) -> EarlyStop | None:
     """The train stage's early stopping: the scale's rule, checked at Table I's deployment
     column (its perception, filter and the fitted motion model) on held-out episodes."""
     rule = config.scale.early_stopping()

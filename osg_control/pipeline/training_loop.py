@@ -159,7 +159,8 @@ def train_early_stopped(
             check_seconds += time.perf_counter() - started
             for k, name in enumerate(active):
                 if progress[name].record(done, float(rates[name])):
-                    kept[name] = SkillOutcome(current[name], done, _skill_logs(logs, k))
+                    logged = _skill_logs(logs, k)
+                    kept[name] = SkillOutcome(current[name], done, logged, progress[name])
             staying = [
                 k for k, name in enumerate(active)
                 if done < steps and not progress[name].stopped(stop.rule)
@@ -168,6 +169,4 @@ def train_early_stopped(
                 trainer.keep(staying)
                 replay.keep(staying)
                 active = [active[k] for k in staying]
-    for name, outcome in kept.items():
-        outcome.progress = progress[name]
     return [kept[name] for name in names], check_seconds
