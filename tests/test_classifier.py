@@ -54,7 +54,7 @@ KITCHEN = get_domain("kitchen")
 
 EPISODES = 20
 STEPS = 25
-FAST = TrainConfig(epochs=20, batch_size=64, seed=0)
+FAST = TrainConfig(epochs=20, batch_size=64, seed=0, validation_fraction=0.0)
 
 
 def _episode(skill: SkillSpec, rng: np.random.Generator, t_range: tuple[float, float]) -> Episode:
@@ -142,6 +142,39 @@ def test_split_is_by_episode_and_seeded(data_dir: Path, data: ClassifierData) ->
         load_classifier_data(data_dir, movement_classes(KITCHEN), seed=-1)
 
 
+def test_validation_split_is_drawn_from_training_episodes_only(
+    data_dir: Path, data: ClassifierData
+) -> None:
+    split = load_classifier_data(
+        data_dir, movement_classes(KITCHEN), seed=0, validation_fraction=0.25
+    )
+    np.testing.assert_array_equal(split.test.observations, data.test.observations)
+    held_out = round(EPISODES * 0.2)
+    validation = round((EPISODES - held_out) * 0.25)
+    assert len(split.validation) == len(MOVEMENT_SKILLS) * validation * STEPS
+    assert len(split.train) + len(split.validation) == len(data.train)
+    rows = {tuple(row) for row in data.train.observations.tolist()}
+    train_rows = {tuple(row) for row in split.train.observations.tolist()}
+    validation_rows = {tuple(row) for row in split.validation.observations.tolist()}
+    assert validation_rows <= rows and not validation_rows & train_rows
+    assert len(data.validation) == 0
+    with pytest.raises(ValueError, match=r"validation_fraction must be in \[0, 1\)"):
+        load_classifier_data(data_dir, movement_classes(KITCHEN), seed=0, validation_fraction=1.0)
+
+
+def test_validation_split_needs_two_training_episodes(tmp_path: Path, data_dir: Path) -> None:
+    name = movement_classes(KITCHEN)[0]
+    episodes = [_episode(get_skill(name), np.random.default_rng(i), (0.25, 0.5)) for i in range(2)]
+    write_episodes(
+        dataset_path(tmp_path, name),
+        episodes,
+        {"skill": get_skill(name).to_json(), "seed": 0, "world_fields": WORLD},
+    )
+    load_classifier_data(tmp_path, [name], seed=0)  # no validation split: 1 train, 1 test
+    with pytest.raises(DatasetError, match=f"{name}.h5: 1 training episode"):
+        load_classifier_data(tmp_path, [name], seed=0, validation_fraction=0.2)
+
+
 def test_missing_or_mislabelled_data_set_is_named(tmp_path: Path, data_dir: Path) -> None:
     with pytest.raises(
         DatasetError, match=f"{movement_classes(KITCHEN)[0]}.h5: data set file not found"
@@ -163,6 +196,36 @@ def test_training_separates_synthetic_skills(model: StateClassifier, data: Class
     assert report.corrected_accuracy >= report.accuracy
     losses = model.info["training"]["epoch_losses"]
     assert len(losses) == FAST.epochs and losses[-1] < losses[0]
+
+
+def test_the_epoch_with_the_best_validation_score_is_kept(tmp_path: Path) -> None:
+    write_movement_datasets(tmp_path, t_range=(0.0, 1.0))  # overlapping: no epoch is perfect
+    config = dataclasses.replace(FAST, epochs=6, validation_fraction=0.25)
+    split = load_classifier_data(
+        tmp_path, movement_classes(KITCHEN), seed=0, validation_fraction=0.25
+    )
+    kept = train_classifier(split, config)
+    record = kept.info["training"]
+    scores = record["validation_corrected_accuracy"]
+    assert len(scores) == 6 and record["validation_states"] == len(split.validation)
+    best = max(scores)
+    assert record["epoch_kept"] == max(i + 1 for i, s in enumerate(scores) if s == best)
+    assert record["epoch_kept"] < 6  # the choice is not simply the last epoch here
+    starts = class_starts(KITCHEN, kept.classes)
+    assert evaluate(kept, split.validation, starts).corrected_accuracy == pytest.approx(best)
+    # the kept weights are those of that epoch: training exactly that long gives them
+    exact = train_classifier(split, dataclasses.replace(config, epochs=record["epoch_kept"]))
+    for (w1, b1), (w2, b2) in zip(kept.layers, exact.layers, strict=True):
+        np.testing.assert_array_equal(w1, w2)
+        np.testing.assert_array_equal(b1, b2)
+    assert kept.info["split"]["validation_fraction"] == 0.25
+
+
+def test_data_and_config_must_agree_on_the_validation_split(data: ClassifierData) -> None:
+    with pytest.raises(ValueError, match="validation_fraction=0.2"):
+        train_classifier(data, dataclasses.replace(FAST, validation_fraction=0.2))
+    with pytest.raises(ValueError, match=r"validation_fraction must be in \[0, 1\)"):
+        TrainConfig(validation_fraction=-0.1)
 
 
 def test_same_seed_same_weights(data: ClassifierData, model: StateClassifier) -> None:
@@ -384,6 +447,8 @@ def test_cli_train_then_eval(
     trained = json.loads(capsys.readouterr().out)
     assert trained["classes"] == list(movement_classes(KITCHEN))
     assert trained["config"]["epochs"] == 3
+    assert trained["config"]["validation_fraction"] == 0.2
+    assert 1 <= trained["training"]["epoch_kept"] <= 3
     assert main(["classifier", "eval", "--data", str(data_dir), "--model", str(out), "--json"]) == 0
     evaluated = json.loads(capsys.readouterr().out)
     assert evaluated["same_data"] is True

@@ -57,7 +57,9 @@ def trained(domain: Domain, tmp_path_factory: pytest.TempPathFactory) -> Path:
     assert cli.main(argv) == 0
     classes = movement_classes(domain)
     data = load_classifier_data(root / "data", classes, seed=0)
-    train_classifier(data, TrainConfig(epochs=30, batch_size=128)).save(root / "classifier")
+    train_classifier(data, TrainConfig(epochs=30, batch_size=128, validation_fraction=0.0)).save(
+        root / "classifier"
+    )
     return root
 
 

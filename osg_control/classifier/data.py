@@ -8,7 +8,8 @@ commands before it, ``classifier.motion``) labelled with the index of its skill 
 order, up to the step that reaches the skill's end node (the steps recorded after it,
 holding the node, are on the graph and not the classifier's business). The train/test split
 is by episode, within each data set, so no test state shares an episode with a training
-state."""
+state; a validation split for choosing the training epoch (``validation_episodes``) is drawn
+the same way from the training episodes only, so it never touches the test split."""
 
 from __future__ import annotations
 
@@ -132,17 +133,22 @@ class ClassifierData:
         classes: class names; a label is an index into it.
         train: training states.
         test: held-out states (whole episodes).
+        validation: states of training-side episodes set aside to choose the epoch
+            (whole episodes, none in ``train`` or ``test``); empty without a validation split.
         sha256: hex digest of each data set file, by skill name.
         seed: the seed of the split.
         test_fraction: fraction of each data set's episodes held out.
+        validation_fraction: fraction of each data set's non-test episodes in ``validation``.
     """
 
     classes: tuple[str, ...]
     train: LabelledStates
     test: LabelledStates
+    validation: LabelledStates
     sha256: dict[str, str]
     seed: int
     test_fraction: float
+    validation_fraction: float
 
 
 def dataset_path(data_dir: Path, skill: str) -> Path:
@@ -166,11 +172,52 @@ def held_out_episodes(num_episodes: int, test_fraction: float, seed: int, skill:
     Returns:
         (num_episodes,) bool, True for a test episode.
     """
-    n_test = min(max(round(num_episodes * test_fraction), 1), num_episodes - 1)
+    return _draw(np.arange(num_episodes), num_episodes, test_fraction, [seed, _skill_key(skill)])
+
+
+def validation_episodes(
+    in_test: np.ndarray, validation_fraction: float, seed: int, skill: str
+) -> np.ndarray:
+    """Choose the validation episodes of one skill's data set among its non-test ones.
+
+    Drawn like ``held_out_episodes`` from a stream of its own (the seed, the skill and a
+    salt), so the test split is the same with or without a validation split.
+
+    Args:
+        in_test: (num_episodes,) bool, the ``held_out_episodes`` mask.
+        validation_fraction: fraction of the non-test episodes, in [0, 1); 0 gives none,
+            else rounded, but at least one, and at least one left for training.
+        seed: non-negative split seed.
+        skill: the skill's name, mixed into the seed.
+
+    Returns:
+        (num_episodes,) bool, True for a validation episode (never a test one).
+
+    Raises:
+        ValueError: a validation split asked for with fewer than two non-test episodes.
+    """
+    candidates = np.flatnonzero(~np.asarray(in_test, dtype=bool))
+    if validation_fraction == 0.0:
+        return np.zeros(len(in_test), dtype=bool)
+    if len(candidates) < 2:
+        raise ValueError(
+            f"{len(candidates)} training episode(s): a validation split needs at least 2"
+        )
+    return _draw(candidates, len(in_test), validation_fraction, [seed, _skill_key(skill), 1])
+
+
+def _skill_key(skill: str) -> int:
+    return int.from_bytes(hashlib.sha256(skill.encode()).digest()[:8], "little")
+
+
+def _draw(
+    candidates: np.ndarray, num_episodes: int, fraction: float, entropy: list[int]
+) -> np.ndarray:
+    """Mark a seeded random ``fraction`` of ``candidates`` (at least one, one left over)."""
+    count = min(max(round(len(candidates) * fraction), 1), len(candidates) - 1)
     mask = np.zeros(num_episodes, dtype=bool)
-    skill_key = int.from_bytes(hashlib.sha256(skill.encode()).digest()[:8], "little")
-    rng = np.random.default_rng([seed, skill_key])
-    mask[rng.permutation(num_episodes)[:n_test]] = True
+    rng = np.random.default_rng(entropy)
+    mask[rng.permutation(candidates)[:count]] = True
     return mask
 
 
@@ -210,6 +257,7 @@ def load_classifier_data(
     seed: int,
     test_fraction: float = 0.2,
     domain: Domain | None = None,
+    validation_fraction: float = 0.0,
 ) -> ClassifierData:
     """Load, label, merge and split the data sets of ``classes``.
 
@@ -221,21 +269,26 @@ def load_classifier_data(
         domain: the classes' domain: observations recorded in an object's frame are put
             back in the world frame (``world_frame_observations``), the frame the classifier
             sees at run time; None keeps them as recorded.
+        validation_fraction: fraction of each data set's non-test episodes set aside as
+            ``validation`` (``validation_episodes``), in [0, 1); the test split is the same
+            whatever its value.
 
     Returns:
         The split data with the files' digests.
 
     Raises:
-        ValueError: ``test_fraction`` outside (0, 1) or a negative seed.
+        ValueError: ``test_fraction`` outside (0, 1), ``validation_fraction`` outside
+            [0, 1) or a negative seed.
         DatasetError: a file is missing or malformed, records another skill, or has fewer
-            than two episodes; the message names the file.
+            than two episodes (three with a validation split); the message names the file.
     """
     if not 0.0 < test_fraction < 1.0:
         raise ValueError(f"test_fraction must be in (0, 1), got {test_fraction}")
+    if not 0.0 <= validation_fraction < 1.0:
+        raise ValueError(f"validation_fraction must be in [0, 1), got {validation_fraction}")
     if seed < 0:
         raise ValueError(f"seed must be non-negative, got {seed}")
-    train_parts: list[LabelledStates] = []
-    test_parts: list[LabelledStates] = []
+    parts: dict[str, list[LabelledStates]] = {"train": [], "test": [], "validation": []}
     digests: dict[str, str] = {}
     for label, skill in enumerate(classes):
         path = dataset_path(data_dir, skill)
@@ -254,21 +307,28 @@ def load_classifier_data(
         )
         observations = recorded[approach]
         motion = motion_features(dataset.arrays["actions"], dataset.episode_starts)[approach]
-        in_test = np.repeat(
-            held_out_episodes(dataset.num_episodes, test_fraction, seed, skill),
-            dataset.episode_lengths,
-        )[approach]
+        test_episodes = held_out_episodes(dataset.num_episodes, test_fraction, seed, skill)
+        try:
+            validation = validation_episodes(test_episodes, validation_fraction, seed, skill)
+        except ValueError as err:
+            raise DatasetError(f"{path}: {err}") from err
+        masks = {
+            "test": test_episodes,
+            "validation": validation,
+            "train": ~(test_episodes | validation),
+        }
         labels = np.full(len(observations), label, dtype=np.int64)
-        train_parts.append(
-            LabelledStates(observations[~in_test], motion[~in_test], labels[~in_test])
-        )
-        test_parts.append(LabelledStates(observations[in_test], motion[in_test], labels[in_test]))
+        for name, episodes in masks.items():
+            rows = np.repeat(episodes, dataset.episode_lengths)[approach]
+            parts[name].append(LabelledStates(observations[rows], motion[rows], labels[rows]))
         digests[skill] = sha256_file(path)
     return ClassifierData(
         classes=tuple(classes),
-        train=_merge(train_parts),
-        test=_merge(test_parts),
+        train=_merge(parts["train"]),
+        test=_merge(parts["test"]),
+        validation=_merge(parts["validation"]),
         sha256=digests,
         seed=seed,
         test_fraction=test_fraction,
+        validation_fraction=validation_fraction,
     )

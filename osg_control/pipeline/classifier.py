@@ -1,5 +1,6 @@
 """The classifier stage: the state -> movement skill classifier from the movement data sets
-(split 80/20 by episode), saved into a bundle's ``classifier/``."""
+(split 80/20 by episode; the epoch chosen on a validation split of the training episodes),
+saved into a bundle's ``classifier/``."""
 
 from __future__ import annotations
 
@@ -54,7 +55,13 @@ def train_state_classifier(
     """
     settings = replace(config or TrainConfig(), seed=seed)
     folder = check_output_dir(out, "classifier folder")
-    data = load_classifier_data(data_dir, movement_classes(domain), seed, domain=domain)
+    data = load_classifier_data(
+        data_dir,
+        movement_classes(domain),
+        seed,
+        domain=domain,
+        validation_fraction=settings.validation_fraction,
+    )
     model = train_classifier(data, settings, progress=progress)
     sidecar = model.save(folder)
     return TrainedClassifier(folder, sidecar, len(data.train), len(data.test), dict(model.info))
