@@ -33,7 +33,7 @@ from osg_control.classifier.model import (
     evaluate,
     reload_split,
 )
-from osg_control.classifier.train import TrainConfig, train_classifier
+from osg_control.classifier.train import PAPER_CONFIG, TrainConfig, train_classifier
 from osg_control.cli import main
 from osg_control.data.datasets import ACTION_DIM, OBS_DIM, Episode, write_episodes
 from osg_control.domain.registry import get_domain
@@ -219,6 +219,15 @@ def test_the_epoch_with_the_best_validation_score_is_kept(tmp_path: Path) -> Non
         np.testing.assert_array_equal(w1, w2)
         np.testing.assert_array_equal(b1, b2)
     assert kept.info["split"]["validation_fraction"] == 0.25
+
+
+def test_the_paper_config_trains_nine_epochs_on_all_training_states(
+    data: ClassifierData,
+) -> None:
+    model = train_classifier(data, PAPER_CONFIG)
+    record = model.info["training"]
+    assert len(record["epoch_losses"]) == 9 and record["train_states"] == len(data.train)
+    assert "epoch_kept" not in record and record["validation_states"] == 0
 
 
 def test_data_and_config_must_agree_on_the_validation_split(data: ClassifierData) -> None:
