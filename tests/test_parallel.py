@@ -93,3 +93,42 @@ def test_long_jobs_default_to_the_machines_cpus() -> None:
     args = build_parser(["reproduce"]).parse_args(["reproduce", "--out", "x"])
     assert (args.workers, args.threads) == (cpus, cpus)
     assert main(["reproduce", "--out", "x", "--threads", "0"]) == 2
+
+
+HALF_SENT_RESULT = """
+import gc, os, signal, struct, sys, time
+from multiprocessing.queues import SimpleQueue
+from osg_control.parallel import LocalExecutor
+
+def half_sent(_):
+    # what a worker killed while sending a large result leaves: a message header
+    # announcing 1 GiB, a few bytes of it, and no more
+    results = next(o for o in gc.get_objects() if isinstance(o, SimpleQueue))
+    os.write(results._writer.fileno(), struct.pack("!i", 1 << 30) + b"partial")
+    time.sleep(120)
+
+def interrupt(*_):
+    raise KeyboardInterrupt
+
+if __name__ == "__main__":
+    signal.signal(signal.SIGALRM, interrupt)
+    signal.alarm(3)  # Ctrl-C while the pool's manager thread waits for the rest
+    try:
+        list(LocalExecutor(2).map(half_sent, range(4)))
+    except KeyboardInterrupt:
+        print("interrupted", flush=True)
+    sys.exit(0)
+"""
+
+
+def test_an_interrupt_while_a_result_is_half_sent_still_exits(tmp_path: Path) -> None:
+    """The pool's manager thread, blocked reading a result its killed worker never
+    finished, must not hang the process's exit (the flake of the billion-episode test)."""
+    script = tmp_path / "half_sent.py"
+    script.write_text(HALF_SENT_RESULT)
+    started = time.monotonic()
+    done = subprocess.run(
+        [sys.executable, str(script)], check=False, capture_output=True, text=True, timeout=60
+    )
+    assert done.returncode == 0 and done.stdout.strip() == "interrupted", done.stderr
+    assert time.monotonic() - started < 30

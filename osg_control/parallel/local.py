@@ -54,12 +54,23 @@ def _init_worker(parent: int) -> None:
 
 def _terminate(pool: ProcessPoolExecutor) -> None:
     """Drop the pool's queued jobs and SIGKILL its workers now (running jobs are abandoned;
-    a signal handler inherited from the parent, e.g. Ray's, must not run in them)."""
+    a signal handler inherited from the parent, e.g. Ray's, must not run in them).
+
+    A worker killed while sending a large result (a chunk of episodes) leaves half a
+    message in the result pipe; the pool's manager thread, blocked reading the rest, would
+    then hang this process's exit, which joins that thread. This process holds the pipe's
+    last writing end, so it closes it: the reader gets end-of-file once the workers are
+    gone and the manager thread ends.
+    """
     # CPython < 3.14 has no public handle on the workers (3.14: terminate_workers).
     processes: dict[int, Any] = dict(getattr(pool, "_processes", None) or {})
+    results = getattr(pool, "_result_queue", None)
     pool.shutdown(wait=False, cancel_futures=True)
     for process in processes.values():
         process.kill()
+    writer = getattr(results, "_writer", None)
+    if writer is not None:
+        writer.close()
 
 
 class LocalExecutor:
