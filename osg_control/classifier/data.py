@@ -196,9 +196,9 @@ def validation_episodes(
     Raises:
         ValueError: a validation split asked for with fewer than two non-test episodes.
     """
-    candidates = np.flatnonzero(~np.asarray(in_test, dtype=bool))
     if validation_fraction == 0.0:
         return np.zeros(len(in_test), dtype=bool)
+    candidates = np.flatnonzero(~np.asarray(in_test, dtype=bool))
     if len(candidates) < 2:
         raise ValueError(
             f"{len(candidates)} training episode(s): a validation split needs at least 2"

@@ -96,17 +96,19 @@ def _build_net(widths: list[int]) -> nn.Sequential:
     return nn.Sequential(*modules[:-1])
 
 
-@dataclass
 class _EpochChoice:
     """The validation record of one training run: each epoch's corrected accuracy on the
     validation states and the weights of the best so far (ties keep the later epoch)."""
 
-    inputs: torch.Tensor
-    labels: np.ndarray
-    n_classes: int
-    scores: list[float]
-    best_state: dict[str, torch.Tensor] | None = None
-    best_epoch: int = 0
+    def __init__(
+        self, validation: LabelledStates, mean: np.ndarray, std: np.ndarray, n_classes: int
+    ) -> None:
+        self.inputs = torch.from_numpy((validation.inputs - mean) / std)  # as the training's
+        self.labels = validation.labels
+        self.n_classes = n_classes
+        self.scores: list[float] = []
+        self.best_state: dict[str, torch.Tensor] | None = None
+        self.best_epoch = 0
 
     def score(self, net: nn.Sequential) -> None:
         """Score the net after an epoch; keep its weights if at least as good as the best."""
@@ -196,7 +198,9 @@ def train_classifier(
     inputs = torch.from_numpy((train_inputs - mean) / std)
     targets = torch.from_numpy(data.train.labels)
     choice = (
-        _choice(data.validation, mean, std, len(data.classes)) if len(data.validation) else None
+        _EpochChoice(data.validation, mean, std, len(data.classes))
+        if len(data.validation)
+        else None
     )
     previous_threads = torch.get_num_threads()
     torch.set_num_threads(config.threads)
@@ -240,11 +244,3 @@ def train_classifier(
             },
         },
     )
-
-
-def _choice(
-    validation: LabelledStates, mean: np.ndarray, std: np.ndarray, n_classes: int
-) -> _EpochChoice:
-    """The epoch choice on ``validation``, normalised like the training inputs."""
-    inputs = torch.from_numpy((validation.inputs - mean) / std)
-    return _EpochChoice(inputs, validation.labels, n_classes, scores=[])

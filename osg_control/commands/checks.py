@@ -31,12 +31,16 @@ def _at_least(minimum: int) -> Callable[[str, Any], None]:
     return check
 
 
-def _finite_range(low: float, high: float, low_open: bool = False) -> Callable[[str, Any], None]:
+def _finite_range(
+    low: float, high: float, low_open: bool = False, high_open: bool = False
+) -> Callable[[str, Any], None]:
     def check(dest: str, value: Any) -> None:
         for item in value if isinstance(value, list) else [value]:
-            inside = (item > low if low_open else item >= low) and item <= high
-            if not (math.isfinite(item) and inside):
-                left, right = "(" if low_open else "[", "]" if math.isfinite(high) else ")"
+            above = item > low if low_open else item >= low
+            below = item < high if high_open else item <= high
+            if not (math.isfinite(item) and above and below):
+                left = "(" if low_open else "["
+                right = ")" if high_open or not math.isfinite(high) else "]"
                 raise UsageError(
                     f"{_option(dest)} must lie in {left}{low}, {high}{right}, got {item}"
                 )
@@ -85,6 +89,7 @@ CHECKS: dict[str, Callable[[str, Any], None]] = {
     "noise": _finite_range(0.0, 1.0),
     "time_limit": _finite_range(0.0, math.inf, low_open=True),
     "filter": _finite_range(0.0, 1.0, low_open=True),
+    "validation_fraction": _finite_range(0.0, 1.0, high_open=True),
     "video": _video,
 }
 """Argument destination -> its check (run only when the argument is present and not None)."""

@@ -41,13 +41,6 @@ def _int_at_least(minimum: int) -> Callable[[str], int]:
     return parse
 
 
-def _fraction(text: str) -> float:
-    value = float(text)
-    if not 0.0 <= value < 1.0:
-        raise argparse.ArgumentTypeError(f"must be a number in [0, 1), got {text}")
-    return value
-
-
 def _data_dir(domain: Domain, path: Path | None) -> Path:
     return Path(path) if path else cache_dir() / domain.name / "data"
 
@@ -181,7 +174,7 @@ def add_train(verbs: Verbs) -> None:
     )
     parser.add_argument(
         "--validation-fraction",
-        type=_fraction,
+        type=float,
         default=defaults.validation_fraction,
         help="fraction of each data set's training episodes that chooses the epoch; "
         "0: train exactly --epochs on all (default: %(default)s)",
