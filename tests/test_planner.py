@@ -15,12 +15,20 @@ from osg_control.domain.base import Task as KitchenTask
 from osg_control.domain.registry import get_domain
 from osg_control.errors import PDDLError, PlanningError
 from osg_control.kitchen.tasks import DEFAULT_WORLD, KITCHEN_TASKS
-from osg_control.planning.api import PLANNERS, plan_files, plan_for_goal, plan_on_graph, solve
+from osg_control.planning.api import (
+    PLANNERS,
+    graph_domain,
+    plan_files,
+    plan_for_goal,
+    plan_on_graph,
+    solve,
+)
 from osg_control.planning.costs import read_manifest
 from osg_control.planning.fast_downward import find_fast_downward
 from osg_control.planning.graph import graph_from_specs
 from osg_control.planning.grounding import ground
 from osg_control.planning.heuristics import HMax
+from osg_control.planning.memo import PlanMemo
 from osg_control.planning.pddl_io import (
     build_domain,
     build_problem,
@@ -98,6 +106,30 @@ def test_kitchen_tasks_from_other_nodes_reach_the_goal_optimally(
     assert astar.cost == ucs.cost
     final = sim.simulate(astar.actions)  # checks each step's preconditions on the way
     assert sim.goal <= final
+
+
+def test_a_remembered_plan_is_the_planners_own_answer() -> None:
+    """``PlanMemo`` answers each question once, the same as ``plan_for_goal``: the facts'
+    order does not matter, a different node, goal or planner is a new question."""
+    pddl = graph_domain(KITCHEN)
+    memo = PlanMemo(KITCHEN, pddl)
+    for task in KITCHEN_TASKS:
+        for node in ("home", "door-front", "above-cube"):
+            fresh = plan_for_goal(KITCHEN, task.goal, node, task.world, "astar", pddl=pddl)
+            remembered = memo(task.goal, node, task.world, "astar")
+            assert (remembered.steps, remembered.cost, remembered.unreached) == (
+                fresh.steps,
+                fresh.cost,
+                fresh.unreached,
+            )
+    questions = len(KITCHEN_TASKS) * 3
+    assert memo.asked() == (0, questions)
+    task = KITCHEN_TASKS[0]
+    first = memo(task.goal, "home", task.world, "astar")
+    assert memo(task.goal, "home", reversed(task.world), "astar") is first
+    assert memo.asked() == (2, questions)
+    memo(task.goal, "home", task.world, "ucs")
+    assert memo.asked() == (2, questions + 1)
 
 
 def test_plan_simulated_step_by_step() -> None:

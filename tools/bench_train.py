@@ -29,7 +29,8 @@ import numpy as np
 import torch
 
 from osg_control.data.datasets import ACTION_DIM, OBS_DIM, Episode, write_episodes
-from osg_control.kitchen.skills import SKILLS, SkillSpec
+from osg_control.kitchen.skills import NODES, SKILLS, SkillSpec
+from osg_control.kitchen.world import WORLD_FIELDS
 from osg_control.learning.td3bc import ACTION_SCALE, TD3BC, BatchedReplay, TD3BCConfig
 from osg_control.paths import cache_dir
 from osg_control.pipeline.train import load_skill_input
@@ -51,8 +52,8 @@ def synthetic_episode(skill: SkillSpec, rng: np.random.Generator) -> Episode:
     Returns:
         An ``EPISODE_STEPS``-step episode with in-bound actions and the reward on the last step.
     """
-    start = np.array(skill.start_node.position) + rng.normal(0.0, 0.02, 3)
-    end = np.array(skill.end_node.position)
+    start = np.array(NODES[skill.start].position) + rng.normal(0.0, 0.02, 3)
+    end = np.array(NODES[skill.end].position)
     moves = (end - start) / EPISODE_STEPS + rng.normal(0.0, 0.003, (EPISODE_STEPS, 3))
     actions = rng.normal(0.0, 0.3, (EPISODE_STEPS, ACTION_DIM)) * ACTION_SCALE
     actions[:, :3] = moves
@@ -61,7 +62,7 @@ def synthetic_episode(skill: SkillSpec, rng: np.random.Generator) -> Episode:
     obs = np.zeros((EPISODE_STEPS + 1, OBS_DIM), dtype=np.float32)
     obs[:, :3] = positions
     obs[:, 3:7] = (0.0, 1.0, 0.0, 0.0)
-    obs[:, 7] = 1.0 if skill.end_node.gripper == "closed" else 0.0
+    obs[:, 7] = 1.0 if NODES[skill.end].gripper == "closed" else 0.0
     obs[:, 8:] = rng.uniform(0.0, 0.08, (EPISODE_STEPS + 1, 2))
     last = np.arange(EPISODE_STEPS) == EPISODE_STEPS - 1
     return Episode(
@@ -71,7 +72,7 @@ def synthetic_episode(skill: SkillSpec, rng: np.random.Generator) -> Episode:
         rewards=last.astype(np.float32),
         terminations=last,
         truncations=np.zeros(EPISODE_STEPS, dtype=bool),
-        world_states=np.zeros((EPISODE_STEPS, 11), dtype=np.float32),
+        world_states=np.zeros((EPISODE_STEPS, len(WORLD_FIELDS)), dtype=np.float32),
     )
 
 
@@ -83,7 +84,14 @@ def write_synthetic_data(directory: Path, steps_per_skill: int, seed: int) -> No
             synthetic_episode(skill, rng) for _ in range(max(1, steps_per_skill // EPISODE_STEPS))
         ]
         write_episodes(
-            directory / f"{skill.name}.h5", episodes, {"skill": skill.to_json(), "seed": seed}
+            directory / f"{skill.name}.h5",
+            episodes,
+            {
+                "domain": "kitchen",
+                "skill": skill.to_json(),
+                "seed": seed,
+                "world_fields": ",".join(WORLD_FIELDS),
+            },
         )
 
 

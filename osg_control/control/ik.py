@@ -139,8 +139,12 @@ class Backend:
         self._posture = np.asarray(config.posture, dtype=float)
         self._posture_gain = config.posture_cost**2 * config.gain
         self._diagonal = config.posture_cost**2 + config.damping
-        self._step_limit = self.velocity_limit * config.dt
-        self._minus_step_limit = -self._step_limit
+        # Both box rows at once: lower = max(gain (lower - q), -step), upper = min(gain
+        # (upper - q), step), as one clip of a (2, 7) array between these rows.
+        step_limit = self.velocity_limit * config.dt
+        self._limits = np.stack([self.lower, self.upper])
+        self._box_floor = np.stack([-step_limit, np.full(7, -np.inf)])
+        self._box_ceiling = np.stack([np.full(7, np.inf), step_limit])
 
     def tcp_pose(self, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """TCP position [m] and rotation matrix in the base frame at ``q``."""
@@ -186,10 +190,11 @@ class Backend:
             lm_term = config.lm_damping * float(weighted_error @ weighted_error)
             hessian.flat[::8] += self._diagonal + lm_term
             equality_matrix = equality_vector = None
-        lower = np.maximum(config.limit_gain * (self.lower - q), self._minus_step_limit)
-        upper = np.minimum(config.limit_gain * (self.upper - q), self._step_limit)
+        box = np.minimum(
+            np.maximum(config.limit_gain * (self._limits - q), self._box_floor), self._box_ceiling
+        )
         return qpsolvers.Problem(
-            hessian, linear, A=equality_matrix, b=equality_vector, lb=lower, ub=upper
+            hessian, linear, A=equality_matrix, b=equality_vector, lb=box[0], ub=box[1]
         )
 
 

@@ -27,9 +27,9 @@ def checked_action(action: Any, bounds: np.ndarray) -> np.ndarray:
         raise ValueError(_refusal(bounds, f"dtype {array.dtype}: {action!r}"))
     if array.shape != (7,):
         raise ValueError(_refusal(bounds, f"shape {array.shape}"))
-    if not np.all(np.isfinite(array)):
+    if not np.isfinite(array).all():
         raise ValueError(_refusal(bounds, f"non-finite values {array.tolist()}"))
-    return np.clip(array, -bounds, bounds)  # float64 for every real kind
+    return np.minimum(np.maximum(array, -bounds), bounds)  # float64 for every real kind
 
 
 def _refusal(bounds: np.ndarray, got: str) -> str:

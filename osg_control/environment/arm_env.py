@@ -25,7 +25,7 @@ catalogue or scene object.
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, field
 from typing import Any, ClassVar
 
 import gymnasium as gym
@@ -368,9 +368,12 @@ class ArmEnv(gym.Env):
         outside); ``percept`` then returns this reading."""
         return self._perceive()
 
-    def _perceive(self, truth: np.ndarray | None = None) -> Percept:
+    def _perceive(
+        self, truth: np.ndarray | None = None, truth_facts: frozenset[str] | None = None
+    ) -> Percept:
         """Read the simulated sensors once (``config.perception``) and keep the percept
-        (``truth``: the world vector, if the caller has read it already)."""
+        (``truth``: the world vector, if the caller has read it already; ``truth_facts``:
+        its facts, if computed, which an exact ``sim`` perception then reuses)."""
         spec = self.config.perception
         truth = self.read_world() if truth is None else truth
         if truth.shape != (len(self.world_sensors),):
@@ -379,11 +382,9 @@ class ArmEnv(gym.Env):
                 f"read_world gives {truth.shape}; declare a sensor for every world field"
             )
         if spec.name == "sim":
-            state, joints, world = (
-                self.sensors.true_state(self.data, self._gripper_cmd),
-                self.arm_q,
-                truth,
-            )
+            state = self.sensors.true_state(self.data, self._gripper_cmd)
+            facts = self.facts_of(truth) if truth_facts is None else truth_facts
+            self._percept = Percept(state, self.arm_q, truth, facts)
         else:
             state, joints = self.sensors.perceived(
                 self.data, self._gripper_cmd, spec, self.np_random
@@ -391,7 +392,7 @@ class ArmEnv(gym.Env):
             world = self.detect_world(
                 state, noisy_world(spec, self.np_random, truth, self._sensor_slices)
             )
-        self._percept = Percept(state, joints, world, self.facts_of(world))
+            self._percept = Percept(state, joints, world, self.facts_of(world))
         return self._percept
 
     # ----------------------------------------------------------------- reset
@@ -574,7 +575,7 @@ class ArmEnv(gym.Env):
         truncated = not terminated and budget is not None and self._steps >= budget
         self._episode_over = self._episode_over or terminated or truncated
         info = self._info(world, facts)
-        info["percept"] = self._perceive(world)
+        info["percept"] = self._perceive(world, facts)
         info["action_applied"] = action
         info["joint_speed_ratio"] = self._step_speed_ratio
         if failure is not None:
@@ -654,8 +655,14 @@ class ArmEnv(gym.Env):
 
     def _truth_success(self, skill: SkillSpec, facts: frozenset[str]) -> bool:
         """The success predicate with ``facts``: the true world's."""
-        end = replace(self.nodes[skill.end], position=tuple(self.node_position(skill.end)))
-        return success_holds(skill, end, self._true_tcp()[0], self._gripper_cmd, facts)
+        return success_holds(
+            skill,
+            self.nodes[skill.end],
+            self.data.site_xpos[self._tcp],
+            self._gripper_cmd,
+            facts,
+            self.node_position(skill.end),
+        )
 
     def _info(
         self, world: np.ndarray | None = None, facts: frozenset[str] | None = None

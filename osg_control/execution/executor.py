@@ -24,7 +24,6 @@ from __future__ import annotations
 
 import time
 from collections.abc import Callable, Iterable, Mapping
-from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
@@ -55,8 +54,9 @@ from osg_control.execution.results import (
     SkillOutcome,
 )
 from osg_control.perception.spec import PerceptionSpec
-from osg_control.planning.api import graph_domain, plan_for_goal
+from osg_control.planning.api import graph_domain
 from osg_control.planning.graph import SkillGraph
+from osg_control.planning.memo import PlanMemo
 from osg_control.planning.pddl_io import MIN_SUCCESS_RATE, skill_cost
 
 TIME_LIMIT = "the env's episode time limit was reached"
@@ -135,7 +135,7 @@ class Executor:
         self.domain = domain
         self.skills = domain.skills_by_name
         self.graph = graph
-        self._pddl = graph_domain(domain, graph)
+        self._plans = PlanMemo(domain, graph_domain(domain, graph))
         self.policies = policies
         self.classifier = classifier
         self.planner = planner
@@ -172,9 +172,7 @@ class Executor:
             skill = self.skills[entry]
             node = skill.end
             facts = (facts - skill.del_effects) | skill.add_effects
-        result = plan_for_goal(
-            self.domain, goal, node, sorted(facts), self.planner, pddl=self._pddl
-        )
+        result = self._plans(goal, node, facts, self.planner)
         return entry, list(result.actions), result
 
     def _entry_skill(
@@ -233,9 +231,7 @@ class Executor:
         from its end node (inf without a plan)."""
         skill = self.skills[name]
         after = (facts - skill.del_effects) | skill.add_effects
-        planned = plan_for_goal(
-            self.domain, goal, skill.end, sorted(after), self.planner, pddl=self._pddl
-        )
+        planned = self._plans(goal, skill.end, after, self.planner)
         if not planned.solved or planned.cost is None:
             return float("inf")
         edge = self.graph.edge(name)
@@ -284,10 +280,8 @@ class Executor:
             percept = env.percept()
             objects.update(percept)
             position = (percept.state if tracker is None else tracker.read(obs))[:3]
-            goal = replace(
-                end, position=tuple(node_position(self.domain.nodes, end.name, objects.offsets()))
-            )
-            if success_holds(skill, goal, position, percept.state[7], percept.facts):
+            goal = node_position(self.domain.nodes, end.name, objects.offsets())
+            if success_holds(skill, end, position, percept.state[7], percept.facts, goal):
                 return SkillOutcome(skill.name, True, step, time.perf_counter() - started), obs
             ended = _episode_end(terminated, truncated)
             if ended:

@@ -8,6 +8,8 @@ fingers; the handle likewise with the fin's width and the handle's perceived pla
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 from osg_control.environment.success import GRIPPER_CLOSED_CMD
@@ -44,12 +46,17 @@ GRIP_REACH = 0.06
 cube's or the handle's noise (1 cm), the TCP's (2 cm under the paper's protocol), and the
 grasp's offset from the object's centre."""
 _FIELD = {name: i for i, name in enumerate(WORLD_FIELDS)}
+_CUBE_POSITION = slice(_FIELD["cube_x"], _FIELD["cube_z"] + 1)
+assert WORLD_FIELDS[_CUBE_POSITION] == ("cube_x", "cube_y", "cube_z")
+_HANDLE_SHUT = np.asarray(NODES["handle"].position, dtype=float)
+"""The handle node with the door shut [m]."""
 
 
 def _grips(state: np.ndarray, width: float, target: np.ndarray) -> bool:
     shut = state[7] == GRIPPER_CLOSED_CMD
     low, high = width + WIDTH_BAND[0], width + WIDTH_BAND[1]
-    near = float(np.linalg.norm(state[:3] - target)) <= GRIP_REACH
+    gap = state[:3] - target
+    near = math.sqrt(gap @ gap) <= GRIP_REACH  # np.linalg.norm's own formula, without its checks
     return bool(shut and low <= state[9] <= high and near)
 
 
@@ -61,8 +68,9 @@ def detect_grasps(state: np.ndarray, world: np.ndarray) -> np.ndarray:
         world: the pose estimator's world vector (``WORLD_FIELDS``).
     """
     detected = np.array(world, dtype=float)
-    cube = detected[[_FIELD["cube_x"], _FIELD["cube_y"], _FIELD["cube_z"]]]
-    handle = np.asarray(NODES["handle"].position) + [0.0, detected[_FIELD["door_opening"]], 0.0]
+    cube = detected[_CUBE_POSITION]
+    handle = _HANDLE_SHUT.copy()
+    handle[1] += detected[_FIELD["door_opening"]]  # the door slides along y
     detected[_FIELD["cube_grasped"]] = float(_grips(state, CUBE_GRIP_WIDTH, cube))
     detected[_FIELD["handle_grasped"]] = float(_grips(state, HANDLE_GRIP_WIDTH, handle))
     return detected

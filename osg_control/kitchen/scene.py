@@ -74,13 +74,13 @@ class SceneIndex:
 
     def read(self, model: mujoco.MjModel, data: mujoco.MjData) -> WorldState:
         """Read the world state from the simulator (copies, never aliases ``data``)."""
-        cube = data.qpos[self.cube_qpos : self.cube_qpos + 7]
+        cube = data.qpos[self.cube_qpos : self.cube_qpos + 7].tolist()
         cube_grasped, handle_grasped = self._grasped(model, data)
         return WorldState(
             door_opening=float(data.qpos[self.door_qpos]),
             valve_angle=float(data.qpos[self.valve_qpos]),
-            cube_pos=(float(cube[0]), float(cube[1]), float(cube[2])),
-            cube_quat=(float(cube[3]), float(cube[4]), float(cube[5]), float(cube[6])),
+            cube_pos=(cube[0], cube[1], cube[2]),
+            cube_quat=(cube[3], cube[4], cube[5], cube[6]),
             cube_grasped=cube_grasped,
             handle_grasped=handle_grasped,
         )

@@ -65,10 +65,8 @@ class WorldState:
     @property
     def cube_in_cabinet(self) -> bool:
         """The cube rests in the cabinet: its centre inside the interior box, not grasped."""
-        inside = all(
-            low < p < high for p, (low, high) in zip(self.cube_pos, _CABINET_BOUNDS, strict=True)
-        )
-        return inside and not self.cube_grasped
+        (x, y, z), ((lx, hx), (ly, hy), (lz, hz)) = self.cube_pos, _CABINET_BOUNDS
+        return lx < x < hx and ly < y < hy and lz < z < hz and not self.cube_grasped
 
     @property
     def cube_on_counter(self) -> bool:
@@ -103,19 +101,17 @@ def world_facts(world: WorldState) -> frozenset[str]:
     Returns:
         The facts that hold; hand-empty means neither the cube nor the handle is grasped.
     """
-    facts = {
-        "door-open" if world.door_open else "door-closed",
-        "valve-open" if world.valve_open else "valve-closed",
-    }
-    named = {
-        "cube-in-cabinet": world.cube_in_cabinet,
-        "cube-on-counter": world.cube_on_counter,
-        "cube-lifted": world.cube_lifted,
-        "holding-cube": world.cube_grasped,
-        "holding-handle": world.handle_grasped,
-        "hand-empty": not (world.cube_grasped or world.handle_grasped),
-    }
-    return frozenset(facts | {name for name, holds in named.items() if holds})
+    named = (
+        ("door-open" if world.door_open else "door-closed", True),
+        ("valve-open" if world.valve_open else "valve-closed", True),
+        ("cube-in-cabinet", world.cube_in_cabinet),
+        ("cube-on-counter", world.cube_on_counter),
+        ("cube-lifted", world.cube_lifted),
+        ("holding-cube", world.cube_grasped),
+        ("holding-handle", world.handle_grasped),
+        ("hand-empty", not (world.cube_grasped or world.handle_grasped)),
+    )
+    return frozenset([name for name, holds in named if holds])
 
 
 WORLD_FIELDS: tuple[str, ...] = (
@@ -135,12 +131,12 @@ WORLD_FIELDS: tuple[str, ...] = (
 
 def world_state_from_array(values: np.ndarray) -> WorldState:
     """Inverse of ``WorldState.as_array``."""
-    v = np.asarray(values, dtype=float)
+    v = np.asarray(values, dtype=float).tolist()  # Python floats: read every step
     return WorldState(
-        door_opening=float(v[0]),
-        valve_angle=float(v[1]),
-        cube_pos=(float(v[2]), float(v[3]), float(v[4])),
-        cube_quat=(float(v[5]), float(v[6]), float(v[7]), float(v[8])),
-        cube_grasped=bool(v[9] > 0.5),
-        handle_grasped=bool(v[10] > 0.5),
+        door_opening=v[0],
+        valve_angle=v[1],
+        cube_pos=(v[2], v[3], v[4]),
+        cube_quat=(v[5], v[6], v[7], v[8]),
+        cube_grasped=v[9] > 0.5,
+        handle_grasped=v[10] > 0.5,
     )
