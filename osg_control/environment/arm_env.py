@@ -518,8 +518,7 @@ class ArmEnv(gym.Env):
             SimulationError: the physics diverged (e.g. a start placed inside the furniture).
         """
         watch = DivergenceWatch(self.data)
-        for _ in range(round(seconds / self.model.opt.timestep)):
-            mujoco.mj_step(self.model, self.data)
+        mujoco.mj_step(self.model, self.data, round(seconds / self.model.opt.timestep))
         diverged = watch.check()
         if diverged is not None:
             raise SimulationError(f"{diverged} while placing the start")
