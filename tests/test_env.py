@@ -13,8 +13,9 @@ import numpy as np
 import pytest
 from gymnasium.utils.env_checker import check_env
 
-from osg_control.control.ik import IKConfig, joint_reset_controller, rotation_error
+from osg_control.control.ik import IKConfig, joint_reset_controller
 from osg_control.control.robot import HOME_Q
+from osg_control.control.rotations import rotation_error
 from osg_control.environment.arm_env import ACTION_BOUNDS, OBS_DIM, EnvConfig
 from osg_control.kitchen.env import KitchenEnv
 from osg_control.kitchen.skills import NODES, TOP_DOWN_QUAT

@@ -19,7 +19,7 @@ import numpy as np
 import pytest
 
 from osg_control.cli import main
-from osg_control.control.ik import quat_to_matrix, rotation_step
+from osg_control.control.rotations import quat_to_matrix, rotation_step
 from osg_control.data.datasets import load_dataset
 from osg_control.domain.registry import get_domain
 from osg_control.errors import DatasetError, UsageError

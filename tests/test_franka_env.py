@@ -24,7 +24,7 @@ def adapter():
 
 
 def _go(env, target: np.ndarray, rotation: np.ndarray, steps: int) -> None:
-    from osg_control.control.ik import rotation_error
+    from osg_control.control.rotations import rotation_error
 
     for _ in range(steps):
         pos, rot = env.tcp_pose()

@@ -19,11 +19,10 @@ from osg_control.control.ik import (
     MinkBackend,
     PinocchioBackend,
     joint_reset_controller,
-    rotation_error,
-    rotation_step,
     solve_ik,
 )
 from osg_control.control.robot import HOME_Q, TCP_FRAME, TCP_SITE
+from osg_control.control.rotations import rotation_error, rotation_step
 from osg_control.errors import ControllerError
 
 BACKEND_NAMES = ("mink", "pinocchio")

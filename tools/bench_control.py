@@ -34,8 +34,9 @@ from typing import Any
 import mujoco
 import numpy as np
 
-from osg_control.control.ik import DiffIKController, IKConfig, rotation_step
+from osg_control.control.ik import DiffIKController, IKConfig
 from osg_control.control.robot import HOME_Q
+from osg_control.control.rotations import rotation_step
 from osg_control.environment.arm_env import ACTION_BOUNDS
 from osg_control.kitchen.env import KitchenEnv
 

@@ -43,13 +43,12 @@ from __future__ import annotations
 
 from collections.abc import Callable
 from dataclasses import dataclass, replace
-from typing import Any
 
 import mujoco
 import numpy as np
 import qpsolvers
-from scipy import sparse
 
+from osg_control.control.qp import SOLVERS, qp_solver
 from osg_control.control.robot import (
     HOME_Q,
     TCP_FRAME,
@@ -58,9 +57,8 @@ from osg_control.control.robot import (
     panda_spec,
     urdf_velocity_limits,
 )
+from osg_control.control.rotations import check_rotation, rotation_error, rotation_step
 from osg_control.errors import ControllerError
-
-SOLVERS: tuple[str, ...] = ("daqp", "osqp")
 
 
 @dataclass(frozen=True)
@@ -279,141 +277,8 @@ BACKENDS: dict[str, Callable[[IKConfig], Backend]] = {
 }
 
 
-class _DaqpSolver:
-    """DAQP called directly: the box as simple bounds, the equality rows with sense 5."""
-
-    def __init__(self, config: IKConfig) -> None:
-        import daqp
-
-        del config  # DAQP runs with its defaults
-        self._solve = daqp.solve
-        self._no_rows = np.zeros((0, 7))
-        self._senses: dict[int, np.ndarray] = {}
-
-    def _sense(self, n_eq: int) -> np.ndarray:
-        sense = self._senses.get(n_eq)
-        if sense is None:
-            sense = np.zeros(7 + n_eq, dtype=np.intc)
-            sense[7:] = 5  # equality rows
-            self._senses[n_eq] = sense
-        return sense
-
-    def __call__(self, problem: qpsolvers.Problem) -> np.ndarray | None:
-        if problem.A is None:
-            rows, upper, lower = self._no_rows, problem.ub, problem.lb
-        else:
-            rows = problem.A
-            upper = np.concatenate([problem.ub, problem.b])
-            lower = np.concatenate([problem.lb, problem.b])
-        sense = self._sense(rows.shape[0])
-        x, _, exitflag, _ = self._solve(problem.P, problem.q, rows, upper, lower, sense)
-        return np.asarray(x) if exitflag > 0 else None
-
-
-class _OsqpSolver:
-    """OSQP on CSC matrices: ``l <= [I; A] dq <= u`` with the upper triangle of ``P``.
-
-    One OSQP workspace per number of equality rows is set up on first use and then only
-    updated (``Px``, ``q``, ``Ax``, ``l``, ``u``): the sparsity pattern never changes, so
-    the expensive Python-side setup runs once. Warm starting is off and the step size
-    ``rho`` is reset before each solve, so a solve does not depend on the previous ones
-    (beyond rounding).
-    """
-
-    def __init__(self, config: IKConfig) -> None:
-        import osqp
-
-        self._osqp = osqp
-        self._rho = 0.1  # OSQP's default initial step size
-        self._settings: dict[str, Any] = {
-            "eps_abs": config.osqp_eps,
-            "eps_rel": config.osqp_eps,
-            "max_iter": 20000,
-            "rho": self._rho,
-            "polishing": False,
-            "warm_starting": False,
-            "verbose": False,
-        }
-        # Upper triangle of the 7x7 Hessian in CSC (column-major) order.
-        cols, rows = np.tril_indices(7)
-        self._p_rows, self._p_cols = rows, cols
-        self._p_pattern = sparse.csc_matrix(
-            (np.ones(rows.size), rows, np.concatenate([[0], np.cumsum(np.arange(1, 8))])),
-            shape=(7, 7),
-        )
-        self._workspaces: dict[int, Any] = {}
-
-    def __call__(self, problem: qpsolvers.Problem) -> np.ndarray | None:
-        n_eq = 0 if problem.A is None else problem.A.shape[0]
-        upper, lower = problem.ub, problem.lb
-        columns = np.ones((1 + n_eq, 7))  # column j of [I; A]: 1 at row j, then A[:, j]
-        if problem.A is not None:
-            columns[1:] = problem.A
-            upper = np.concatenate([upper, problem.b])
-            lower = np.concatenate([lower, problem.b])
-        p_data = problem.P[self._p_rows, self._p_cols]
-        a_data = columns.ravel(order="F")
-        solver = self._workspaces.get(n_eq)
-        if solver is None:
-            indices = np.concatenate([[j, *range(7, 7 + n_eq)] for j in range(7)])
-            a_matrix = sparse.csc_matrix(
-                (a_data, indices, np.arange(8) * (1 + n_eq)), shape=(7 + n_eq, 7)
-            )
-            p_matrix = self._p_pattern.copy()
-            p_matrix.data = p_data
-            solver = self._osqp.OSQP()
-            solver.setup(P=p_matrix, q=problem.q, A=a_matrix, l=lower, u=upper, **self._settings)
-            self._workspaces[n_eq] = solver
-        else:
-            solver.update(q=problem.q, l=lower, u=upper, Px=p_data, Ax=a_data)
-            solver.update_settings(rho=self._rho)  # undo the previous solve's adaptation
-        result = solver.solve(raise_error=False)
-        if result.info.status_val != self._osqp.SolverStatus.OSQP_SOLVED:
-            return None
-        return np.array(result.x)
-
-
-_SOLVER_CLASSES: dict[str, Callable[[IKConfig], Callable[[qpsolvers.Problem], Any]]] = {
-    "daqp": _DaqpSolver,
-    "osqp": _OsqpSolver,
-}
-
-
-def rotation_step(rot: np.ndarray, delta: np.ndarray) -> np.ndarray:
-    """Rotate ``rot`` by the world-frame rotation vector ``delta`` [rad]."""
-    quat = np.array([1.0, 0.0, 0.0, 0.0])
-    mujoco.mju_quatIntegrate(quat, np.asarray(delta, dtype=float), 1.0)
-    return quat_to_matrix(quat) @ rot
-
-
-def rotation_error(current: np.ndarray, target: np.ndarray) -> np.ndarray:
-    """World-frame rotation vector [rad] taking ``current`` to ``target``."""
-    quat = np.zeros(4)
-    mujoco.mju_mat2Quat(quat, (target @ current.T).ravel())
-    rotvec = np.zeros(3)
-    mujoco.mju_quat2Vel(rotvec, quat, 1.0)
-    return rotvec
-
-
 class InfeasibleQPError(ControllerError):
     """The IK QP has no solution for this configuration and target."""
-
-
-ORTHONORMAL_TOL = 1e-6
-
-
-def check_rotation(rot: np.ndarray) -> None:
-    """Refuse a rotation target that is not a rotation matrix.
-
-    Raises:
-        ControllerError: ``rot`` is not orthonormal (within ``ORTHONORMAL_TOL``) with det +1.
-    """
-    error = float(np.abs(rot.T @ rot - np.eye(3)).max())
-    if error > ORTHONORMAL_TOL or np.linalg.det(rot) < 0:
-        raise ControllerError(
-            f"TCP rotation target must be orthonormal with determinant +1 (|R^T R - I| = "
-            f"{error:.2g}, det {np.linalg.det(rot):.3g})"
-        )
 
 
 class DiffIKController:
@@ -427,7 +292,7 @@ class DiffIKController:
     def __init__(self, config: IKConfig | None = None) -> None:
         self.config = config or IKConfig()
         self.backend: Backend = BACKENDS[self.config.backend](self.config)
-        self._solve_qp = _SOLVER_CLASSES[self.config.solver](self.config)
+        self._solve_qp = qp_solver(self.config.solver, self.config.osqp_eps)
 
     def tcp_pose(self, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Forward kinematics: TCP position [m] and rotation matrix in the base frame."""
@@ -553,10 +418,3 @@ def solve_ik(
         and np.linalg.norm(rotation_error(rot, target_rot)) < rot_tol
     )
     return q, converged
-
-
-def quat_to_matrix(quat_wxyz: np.ndarray) -> np.ndarray:
-    """Rotation matrix of a ``w, x, y, z`` quaternion (MuJoCo's order)."""
-    mat = np.zeros(9)
-    mujoco.mju_quat2Mat(mat, np.asarray(quat_wxyz, dtype=float))
-    return mat.reshape(3, 3)

@@ -13,7 +13,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from osg_control.control.ik import quat_to_matrix, rotation_error
+from osg_control.control.rotations import quat_to_matrix, rotation_error
 from osg_control.domain.spec import TOP_DOWN_QUAT, ScriptParams, SkillSpec
 from osg_control.environment.actions import scale_into
 from osg_control.environment.arm_env import ACTION_BOUNDS, GRIPPER_CLOSED_CMD, GRIPPER_OPEN_CMD

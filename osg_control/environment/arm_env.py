@@ -48,13 +48,8 @@ from osg_control.control.robot import (
     HOME_Q,
     TCP_SITE,
     substeps_per_control_step,
-    urdf_velocity_limits,
 )
-from osg_control.control.servo import (
-    SpeedWatch,
-    saturate_joint_speeds,
-    uncap_drive,
-)
+from osg_control.control.servo import uncap_drive
 from osg_control.domain.frames import node_position, offsets_of
 from osg_control.domain.spec import Node, ObjectFrame, SkillSpec
 from osg_control.environment.actions import checked_action
@@ -70,6 +65,7 @@ from osg_control.environment.options import (
 )
 from osg_control.environment.poses import quat_rotation, sample_start_pose
 from osg_control.environment.sensing import ArmSensors
+from osg_control.environment.stepping import ArmControlStep
 from osg_control.environment.success import GRIPPER_CLOSED_CMD, GRIPPER_OPEN_CMD, success_holds
 from osg_control.errors import EnvOptionError, SimulationError
 from osg_control.perception.percept import Percept
@@ -93,8 +89,6 @@ OBS_HIGH = np.array([2.0, 2.0, 2.0, 1.0, 1.0, 1.0, 1.0, 1.0, 70.0, 0.1])
 """Observation bounds: TCP position within 2 m of the base (reach 0.86 m, plus noise), a
 unit quaternion, the gripper command, its force (the actuator's 70 N force range) and the
 finger distance (0 to 8 cm, with slack for contact penetration)."""
-_STEP_STATE = mujoco.mjtState.mjSTATE_INTEGRATION
-"""The state a control step is rerun from: everything ``mj_step`` reads."""
 SIMULATED_PERCEPTIONS = ("paper", "robot", "sim")
 """The perceptions an ``ArmEnv`` simulates (``env`` is an outside env's own observation)."""
 RESET_OPTIONS = ("node", "position", "radius", "angle", "gripper", "facts", "world", "holding")
@@ -216,14 +210,17 @@ class ArmEnv(gym.Env):
         self._arm_qpos = _as_slice([self.model.joint(j).qposadr[0] for j in ARM_JOINTS])
         self._arm_dof = _as_slice([self.model.joint(j).dofadr[0] for j in ARM_JOINTS])
         self._arm_act = _as_slice([self.model.actuator(j).id for j in ARM_JOINTS])
-        self._velocity_limits = urdf_velocity_limits()
-        self._inverse_limits = 1.0 / self._velocity_limits
         if not self.config.limit_joint_speed:
             uncap_drive(self.model, ARM_JOINTS)
-        self._speed_watch = SpeedWatch(
-            self.model, ARM_JOINTS, self._arm_dof, self._velocity_limits, self.n_substeps
+        self._control_step = ArmControlStep(
+            self.model,
+            self.data,
+            self._arm_qpos,
+            self._arm_dof,
+            self._arm_act,
+            self.n_substeps,
+            self.config.limit_joint_speed,
         )
-        self._step_start = np.empty(mujoco.mj_stateSize(self.model, _STEP_STATE))
         self._step_speed_ratio = 0.0
         self.peak_joint_speed_ratio = 0.0
         """Peak |arm joint velocity| / URDF limit over every simulated substep since the last
@@ -582,55 +579,11 @@ class ArmEnv(gym.Env):
         return self.observe(), reward, terminated, truncated, info
 
     def _simulate(self, arm_target: np.ndarray) -> str | None:
-        """Run one control step of physics toward ``arm_target`` (the speed-capped drive and
-        the speed saturation of ``control.servo``); return a failure reason if the
-        simulation diverged.
-
-        MuJoCo runs the substeps in one call and the speed sensors' history gives each
-        one's joint speeds; when one exceeded its limit (with ``limit_joint_speed``), the
-        physics goes back to the call's start, runs up to that substep again, saturates the
-        speeds and goes on with the substeps left.
-        """
-        watch = DivergenceWatch(self.data)
-        self.data.ctrl[self._arm_act] = arm_target
-        if not self._speed_watch.available:
-            return self._saturating_substeps(watch)
-        peak, left = 0.0, self.n_substeps
-        while left:
-            mujoco.mj_getState(self.model, self.data, self._step_start, _STEP_STATE)
-            mujoco.mj_step(self.model, self.data, left)
-            fastest = self._speed_watch.peak(self.data, left)
-            if fastest <= 1.0 or not self.config.limit_joint_speed:
-                peak = max(peak, fastest)
-                break
-            ratios = self._speed_watch.ratios(self.data, left)
-            first = int(np.argmax(ratios > 1.0)) + 1  # substeps up to the first too fast one
-            mujoco.mj_setState(self.model, self.data, self._step_start, _STEP_STATE)
-            mujoco.mj_step(self.model, self.data, first)
-            peak = max(peak, float(ratios[: first - 1].max(initial=0.0)), self._saturate())
-            left -= first
+        """Run one control step of physics toward ``arm_target`` (``stepping.ArmControlStep``)
+        and record its peak joint speed; return a failure reason if the simulation diverged."""
+        failure, peak = self._control_step.run(arm_target)
         self._record_peak(peak)
-        return watch.check()
-
-    def _saturate(self) -> float:
-        """Saturate the arm's joint speeds (``servo.saturate_joint_speeds``); returns the peak
-        speed ratio after it."""
-        saturate_joint_speeds(
-            self.data, self._arm_qpos, self._arm_dof, self._velocity_limits, self.model.opt.timestep
-        )
-        return float(np.max(np.abs(self.data.qvel[self._arm_dof]) * self._inverse_limits))
-
-    def _saturating_substeps(self, watch: DivergenceWatch) -> str | None:
-        """``_simulate`` substep by substep, for a model without the speed sensors."""
-        peak = 0.0
-        for _ in range(self.n_substeps):
-            mujoco.mj_step(self.model, self.data)
-            fastest = float(np.max(np.abs(self.data.qvel[self._arm_dof]) * self._inverse_limits))
-            if self.config.limit_joint_speed and fastest > 1.0:
-                fastest = self._saturate()
-            peak = max(peak, fastest)
-        self._record_peak(peak)
-        return watch.check()
+        return failure
 
     def _record_peak(self, peak: float) -> None:
         self.peak_joint_speed_ratio = max(self.peak_joint_speed_ratio, peak)

@@ -50,7 +50,7 @@ from typing import Any
 
 import numpy as np
 
-from osg_control.control.ik import quat_to_matrix, rotation_error
+from osg_control.control.rotations import quat_to_matrix, rotation_error
 from osg_control.data.datasets import Episode, dataset_bytes, write_episodes
 from osg_control.domain.base import Domain
 from osg_control.domain.spec import SkillSpec

@@ -135,7 +135,7 @@ def drive_to(
 ) -> int:
     """Step toward a TCP pose (position, rotation matrix) with the gripper ``"open"`` or
     ``"closed"``, on the true TCP; return the steps used."""
-    from osg_control.control.ik import rotation_error
+    from osg_control.control.rotations import rotation_error
 
     bounds = adapter.action_bounds
     g = GRIPPER_OPEN_CMD if gripper == "open" else GRIPPER_CLOSED_CMD

@@ -1,0 +1,99 @@
+"""The physics of one control step of the arm: the substeps toward a joint target, with
+the drive's speed cap and the speed saturation of ``control.servo``, and a divergence
+check. ``ArmEnv`` runs every step and joint-reset step through it."""
+
+from __future__ import annotations
+
+import mujoco
+import numpy as np
+
+from osg_control.control.divergence import DivergenceWatch
+from osg_control.control.robot import ARM_JOINTS, urdf_velocity_limits
+from osg_control.control.servo import SpeedWatch, saturate_joint_speeds
+
+_STEP_STATE = mujoco.mjtState.mjSTATE_INTEGRATION
+"""The state a control step is rerun from: everything ``mj_step`` reads."""
+
+
+class ArmControlStep:
+    """Runs a control step's substeps on ``model``/``data`` toward an arm joint target.
+
+    Args:
+        model, data: the scene.
+        arm_qpos, arm_dof, arm_act: the arm joints' qpos and dof addresses and actuators.
+        n_substeps: physics substeps per control step.
+        limit_joint_speed: saturate a joint speed over its URDF limit (False: only measure).
+    """
+
+    def __init__(
+        self,
+        model: mujoco.MjModel,
+        data: mujoco.MjData,
+        arm_qpos: slice | np.ndarray,
+        arm_dof: slice | np.ndarray,
+        arm_act: slice | np.ndarray,
+        n_substeps: int,
+        limit_joint_speed: bool,
+    ) -> None:
+        self.model, self.data = model, data
+        self._arm_qpos, self._arm_dof, self._arm_act = arm_qpos, arm_dof, arm_act
+        self.n_substeps = n_substeps
+        self.limit_joint_speed = limit_joint_speed
+        self._velocity_limits = urdf_velocity_limits()
+        self._inverse_limits = 1.0 / self._velocity_limits
+        self._speed_watch = SpeedWatch(
+            model, ARM_JOINTS, arm_dof, self._velocity_limits, n_substeps
+        )
+        self._step_start = np.empty(mujoco.mj_stateSize(model, _STEP_STATE))
+
+    def run(self, arm_target: np.ndarray) -> tuple[str | None, float]:
+        """One control step toward ``arm_target``: the failure reason if the simulation
+        diverged (else None) and the peak joint speed ratio (|speed| / URDF limit) over its
+        substeps.
+
+        MuJoCo runs the substeps in one call and the speed sensors' history gives each
+        one's joint speeds; when one exceeded its limit (with ``limit_joint_speed``), the
+        physics goes back to the call's start, runs up to that substep again, saturates the
+        speeds and goes on with the substeps left.
+        """
+        watch = DivergenceWatch(self.data)
+        self.data.ctrl[self._arm_act] = arm_target
+        if not self._speed_watch.available:
+            return self._saturating_substeps(watch)
+        peak, left = 0.0, self.n_substeps
+        while left:
+            mujoco.mj_getState(self.model, self.data, self._step_start, _STEP_STATE)
+            mujoco.mj_step(self.model, self.data, left)
+            fastest = self._speed_watch.peak(self.data, left)
+            if fastest <= 1.0 or not self.limit_joint_speed:
+                peak = max(peak, fastest)
+                break
+            ratios = self._speed_watch.ratios(self.data, left)
+            first = int(np.argmax(ratios > 1.0)) + 1  # substeps up to the first too fast one
+            mujoco.mj_setState(self.model, self.data, self._step_start, _STEP_STATE)
+            mujoco.mj_step(self.model, self.data, first)
+            peak = max(peak, float(ratios[: first - 1].max(initial=0.0)), self._saturate())
+            left -= first
+        return watch.check(), peak
+
+    def _saturate(self) -> float:
+        """Saturate the arm's joint speeds (``servo.saturate_joint_speeds``); returns the peak
+        speed ratio after it."""
+        saturate_joint_speeds(
+            self.data, self._arm_qpos, self._arm_dof, self._velocity_limits, self.model.opt.timestep
+        )
+        return self._speed_ratio()
+
+    def _speed_ratio(self) -> float:
+        return float(np.max(np.abs(self.data.qvel[self._arm_dof]) * self._inverse_limits))
+
+    def _saturating_substeps(self, watch: DivergenceWatch) -> tuple[str | None, float]:
+        """``run`` substep by substep, for a model without the speed sensors."""
+        peak = 0.0
+        for _ in range(self.n_substeps):
+            mujoco.mj_step(self.model, self.data)
+            fastest = self._speed_ratio()
+            if self.limit_joint_speed and fastest > 1.0:
+                fastest = self._saturate()
+            peak = max(peak, fastest)
+        return watch.check(), peak
