@@ -31,16 +31,6 @@ from osg_control.paths import cache_dir
 Verbs: TypeAlias = "argparse._SubParsersAction[argparse.ArgumentParser]"
 
 
-def _int_at_least(minimum: int) -> Callable[[str], int]:
-    def parse(text: str) -> int:
-        value = int(text)
-        if value < minimum:
-            raise argparse.ArgumentTypeError(f"must be an integer >= {minimum}, got {value}")
-        return value
-
-    return parse
-
-
 def _data_dir(domain: Domain, path: Path | None) -> Path:
     return Path(path) if path else cache_dir() / domain.name / "data"
 
@@ -160,14 +150,14 @@ def add_train(verbs: Verbs) -> None:
     )
     parser.add_argument(
         "--seed",
-        type=_int_at_least(0),
+        type=int,
         default=0,
         help="split, init and shuffle seed (default: %(default)s)",
     )
     defaults = TrainConfig()
     parser.add_argument(
         "--epochs",
-        type=_int_at_least(1),
+        type=int,
         default=defaults.epochs,
         help="epochs (with a validation split: the most, the best on it kept; "
         "default: %(default)s)",
@@ -181,13 +171,13 @@ def add_train(verbs: Verbs) -> None:
     )
     parser.add_argument(
         "--batch-size",
-        type=_int_at_least(1),
+        type=int,
         default=defaults.batch_size,
         help="states per step (default: %(default)s)",
     )
     parser.add_argument(
         "--threads",
-        type=_int_at_least(1),
+        type=int,
         default=defaults.threads,
         help="torch CPU threads (default: %(default)s)",
     )
@@ -248,9 +238,9 @@ def add_reach(verbs: Verbs) -> None:
         "termination node; beside it, how often the start lay outside the chosen skill's "
         "initiation region and the success of the nearest-start-node baseline.",
     )
-    parser.add_argument("--episodes", type=_int_at_least(1), default=200, help="per start region")
+    parser.add_argument("--episodes", type=int, default=200, help="per start region")
     parser.add_argument("--seed", type=int, default=0)
-    parser.add_argument("--workers", type=_int_at_least(1), default=2)
+    parser.add_argument("--workers", type=int, default=2)
     add_backend_arguments(parser)
     parser.add_argument(
         "--noise", type=float, default=None, help="the paper protocol's TCP noise [m] (default 0)"
