@@ -24,7 +24,8 @@ from osg_control.learning.checkpoints import (
     sha256_file,
 )
 from osg_control.learning.policy import SkillPolicy, load_policies
-from osg_control.learning.td3bc import TD3BC, SkillData
+from osg_control.learning.replay import SkillData
+from osg_control.learning.td3bc import TD3BC
 
 
 @pytest.fixture(scope="module")

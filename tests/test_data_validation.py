@@ -21,7 +21,8 @@ from osg_control.data.datasets import load_dataset
 from osg_control.domain.registry import get_domain
 from osg_control.errors import EXIT_CODES, CheckpointError, DatasetError, TrainingError
 from osg_control.learning.checkpoints import checkpoint_paths, load_checkpoint, save_checkpoint
-from osg_control.learning.td3bc import TD3BC, BatchedReplay
+from osg_control.learning.replay import BatchedReplay
+from osg_control.learning.td3bc import TD3BC
 from osg_control.pipeline.training_loop import train_with_progress
 from tests.datagen import write_synthetic_dataset
 

@@ -13,7 +13,8 @@ import pytest
 from osg_control.domain.registry import get_domain
 from osg_control.learning.checkpoints import Checkpoint, load_checkpoint, save_checkpoint
 from osg_control.learning.early_stopping import EarlyStopping, SkillProgress
-from osg_control.learning.td3bc import TD3BC, BatchedReplay, SkillData, TD3BCConfig
+from osg_control.learning.replay import BatchedReplay, SkillData
+from osg_control.learning.td3bc import TD3BC, TD3BCConfig
 from osg_control.pipeline.training_loop import EarlyStop, train_early_stopped
 
 OBS, ACT = 10, 7

@@ -18,15 +18,8 @@ from osg_control.kitchen.skills import get_skill
 from osg_control.kitchen.world import WORLD_FIELDS
 from osg_control.learning.checkpoints import Checkpoint, normalise_observations
 from osg_control.learning.policy import SkillPolicy, load_policies
-from osg_control.learning.td3bc import (
-    ACTION_SCALE,
-    TD3BC,
-    BatchedReplay,
-    SkillData,
-    TD3BCConfig,
-    bc_weights,
-    prepare_skill_data,
-)
+from osg_control.learning.replay import ACTION_SCALE, BatchedReplay, SkillData, prepare_skill_data
+from osg_control.learning.td3bc import TD3BC, TD3BCConfig, bc_weights
 from osg_control.seeding import skill_seed
 
 WORLD = ",".join(WORLD_FIELDS)

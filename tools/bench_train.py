@@ -31,7 +31,8 @@ import torch
 from osg_control.data.datasets import ACTION_DIM, OBS_DIM, Episode, write_episodes
 from osg_control.kitchen.skills import NODES, SKILLS, SkillSpec
 from osg_control.kitchen.world import WORLD_FIELDS
-from osg_control.learning.td3bc import ACTION_SCALE, TD3BC, BatchedReplay, TD3BCConfig
+from osg_control.learning.replay import ACTION_SCALE, BatchedReplay
+from osg_control.learning.td3bc import TD3BC, TD3BCConfig
 from osg_control.paths import cache_dir
 from osg_control.pipeline.train import load_skill_input
 from osg_control.seeding import skill_seed

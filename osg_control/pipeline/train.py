@@ -23,14 +23,8 @@ from osg_control.domain.spec import SkillSpec, skill_from_json
 from osg_control.errors import DatasetError, OSGError, SkillSpecError
 from osg_control.io_safety import check_output_dir
 from osg_control.learning.checkpoints import Checkpoint, Layer, save_checkpoint, sha256_file
-from osg_control.learning.td3bc import (
-    ACTION_SCALE,
-    TD3BC,
-    BatchedReplay,
-    SkillData,
-    TD3BCConfig,
-    prepare_skill_data,
-)
+from osg_control.learning.replay import ACTION_SCALE, BatchedReplay, SkillData, prepare_skill_data
+from osg_control.learning.td3bc import TD3BC, TD3BCConfig
 from osg_control.pipeline.resume import untrained_skills
 from osg_control.pipeline.training_loop import (
     EarlyStop,

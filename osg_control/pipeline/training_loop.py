@@ -16,7 +16,8 @@ from tqdm import tqdm
 from osg_control.errors import TrainingError
 from osg_control.learning.checkpoints import Layer
 from osg_control.learning.early_stopping import EarlyStopping, SkillProgress
-from osg_control.learning.td3bc import TD3BC, BatchedReplay
+from osg_control.learning.replay import BatchedReplay
+from osg_control.learning.td3bc import TD3BC
 
 LOG_EVERY = 100
 """Updates between refreshes of the progress bar's losses."""
