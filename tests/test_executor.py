@@ -231,9 +231,9 @@ def test_entry_skips_skills_recorded_with_the_door_open_while_it_is_shut(
     obs[:3] = (0.40, 0.09, 0.31)  # a start beside the closed door's handle
     obs[7] = 1.0
     shut = {"hand-empty", "door-closed", "cube-on-counter"}
-    assert executor._entry_skill(obs, shut) == "move-home-to-cube"
+    assert executor.entry.skill(obs, shut, executor.motion) == "move-home-to-cube"
     opened = {"hand-empty", "door-open", "cube-on-counter"}
-    assert executor._entry_skill(obs, opened) == "move-cabinet-to-cube"
+    assert executor.entry.skill(obs, opened, executor.motion) == "move-cabinet-to-cube"
 
 
 def test_a_start_part_way_down_to_the_cube_enters_at_grab_cube(
@@ -293,7 +293,8 @@ def test_the_entry_is_goal_aware(defaults: tuple[dict, object]) -> None:
     obs[:3] = (0.40, 0.05, 0.42)  # off the graph, near home
     obs[7] = 1.0
     facts = {"hand-empty", "door-closed", "cube-on-counter", "valve-closed"}
-    assert executor._classify(obs, facts) == "move-home-to-valve"  # no goal: the argmax
-    assert executor._entry_skill(obs, facts, goal=["cube-lifted"]) == "move-home-to-cube"
-    assert executor._entry_skill(obs, facts, goal=["door-open"]) == "move-home-to-door"
-    assert executor._entry_skill(obs, facts, goal=["valve-open"]) == "move-home-to-valve"
+    entry = executor.entry
+    assert entry.classify(obs, facts, executor.motion) == "move-home-to-valve"  # no goal: argmax
+    assert entry.skill(obs, facts, executor.motion, goal=["cube-lifted"]) == "move-home-to-cube"
+    assert entry.skill(obs, facts, executor.motion, goal=["door-open"]) == "move-home-to-door"
+    assert entry.skill(obs, facts, executor.motion, goal=["valve-open"]) == "move-home-to-valve"

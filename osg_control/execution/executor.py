@@ -37,15 +37,15 @@ from osg_control.domain.frames import (
     Offsets,
     in_skill_frame,
     node_position,
-    shifted_nodes,
     skill_offset,
 )
-from osg_control.domain.spec import SkillSpec, nearest_start
+from osg_control.domain.spec import SkillSpec
 from osg_control.environment.arm_env import GRIPPER_OPEN_CMD, EnvConfig
 from osg_control.environment.contract import SkillEnv
 from osg_control.environment.success import success_holds
 from osg_control.errors import SimulationError
-from osg_control.execution.locate import node_at, recorded_world_holds, skill_on_path
+from osg_control.execution.entry import EntryChoice
+from osg_control.execution.locate import node_at
 from osg_control.execution.objects import ObjectTracker
 from osg_control.execution.results import (
     EntryClassifier,
@@ -57,7 +57,6 @@ from osg_control.perception.spec import PerceptionSpec
 from osg_control.planning.api import graph_domain
 from osg_control.planning.graph import SkillGraph
 from osg_control.planning.memo import PlanMemo
-from osg_control.planning.pddl_io import MIN_SUCCESS_RATE, skill_cost
 
 TIME_LIMIT = "the env's episode time limit was reached"
 """The failure of a skill whose env step came back truncated (e.g. a gymnasium
@@ -68,9 +67,6 @@ EPISODE_ENDED = "the env ended its episode"
 truncated): by Gymnasium's protocol no further step is taken, so the execution ends there
 and succeeds if its goal facts hold."""
 
-ENTRY_MARGIN = 0.5
-"""A movement skill is an entry candidate when its classifier probability is at least this
-share of the best one's (``Executor._classify``)."""
 GRASP_GRACE_STEPS = 5
 """Steps a watched fact may be false before the skill is stopped (a grasp's contact may
 flicker for a few steps in the offline data)."""
@@ -102,7 +98,7 @@ class Executor:
             robot on the graph from it; None uses the raw observation (the paper's
             protocol).
         goal_aware_entry: choose the entry movement skill by the cost to the goal
-            (``_classify``); False: the classifier's argmax (the paper's executor).
+            (``entry.EntryChoice.classify``); False: the classifier's argmax (the paper's executor).
         motion_model: the filter's ``(k_now, k_prev)`` (the defaults' own,
             ``load_executor``; default the kitchen's fit).
         graph: the skill graph whose costs plans minimise: the cost model, e.g. the
@@ -137,7 +133,8 @@ class Executor:
         self.graph = graph
         self._plans = PlanMemo(domain, graph_domain(domain, graph))
         self.policies = policies
-        self.classifier = classifier
+        self.entry = EntryChoice(domain, classifier, graph, self._plans)
+        """Where a start off the graph enters it (``entry.EntryChoice``)."""
         self.planner = planner
         self.max_replans = max_replans
         self.reset_joints = reset_joints
@@ -148,6 +145,11 @@ class Executor:
         """Called after every env step (e.g. to record video frames)."""
         self.motion = MotionMemory()
         """The TCP commands sent since ``execute`` began: the classifier's motion input."""
+
+    @property
+    def classifier(self) -> EntryClassifier:
+        """The state -> movement-skill classifier of the entry choice."""
+        return self.entry.classifier
 
     def plan(
         self,
@@ -168,75 +170,13 @@ class Executor:
         node = node_at(self.domain, obs, facts, offsets)
         entry = None
         if node is None:
-            entry = self._entry_skill(obs, facts, offsets, goal)
+            aware = goal if self.goal_aware_entry else None
+            entry = self.entry.skill(obs, facts, self.motion, offsets, aware, self.planner)
             skill = self.skills[entry]
             node = skill.end
             facts = (facts - skill.del_effects) | skill.add_effects
         result = self._plans(goal, node, facts, self.planner)
         return entry, list(result.actions), result
-
-    def _entry_skill(
-        self,
-        obs: np.ndarray,
-        facts: set[str],
-        offsets: Offsets | None = None,
-        goal: list[str] | None = None,
-    ) -> str:
-        """Off the graph: the manipulation skill whose path the TCP is on; else, the hand
-        empty, the classifier's movement skill (goal-aware, ``_classify``); else the
-        applicable skill whose start node is nearest (retry from where it failed)."""
-        on_path = skill_on_path(self.domain, obs, facts, self.skills.values(), offsets)
-        if on_path is not None:
-            return on_path
-        if self.domain.hand_empty in facts:
-            return self._classify(obs, facts, goal if self.goal_aware_entry else None)
-        applicable = [s for s in self.skills.values() if s.preconditions <= facts]
-        fallback = applicable or list(self.skills.values())
-        nodes = shifted_nodes(self.domain, offsets or {})
-        return nearest_start(fallback, nodes, obs[:3]).name
-
-    def _classify(self, obs: np.ndarray, facts: set[str], goal: list[str] | None = None) -> str:
-        """The entry movement skill among those whose recorded world holds
-        (``recorded_world_holds``; all of them if none does).
-
-        Without a goal: the classifier's likeliest. With one, goal-aware: skills that start
-        at the same node share their initiation region, so the classifier splits a start
-        there between them; the chance that the state lies in a node's region is the sum of
-        its skills' probabilities. Among the skills whose region's chance is at least
-        ``ENTRY_MARGIN`` of the best, the one that minimises ``round(-ln P * 1000)`` plus
-        its own operator cost plus the plan's cost from its end to the goal (plan costs are
-        ``-1000 ln`` of measured success rates: the likeliest way to the goal, entering
-        included). A start near home then enters toward the cube for a cube task instead of
-        toward the valve and back.
-        """
-        proba = np.asarray(
-            self.classifier.predict_proba(obs, self.motion.features()), dtype=float
-        ).reshape(-1)
-        classes = self.classifier.classes
-        allowed = np.array([recorded_world_holds(self.skills[c], facts) for c in classes])
-        if not allowed.any():
-            allowed[:] = True
-        scores = np.where(allowed, proba, 0.0)
-        if goal is None:
-            return classes[int(np.argmax(np.where(allowed, proba, -np.inf)))]
-        starts = [self.skills[c].start for c in classes]
-        region = np.array([scores[[s == start for s in starts]].sum() for start in starts])
-        region = np.where(allowed, region, 0.0)
-        candidates = [i for i in range(len(classes)) if region[i] >= ENTRY_MARGIN * region.max()]
-        costs = {i: self._entry_cost(classes[i], float(region[i]), facts, goal) for i in candidates}
-        return classes[min(candidates, key=lambda i: (costs[i], -scores[i]))]
-
-    def _entry_cost(self, name: str, probability: float, facts: set[str], goal: list[str]) -> float:
-        """``-1000 ln p`` of entering through ``name``, its operator cost and the plan cost
-        from its end node (inf without a plan)."""
-        skill = self.skills[name]
-        after = (facts - skill.del_effects) | skill.add_effects
-        planned = self._plans(goal, skill.end, after, self.planner)
-        if not planned.solved or planned.cost is None:
-            return float("inf")
-        edge = self.graph.edge(name)
-        entering = skill_cost(max(probability, MIN_SUCCESS_RATE)) + skill_cost(edge.success_rate)
-        return float(entering + edge.step_cost + planned.cost)
 
     def run_skill(
         self,
