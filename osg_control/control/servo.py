@@ -141,21 +141,22 @@ class SpeedWatch:
         A sample is read at the start of a substep: the newest ``substeps - 1`` samples are
         the velocities after the first ``substeps - 1``; the last is ``data.qvel``.
         """
-        return np.append(self._during(data, substeps).max(axis=0), self._after(data))
+        return np.append(self._during(data, substeps).max(axis=0), self.ratio_now(data))
 
     def peak(self, data: mujoco.MjData, substeps: int) -> float:
         """The largest of ``ratios(data, substeps)``: the peak over the call's substeps
         (the same maximum, without building the per-substep vector)."""
         during = self._during(data, substeps)  # empty for one substep
-        return max(float(during.max(initial=0.0)), self._after(data))
+        return max(float(during.max(initial=0.0)), self.ratio_now(data))
 
     def _during(self, data: mujoco.MjData, substeps: int) -> np.ndarray:
         """The speed ratios (joints x substeps - 1) after the first ``substeps - 1``."""
         rows = self._rows(int(data.history[self._cursor]), substeps)
         return np.abs(data.history[rows]) * self._inverse_limits[:, None]
 
-    def _after(self, data: mujoco.MjData) -> float:
-        """The peak speed ratio now (``data.qvel``): the last substep's."""
+    def ratio_now(self, data: mujoco.MjData) -> float:
+        """The peak speed ratio now (``data.qvel``): the last substep's (also without the
+        sensors)."""
         return float((np.abs(data.qvel[self._dofs]) * self._inverse_limits).max())
 
     def _rows(self, newest: int, substeps: int) -> np.ndarray:

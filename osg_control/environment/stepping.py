@@ -40,7 +40,6 @@ class ArmControlStep:
         self.n_substeps = n_substeps
         self.limit_joint_speed = limit_joint_speed
         self._velocity_limits = urdf_velocity_limits()
-        self._inverse_limits = 1.0 / self._velocity_limits
         self._speed_watch = SpeedWatch(
             model, ARM_JOINTS, arm_dof, self._velocity_limits, n_substeps
         )
@@ -82,17 +81,14 @@ class ArmControlStep:
         saturate_joint_speeds(
             self.data, self._arm_qpos, self._arm_dof, self._velocity_limits, self.model.opt.timestep
         )
-        return self._speed_ratio()
-
-    def _speed_ratio(self) -> float:
-        return float(np.max(np.abs(self.data.qvel[self._arm_dof]) * self._inverse_limits))
+        return self._speed_watch.ratio_now(self.data)
 
     def _saturating_substeps(self, watch: DivergenceWatch) -> tuple[str | None, float]:
         """``run`` substep by substep, for a model without the speed sensors."""
         peak = 0.0
         for _ in range(self.n_substeps):
             mujoco.mj_step(self.model, self.data)
-            fastest = self._speed_ratio()
+            fastest = self._speed_watch.ratio_now(self.data)
             if self.limit_joint_speed and fastest > 1.0:
                 fastest = self._saturate()
             peak = max(peak, fastest)

@@ -130,7 +130,6 @@ class Executor:
             raise ValueError(f"domain {domain.name!r}: no policy for skills {missing}")
         self.domain = domain
         self.skills = domain.skills_by_name
-        self.graph = graph
         self._plans = PlanMemo(domain, graph_domain(domain, graph))
         self.policies = policies
         self.entry = EntryChoice(domain, classifier, graph, self._plans)
@@ -150,6 +149,11 @@ class Executor:
     def classifier(self) -> EntryClassifier:
         """The state -> movement-skill classifier of the entry choice."""
         return self.entry.classifier
+
+    @property
+    def graph(self) -> SkillGraph:
+        """The cost model the plans and the entry choice minimise."""
+        return self.entry.graph
 
     def plan(
         self,
