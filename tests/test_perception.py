@@ -56,13 +56,26 @@ class GuardedKitchenEnv(KitchenEnv):
         self._guard("tcp_pose")
         return super().tcp_pose()
 
+    @property
+    def arm_q(self) -> np.ndarray:
+        self._guard("arm_q")
+        return KitchenEnv.arm_q.fget(self)  # type: ignore[attr-defined]
+
+    def _info(self, world: Any = None, facts: Any = None) -> dict[str, Any]:
+        """The step's info is the env's own scoring (``step`` strips its truth)."""
+        self.scoring, before = True, self.scoring
+        try:
+            return super()._info(world, facts)
+        finally:
+            self.scoring = before
+
     def skill_success(self, skill: Any = None, world: Any = None) -> bool:
         self._guard("skill_success")
         return super().skill_success(skill, world)
 
     def step(self, action: np.ndarray) -> tuple[np.ndarray, float, bool, bool, dict[str, Any]]:
         obs, reward, terminated, truncated, info = super().step(action)
-        for truth in ("world", "world_facts", "success"):
+        for truth in ("world", "world_facts", "success", "arm_q"):
             info.pop(truth)
         return obs, reward, terminated, truncated, info
 
@@ -83,6 +96,7 @@ def test_the_executor_runs_a_task_on_percepts_alone(executor: Executor, percepti
     result = executor.execute(["cube-lifted"], env, obs)
     assert result.success, result.failure
     assert result.plan[-2:] == ["grab-cube", "pick-up-cube"]
+    assert any(outcome.reset_steps for outcome in result.outcomes)  # joint resets ran, guarded
     env.scoring = True
     assert "cube-lifted" in env.facts()  # scored on the simulator's truth
 
@@ -92,6 +106,8 @@ def test_the_guard_catches_a_truth_read() -> None:
     env.reset(seed=0)
     with pytest.raises(TruthAccessed, match="env.facts"):
         env.facts()
+    with pytest.raises(TruthAccessed, match="env.arm_q"):
+        env.arm_q  # noqa: B018
     _obs, *_, info = env.step(np.zeros(7))
     assert "world" not in info and "percept" in info
 

@@ -24,24 +24,37 @@ DIVERGED = "physics diverged"
 """The prefix of every divergence message (the executor stops on it instead of replanning)."""
 
 
-_WARNING_INDEX = np.array([int(w) for w in DIVERGENCE_WARNINGS])
+_FIRST_WARNING = int(DIVERGENCE_WARNINGS[0])
+assert [int(w) for w in DIVERGENCE_WARNINGS] == list(
+    range(_FIRST_WARNING, _FIRST_WARNING + len(DIVERGENCE_WARNINGS))
+), "the divergence warnings are read as one slice of MuJoCo's warning counters"
 
 
 class DivergenceWatch:
-    """Snapshot of the warning counters and clock of ``data``; ``check`` compares to it."""
+    """Snapshot of the warning counters and clock of ``data`` (taken at construction and
+    by ``start``); ``check`` compares to it. One watch serves every control step of a data:
+    the counters are a view into it, read as a slice (``warning[w].number`` one by one cost
+    6 us a step, a fresh gather 3 us)."""
 
     def __init__(self, data: mujoco.MjData) -> None:
         self.data = data
-        self.time = float(data.time)
-        # All counters in one read (``warning[w].number`` one by one cost 6 us a step).
-        self.counts = data.warning.number[_WARNING_INDEX].copy()
+        self._counters = data.warning.number[
+            _FIRST_WARNING : _FIRST_WARNING + len(DIVERGENCE_WARNINGS)
+        ]
+        self.start()
+
+    def start(self) -> None:
+        """Take the snapshot now (before a stretch of steps)."""
+        self.time = float(self.data.time)
+        self.counts = self._counters.tolist()
 
     def check(self) -> str | None:
         """The divergence since the snapshot, as a message starting ``DIVERGED``; else None."""
-        grown = np.flatnonzero(self.data.warning.number[_WARNING_INDEX] > self.counts)
-        if grown.size:
-            warning = DIVERGENCE_WARNINGS[int(grown[0])]
-            return f"{DIVERGED}: MuJoCo reported {warning.name} and reset the state"
+        now = self._counters.tolist()
+        if now != self.counts:
+            for warning, after, before in zip(DIVERGENCE_WARNINGS, now, self.counts, strict=True):
+                if after > before:
+                    return f"{DIVERGED}: MuJoCo reported {warning.name} and reset the state"
         if self.data.time < self.time:
             return f"{DIVERGED}: MuJoCo reset the state"
         return non_finite_state(self.data)

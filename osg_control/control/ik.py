@@ -218,16 +218,24 @@ class MinkBackend(Backend):
         self._target = mink.SE3(np.array([1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0]))
         self.frame_task.transform_target_to_world = self._target
         self._site = self.model.site(TCP_SITE).id
+        self._posed_at = np.full(7, np.nan)  # the configuration's q (NaN: none yet)
+
+    def _pose(self, q: np.ndarray) -> None:
+        """Forward kinematics at ``q``, unless the configuration is there already (a
+        relative step or an IK iteration reads the pose, then linearises at the same q)."""
+        if not (q == self._posed_at).all():
+            self.configuration.update(q)
+            self._posed_at[:] = q
 
     def tcp_pose(self, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        self.configuration.update(q)
+        self._pose(q)
         data = self.configuration.data
         return data.site_xpos[self._site].copy(), data.site_xmat[self._site].reshape(3, 3).copy()
 
     def frame_residual(
         self, q: np.ndarray, target_pos: np.ndarray, target_rot: np.ndarray
     ) -> tuple[np.ndarray, np.ndarray]:
-        self.configuration.update(q)
+        self._pose(q)
         target = self._target.wxyz_xyz
         mujoco.mju_mat2Quat(target[:4], target_rot.ravel())
         target[4:] = target_pos
@@ -335,7 +343,7 @@ class DiffIKController:
     ) -> np.ndarray:
         """``solve_velocity`` on inputs already checked. A ``q`` a little past a joint limit
         (contacts can push it there) is linearised at the limit, where the QP is feasible."""
-        q = np.clip(q, self.backend.lower, self.backend.upper)
+        q = np.minimum(np.maximum(q, self.backend.lower), self.backend.upper)
         problem = self.backend.build_qp(q, target_pos, target_rot, hard_tcp)
         solution = self._solve_qp(problem)
         if solution is None:

@@ -26,6 +26,7 @@ catalogue or scene object.
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from functools import partial
 from typing import Any, ClassVar
 
 import gymnasium as gym
@@ -325,15 +326,13 @@ class ArmEnv(gym.Env):
 
     @property
     def arm_q(self) -> np.ndarray:
-        """Current arm joint positions [rad] (a copy)."""
+        """True arm joint positions [rad] (a copy): the simulator's, for scoring and the step
+        info (what decides reads the encoders, ``percept().joints``)."""
         return self.data.qpos[self._arm_qpos].copy()
 
     def tcp_pose(self) -> tuple[np.ndarray, np.ndarray]:
         """True TCP position [m] and rotation matrix: the simulator's truth, for scoring and
         set-ups (what decides reads ``percept``)."""
-        return self._true_tcp()
-
-    def _true_tcp(self) -> tuple[np.ndarray, np.ndarray]:
         return (
             self.data.site_xpos[self._tcp].copy(),
             self.data.site_xmat[self._tcp].reshape(3, 3).copy(),
@@ -637,7 +636,10 @@ class ArmEnv(gym.Env):
 
         Null-space motion: the TCP pose is an equality constraint of the IK QP and the
         posture task pulls toward ``IKConfig.posture``. Runs until every joint is within
-        ``tolerance`` [rad] of the posture or the posture error stops shrinking.
+        ``tolerance`` [rad] of the posture or the posture error stops shrinking. Decided
+        from the encoders alone, as a robot's controller would: the joints are read (with
+        the perception's encoder noise) every step, the TCP is held where forward
+        kinematics of the joints read at its start puts it.
 
         Returns:
             The number of control steps used.
@@ -654,19 +656,23 @@ class ArmEnv(gym.Env):
         """``joint_reset``'s loop (the percept is refreshed after it, whatever happens)."""
         if self._reset_ik is None:
             self._reset_ik = joint_reset_controller(self.config.ik)
-        pos, rot = self._true_tcp()
+        encoders = partial(self.sensors.encoders, self.data, self.config.perception, self.np_random)
+        joints = encoders()
+        held: tuple[np.ndarray, np.ndarray] | None = None  # the TCP pose to hold
         posture = np.asarray(self.config.ik.posture)
         previous = np.inf
         for step in range(max_steps):
-            error = float(np.abs(self.arm_q - posture).max())
+            error = float(np.abs(joints - posture).max())
             if error < tolerance or error > previous - 1e-4:
                 return step
             previous = error
             diverged = non_finite_state(self.data, ("qpos",))
             if diverged is None:
-                diverged = self._simulate(self._reset_ik.reset_step(self.arm_q, pos, rot))
+                held = held or self._reset_ik.tcp_pose(joints)
+                diverged = self._simulate(self._reset_ik.reset_step(joints, *held))
             if diverged is not None:
                 raise SimulationError(f"{diverged} during joint reset")
+            joints = encoders()
         return max_steps
 
     # ----------------------------------------------------------------- render

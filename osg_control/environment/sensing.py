@@ -56,11 +56,10 @@ class ArmSensors:
         """The perceived 10-D state and arm joints under ``spec``: the TCP by forward
         kinematics of the encoders (with their noise), the finger width with its noise, then
         the paper's noise on the TCP position, if any; draws nothing for an exact sensor."""
-        joints = np.array(data.qpos[self.arm_qpos], dtype=float)
+        joints = self.encoders(data, spec, rng)
         if spec.joint_noise == 0.0 and spec.finger_noise == 0.0:
             state = self.true_state(data, gripper_cmd)
         else:
-            joints = joints + rng.normal(0.0, spec.joint_noise, joints.shape)
             if self._fk is None:
                 self._fk = mujoco.MjData(self.model)
             self._fk.qpos[self.arm_qpos] = joints
@@ -71,6 +70,16 @@ class ArmSensors:
         if spec.tcp_noise > 0:
             state[:3] += rng.normal(0.0, spec.tcp_noise, 3)
         return state, joints
+
+    def encoders(
+        self, data: mujoco.MjData, spec: PerceptionSpec, rng: np.random.Generator
+    ) -> np.ndarray:
+        """The arm joints [rad] as the encoders read them, with ``spec``'s encoder noise
+        (draws nothing for exact encoders)."""
+        joints = np.array(data.qpos[self.arm_qpos], dtype=float)
+        if spec.joint_noise > 0:
+            joints += rng.normal(0.0, spec.joint_noise, joints.shape)
+        return joints
 
     def _state(
         self, pose: mujoco.MjData, data: mujoco.MjData, gripper_cmd: float, fingers: float

@@ -44,6 +44,7 @@ class ArmControlStep:
             model, ARM_JOINTS, arm_dof, self._velocity_limits, n_substeps
         )
         self._step_start = np.empty(mujoco.mj_stateSize(model, _STEP_STATE))
+        self._watch = DivergenceWatch(data)
 
     def run(self, arm_target: np.ndarray) -> tuple[str | None, float]:
         """One control step toward ``arm_target``: the failure reason if the simulation
@@ -55,7 +56,8 @@ class ArmControlStep:
         physics goes back to the call's start, runs up to that substep again, saturates the
         speeds and goes on with the substeps left.
         """
-        watch = DivergenceWatch(self.data)
+        watch = self._watch
+        watch.start()
         self.data.ctrl[self._arm_act] = arm_target
         if not self._speed_watch.available:
             return self._saturating_substeps(watch)
