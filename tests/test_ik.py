@@ -244,6 +244,33 @@ def test_osqp_solves_are_independent_of_history() -> None:
     )
 
 
+def test_mink_kinematics_reused_only_at_the_same_q() -> None:
+    """The mink backend skips forward kinematics when its configuration is at ``q``
+    already, and redoes it for any other ``q``: every answer equals a fresh backend's bit
+    for bit, whatever was asked before (a pose then a residual at the same q, as a relative
+    step does, or a residual at another q, including one edited in place)."""
+    used = MinkBackend(IKConfig())
+    cases = random_cases(DiffIKController(), 6, seed=11)
+    for q, pos, rot in cases:
+        fresh = MinkBackend(IKConfig())
+        for got, want in zip(used.tcp_pose(q), fresh.tcp_pose(q), strict=True):
+            np.testing.assert_array_equal(got, want)
+        for got, want in zip(
+            used.frame_residual(q, pos, rot), fresh.frame_residual(q, pos, rot), strict=True
+        ):
+            np.testing.assert_array_equal(got, want)
+    q, pos, rot = cases[0]
+    moved = q.copy()
+    used.frame_residual(moved, pos, rot)
+    moved[3] += 0.1  # the same array, edited: not the configuration's q any more
+    for got, want in zip(
+        used.frame_residual(moved, pos, rot),
+        MinkBackend(IKConfig()).frame_residual(moved, pos, rot),
+        strict=True,
+    ):
+        np.testing.assert_array_equal(got, want)
+
+
 # ------------------------------------------------------------------ convergence and limits
 def assert_within_limits(controller: DiffIKController, q: np.ndarray) -> None:
     backend = controller.backend

@@ -24,10 +24,9 @@ DIVERGED = "physics diverged"
 """The prefix of every divergence message (the executor stops on it instead of replanning)."""
 
 
-_FIRST_WARNING = int(DIVERGENCE_WARNINGS[0])
-assert [int(w) for w in DIVERGENCE_WARNINGS] == list(
-    range(_FIRST_WARNING, _FIRST_WARNING + len(DIVERGENCE_WARNINGS))
-), "the divergence warnings are read as one slice of MuJoCo's warning counters"
+_WARNING_SLICE = slice(int(DIVERGENCE_WARNINGS[0]), int(DIVERGENCE_WARNINGS[-1]) + 1)
+"""The divergence warnings' counters: consecutive in ``mjtWarning`` (a gap would make
+``check``'s ``zip(..., strict=True)`` raise)."""
 
 
 class DivergenceWatch:
@@ -38,9 +37,7 @@ class DivergenceWatch:
 
     def __init__(self, data: mujoco.MjData) -> None:
         self.data = data
-        self._counters = data.warning.number[
-            _FIRST_WARNING : _FIRST_WARNING + len(DIVERGENCE_WARNINGS)
-        ]
+        self._counters = data.warning.number[_WARNING_SLICE]
         self.start()
 
     def start(self) -> None:

@@ -31,7 +31,7 @@ so no prefix is needed."""
 def with_panda(scene: mujoco.MjSpec) -> mujoco.MjSpec:
     """Attach the Panda (fingers included, its own keyframes dropped: the scene's keyframe
     must cover the scene's joints too) at the world origin of ``scene``, with its joints'
-    speed sensors keeping one control step's substeps less one (``servo.SpeedWatch``); returns
+    speed sensors keeping one control step of substeps (``servo.SpeedWatch``); returns
     ``scene``."""
     robot = panda_spec(with_fingers=True)
     for key in list(robot.keys):
@@ -39,7 +39,7 @@ def with_panda(scene: mujoco.MjSpec) -> mujoco.MjSpec:
     with warnings.catch_warnings():
         warnings.filterwarnings("ignore", message=_EMPTY_PREFIX)
         scene.attach(robot, frame=scene.worldbody.add_frame(), prefix="")
-    add_speed_sensors(scene, ARM_JOINTS, substeps_per_control_step(scene.option.timestep) - 1)
+    add_speed_sensors(scene, ARM_JOINTS, substeps_per_control_step(scene.option.timestep))
     return scene
 
 

@@ -92,8 +92,7 @@ def uncap_drive(model: mujoco.MjModel, joints: Sequence[str]) -> None:
 
 def add_speed_sensors(spec: mujoco.MjSpec, joints: Sequence[str], samples: int) -> None:
     """Add a velocity sensor per joint keeping its last ``samples`` readings (one per
-    physics substep: MuJoCo records each at the start of a substep, before integrating;
-    ``SpeedWatch`` needs one control step's substeps less one, the last being ``qvel``)."""
+    physics substep: MuJoCo records each at the start of a substep, before integrating)."""
     for joint in joints:
         spec.add_sensor(
             name=joint + SPEED_SENSOR_SUFFIX,
@@ -109,7 +108,7 @@ class SpeedWatch:
     one ``mj_step`` call, read from the speed sensors' history and the current velocities.
 
     ``available`` is False when the model lacks the sensors or their history is shorter
-    than ``substeps - 1`` (the env then watches substep by substep).
+    than ``substeps`` (the env then watches substep by substep).
     """
 
     def __init__(
@@ -127,7 +126,7 @@ class SpeedWatch:
             mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_SENSOR, joint + SPEED_SENSOR_SUFFIX)
             for joint in joints
         ]
-        if min(ids) < 0 or any(int(model.sensor_history[i, 0]) < substeps - 1 for i in ids):
+        if min(ids) < 0 or any(int(model.sensor_history[i, 0]) < substeps for i in ids):
             return
         self.available = True
         self._samples = int(model.sensor_history[ids[0], 0])
@@ -135,23 +134,6 @@ class SpeedWatch:
         self._cursor = int(model.sensor_historyadr[ids[0]]) + 1
         self._values = np.array([int(model.sensor_historyadr[i]) + 2 + self._samples for i in ids])
         self._cache: dict[tuple[int, int], np.ndarray] = {}
-        self._whole = self._whole_histories(model, ids, substeps)
-
-    def _whole_histories(
-        self, model: mujoco.MjModel, ids: list[int], substeps: int
-    ) -> tuple[int, int, int] | None:
-        """(start, stop, row length) of the sensors' histories as one block, when they hold
-        exactly ``substeps - 1`` samples and lie next to each other in joint order: then after
-        a full call every sample is one of ``_during``'s and the block is read as a
-        (joints, row) view without gathering indices; else None."""
-        row = 2 + 2 * self._samples
-        start = int(model.sensor_historyadr[ids[0]])
-        adjacent = all(
-            int(model.sensor_historyadr[i]) == start + k * row for k, i in enumerate(ids)
-        )
-        if self._samples != substeps - 1 or not adjacent:
-            return None
-        return start, start + row * len(ids), row
 
     def ratios(self, data: mujoco.MjData, substeps: int) -> np.ndarray:
         """The peak speed ratio after each of the last ``substeps`` substeps, oldest first.
@@ -164,13 +146,7 @@ class SpeedWatch:
     def peak(self, data: mujoco.MjData, substeps: int) -> float:
         """The largest of ``ratios(data, substeps)``: the peak over the call's substeps
         (the same maximum, without building the per-substep vector)."""
-        whole = self._whole
-        if whole is not None and substeps == self._samples + 1:
-            start, stop, row = whole
-            values = data.history[start:stop].reshape(-1, row)[:, 2 + self._samples :]
-            during = np.abs(values) * self._inverse_limits[:, None]
-        else:
-            during = self._during(data, substeps)  # empty for one substep
+        during = self._during(data, substeps)  # empty for one substep
         return max(float(during.max(initial=0.0)), self.ratio_now(data))
 
     def _during(self, data: mujoco.MjData, substeps: int) -> np.ndarray:
