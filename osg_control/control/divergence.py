@@ -25,8 +25,10 @@ DIVERGED = "physics diverged"
 
 
 _WARNING_SLICE = slice(int(DIVERGENCE_WARNINGS[0]), int(DIVERGENCE_WARNINGS[-1]) + 1)
-"""The divergence warnings' counters: consecutive in ``mjtWarning`` (a gap would make
-``check``'s ``zip(..., strict=True)`` raise)."""
+"""Where the divergence warnings' tallies lie in ``data.warning.number``: one slice, so
+``DivergenceWatch`` reads them as a view."""
+if [int(w) for w in DIVERGENCE_WARNINGS] != list(range(_WARNING_SLICE.start, _WARNING_SLICE.stop)):
+    raise ImportError("DIVERGENCE_WARNINGS must be consecutive in mujoco.mjtWarning")
 
 
 class DivergenceWatch:
