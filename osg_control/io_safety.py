@@ -19,7 +19,14 @@ from pathlib import Path
 from osg_control.errors import OutputError
 from osg_control.paths import PACKAGE_DIR
 
-__all__ = ["atomic_write", "check_output_dir", "file_mode", "output_errors", "refuse_package"]
+__all__ = [
+    "atomic_folder",
+    "atomic_write",
+    "check_output_dir",
+    "file_mode",
+    "output_errors",
+    "refuse_package",
+]
 
 
 def file_mode() -> int:
@@ -81,6 +88,38 @@ def atomic_write(path: str | Path, write: Callable[[Path], object]) -> Path:
     finally:
         tmp.unlink(missing_ok=True)
     return path
+
+
+def atomic_folder(target: Path, fill: Callable[[Path], object]) -> Path:
+    """Create folder ``target`` by calling ``fill(staging)`` on a new sibling folder, then
+    moving it in place; an old ``target`` is set aside first and removed only once the new
+    one is there, so a failure at any point keeps one of them, whole.
+
+    Raises:
+        OutputError: the folder cannot be written, or lies inside the package; names it.
+    """
+    refuse_package(target)
+    with output_errors(target):
+        target.parent.mkdir(parents=True, exist_ok=True)
+        staging = Path(tempfile.mkdtemp(prefix=f".{target.name}.", dir=target.parent))
+    try:
+        with output_errors(target):
+            fill(staging)
+            if not target.exists():
+                staging.rename(target)
+                return target
+            old = Path(tempfile.mkdtemp(prefix=f".{target.name}.old.", dir=target.parent))
+            old.rmdir()
+            target.rename(old)
+            try:
+                staging.rename(target)
+            except OSError:
+                old.rename(target)
+                raise
+            shutil.rmtree(old, ignore_errors=True)
+    finally:
+        shutil.rmtree(staging, ignore_errors=True)
+    return target
 
 
 MIN_FREE_BYTES = 16 * 2**20

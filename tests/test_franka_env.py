@@ -35,6 +35,13 @@ def _go(env, target: np.ndarray, rotation: np.ndarray, steps: int) -> None:
         env.step(action)
 
 
+def test_the_domains_control_rate_is_the_envs(adapter) -> None:
+    from osg_control.franka.domain import franka_domain
+
+    assert adapter.dt * franka_domain().control_hz == pytest.approx(1.0)
+    assert adapter.metadata["render_fps"] == int(franka_domain().control_hz)
+
+
 def test_arm_model_matches_the_env(adapter) -> None:
     adapter.reset(seed=0)
     pos, rot = adapter.ik.tcp_pose(adapter.arm_q)

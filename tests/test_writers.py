@@ -40,6 +40,13 @@ def _minari_source(tmp_path: Path) -> Path:
     return root / "osg" / "grab-cube-v0"
 
 
+def _lerobot_source(tmp_path: Path) -> Path:
+    """A LeRobot data set made from a tiny project data set (the import's input)."""
+    data = chained_dataset(tmp_path / "src" / "grab-cube.h5")
+    assert main(["datasets", "lerobot", str(data), "--out", str(tmp_path / "lerobot")]) == 0
+    return tmp_path / "lerobot"
+
+
 WRITERS: dict[str, Callable[[Path, Path], list[str]]] = {
     "graph --out": lambda dest, tmp: ["graph", "--out", str(dest / "figures.json")],
     "graph --png": lambda dest, tmp: ["graph", "--png", str(dest / "graph.png")],
@@ -57,6 +64,24 @@ WRITERS: dict[str, Callable[[Path, Path], list[str]]] = {
         "datasets",
         "import",
         str(_minari_source(tmp)),
+        "--skill",
+        "grab-cube",
+        "--out",
+        str(dest / "grab-cube.h5"),
+    ],
+    "datasets lerobot": lambda dest, tmp: [
+        "datasets",
+        "lerobot",
+        str(chained_dataset(tmp / "data" / "grab-cube.h5")),
+        "--out",
+        str(dest / "lerobot"),
+    ],
+    "datasets import --layout lerobot": lambda dest, tmp: [
+        "datasets",
+        "import",
+        str(_lerobot_source(tmp)),
+        "--layout",
+        "lerobot",
         "--skill",
         "grab-cube",
         "--out",

@@ -21,6 +21,7 @@ import mujoco
 import numpy as np
 
 from osg_control.control.mujoco_log import install_warning_handler
+from osg_control.control.rate import CONTROL_HZ
 from osg_control.control.servo import add_speed_capped_drives
 from osg_control.errors import ModelNotFoundError
 
@@ -34,8 +35,6 @@ HOME_Q = np.array([0.0, -0.785398, 0.0, -2.35619, 0.0, 1.5707, 0.785398])
 """Home arm configuration [rad] (the SRDF's ``default`` group state)."""
 FINGER_OPEN = 0.04
 """Finger joint travel when open [m] (each finger; distance between fingers is twice this)."""
-CONTROL_HZ = 20.0
-"""The rate of the arm's control loop [Hz]: one IK solve and servo target per 50 ms."""
 
 
 def substeps_per_control_step(timestep: float) -> int:

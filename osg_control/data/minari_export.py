@@ -24,8 +24,6 @@ import dataclasses
 import json
 import os
 import re
-import shutil
-import tempfile
 from pathlib import Path
 from typing import Any
 
@@ -35,7 +33,7 @@ import numpy as np
 from osg_control import __version__
 from osg_control.data.datasets import Dataset, hdf5_bytes, load_dataset
 from osg_control.errors import DatasetError
-from osg_control.io_safety import output_errors, refuse_package
+from osg_control.io_safety import atomic_folder, refuse_package
 
 MINARI_FORMAT_VERSION = "0.5.0"
 """The Minari data-set version written: its HDF5 layout, read by minari 0.5.x."""
@@ -170,33 +168,10 @@ def export_minari(
     episodes = _episodes_bytes(data)
     metadata = _metadata(data, dataset_id, env_id)
     metadata["dataset_size"] = round(len(episodes) / 1e6, 1)
-    with output_errors(target):
-        target.parent.mkdir(parents=True, exist_ok=True)
-        staging = Path(tempfile.mkdtemp(prefix=f".{target.name}.", dir=target.parent))
-    try:
-        with output_errors(target):
-            (staging / DATA_DIR).mkdir()
-            (staging / DATA_DIR / MAIN_FILE).write_bytes(episodes)
-            (staging / DATA_DIR / METADATA_FILE).write_text(json.dumps(metadata, indent=2))
-        _replace_folder(staging, target)
-    finally:
-        shutil.rmtree(staging, ignore_errors=True)
-    return target
 
+    def fill(staging: Path) -> None:
+        (staging / DATA_DIR).mkdir()
+        (staging / DATA_DIR / MAIN_FILE).write_bytes(episodes)
+        (staging / DATA_DIR / METADATA_FILE).write_text(json.dumps(metadata, indent=2))
 
-def _replace_folder(staging: Path, target: Path) -> None:
-    """Move the finished ``staging`` folder to ``target``; an old ``target`` is set aside
-    first and removed only once the new one is in place, so a failure keeps one of them."""
-    with output_errors(target):
-        if not target.exists():
-            staging.rename(target)
-            return
-        old = Path(tempfile.mkdtemp(prefix=f".{target.name}.old.", dir=target.parent))
-        old.rmdir()
-        target.rename(old)
-        try:
-            staging.rename(target)
-        except OSError:
-            old.rename(target)
-            raise
-        shutil.rmtree(old, ignore_errors=True)
+    return atomic_folder(target, fill)

@@ -138,7 +138,7 @@ SOURCE_FIELDS: dict[str, tuple[tuple[int, ...], Any]] = {
 """The per-step arrays read from a Minari episode (shape after the step axis, dtype kind)."""
 
 
-def _check_actions(actions: np.ndarray, bounds: tuple[float, ...], where: str) -> None:
+def check_actions(actions: np.ndarray, bounds: tuple[float, ...], where: str) -> None:
     """Refuse an action outside the domain's per-step bounds (the env would never apply it).
 
     Raises:
@@ -177,7 +177,7 @@ def _episode(domain: Domain, group: h5py.Group, skill: SkillSpec, how: str, wher
             f"expected {steps + 1} (the T states and the last next state)"
         )
     actions = source["actions"]
-    _check_actions(actions, domain.action_bounds, where)
+    check_actions(actions, domain.action_bounds, where)
     infos = group.get("infos")
     if infos is not None and "world_states" in infos:
         worlds = np.asarray(infos["world_states"][()])
@@ -233,12 +233,27 @@ def import_minari(
         raise DatasetError(f"{main}: not a readable Minari HDF5 file ({err})") from err
     if not episodes:
         raise DatasetError(f"{main}: holds no episodes; nothing to import")
+    collector = f"imported from Minari data set {metadata.get('dataset_id', source)}"
+    return write_import(domain, skill, episodes, out, seed, collector, success)
+
+
+def write_import(
+    domain: Domain,
+    skill: SkillSpec,
+    episodes: list[Episode],
+    out: str | Path,
+    seed: int,
+    collector: str,
+    success: str,
+) -> Dataset:
+    """Write imported ``episodes`` as ``skill``'s data set file ``out`` (validated by
+    ``write_episodes``; world states all NaN are declared unknown) and load it back."""
     attrs = {
         "domain": domain.name,
         "world_fields": ",".join(domain.world_fields),
         "skill": skill.to_json(),
         "seed": seed,
-        "collector": f"imported from Minari data set {metadata.get('dataset_id', source)}",
+        "collector": collector,
         "success_from": success,
     }
     if any(np.isnan(e.world_states).all() for e in episodes):

@@ -20,6 +20,7 @@ from typing import Any, Protocol
 
 import numpy as np
 
+from osg_control.control.rate import CONTROL_HZ
 from osg_control.domain.benchmark import Benchmark, validate_benchmark
 from osg_control.domain.spec import Node, ObjectFrame, SkillSpec, check_skill_fields
 from osg_control.errors import DomainError, SkillSpecError, lookup
@@ -134,6 +135,8 @@ class Domain:
             ``round(-ln p * 1000)`` (0: plans minimise failure only; a domain whose env has
             an episode step limit prefers the shorter of two likely plans with it).
         dataset_layouts: outside data-set layouts it imports (``DatasetLayout``).
+        control_hz: its env's control rate [Hz], one action per ``1 / control_hz`` s
+            (default: the core ``ArmEnv``'s); data-set exports time their frames by it.
     """
 
     name: str
@@ -159,6 +162,7 @@ class Domain:
     action_bounds: tuple[float, ...] = (0.02, 0.02, 0.02, 0.1, 0.1, 0.1, 1.0)
     step_cost: float = 0.0
     dataset_layouts: tuple[DatasetLayout, ...] = ()
+    control_hz: float = CONTROL_HZ
     skills_by_name: dict[str, SkillSpec] = field(init=False, repr=False, compare=False)
 
     def __post_init__(self) -> None:
@@ -270,6 +274,8 @@ def validate_domain(domain: Domain) -> None:
             raise DomainError(f"{where}: field {attr!r} is empty")
     if not callable(domain.facts_of) or not callable(domain.make_env):
         raise DomainError(f"{where}: fields 'facts_of' and 'make_env' must be callable")
+    if not (math.isfinite(domain.control_hz) and domain.control_hz > 0):
+        raise DomainError(f"{where}: field 'control_hz' must be a positive rate [Hz]")
     facts = set(domain.facts)
     names = [s.name for s in domain.skills]
     duplicates = sorted({n for n in names if names.count(n) > 1})

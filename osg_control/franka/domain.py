@@ -58,6 +58,9 @@ FACTS: tuple[str, ...] = (
 )
 OBJECT_FIELDS: tuple[str, ...] = tuple(f"qpos{i}" for i in range(9, 30))
 WORLD_FIELDS: tuple[str, ...] = (*OBJECT_FIELDS, "grasped")
+CONTROL_HZ = 12.5
+"""FrankaKitchen-v1's control rate [Hz]: its robot env steps 40 physics steps of 2 ms per
+action (the adapter checks its ``dt`` against this)."""
 _OFFSET = 9
 """The world vector's first entry is the env's qpos 9."""
 
@@ -399,6 +402,7 @@ def franka_domain() -> Domain:
         step_cost=STEP_COST,
         perceptions=PERCEPTIONS,
         dataset_layouts=(DatasetLayout("d4rl", _is_d4rl, _import_d4rl),),
+        control_hz=CONTROL_HZ,
     )
 
 

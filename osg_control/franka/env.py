@@ -55,6 +55,7 @@ from osg_control.franka.arm import (
     build_arm_model,
     rotation_step,
 )
+from osg_control.franka.domain import CONTROL_HZ
 from osg_control.franka.perception import (
     ARM,
     REFERENCE_QUAT,
@@ -109,7 +110,7 @@ class FrankaKitchenAdapter(gym.Env):
             only these; empty: not declared).
     """
 
-    metadata = {"render_modes": ["rgb_array"], "render_fps": 12}
+    metadata = {"render_modes": ["rgb_array"], "render_fps": int(CONTROL_HZ)}
 
     def __init__(
         self,
@@ -139,6 +140,10 @@ class FrankaKitchenAdapter(gym.Env):
         self.perception = self.config.perception
         self.render_mode = getattr(env, "render_mode", None)
         self.dt = float(self.kitchen.robot_env.dt)
+        if not np.isclose(self.dt * CONTROL_HZ, 1.0):
+            raise DomainError(
+                f"FrankaKitchen-v1 steps every {self.dt} s, not at the declared {CONTROL_HZ} Hz"
+            )
         self.posture = np.asarray(self.kitchen.robot_env.init_qpos[:7], dtype=float).copy()
         self.arm_model = build_arm_model(self.kitchen)
         self.ik = ArmIK(self.arm_model, self.config, self.posture)
