@@ -4,8 +4,9 @@ from __future__ import annotations
 
 import argparse
 import json
+from collections.abc import Callable
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -26,6 +27,9 @@ from osg_control.execution.executor import load_executor, task_env_config
 from osg_control.io_safety import atomic_write, check_output_dir
 from osg_control.parallel import open_executor
 from osg_control.perception.spec import perception_spec
+
+if TYPE_CHECKING:
+    from osg_control.execution.recording import RunRecorder
 
 
 def register(subparsers: argparse._SubParsersAction) -> None:
@@ -52,6 +56,14 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     run.add_argument("--max-replans", type=int, default=2)
     run.add_argument("--models", type=Path, default=None, help="defaults directory to use")
     run.add_argument("--video", type=Path, default=None, help="write an MP4 of the first episode")
+    run.add_argument(
+        "--rerun",
+        type=Path,
+        default=None,
+        metavar="FILE.rrd",
+        help="record every episode for the rerun viewer (`rerun FILE.rrd`): TCP path, target "
+        "nodes, joints, gripper, skills, plans, replans, failures (needs the [viz] extra)",
+    )
     add_filter_argument(run)
     run.add_argument("--json", action="store_true")
     run.set_defaults(func=run_task)
@@ -102,6 +114,7 @@ def run_task(args: argparse.Namespace) -> int:
     facts = domain.start_world if args.facts is None else tuple(args.facts.split())
     if args.video:
         check_output_dir(args.video.parent, "video folder")
+    recorder = _recorder(args.rerun, domain)
     executor = load_executor(
         domain, args.models, max_replans=args.max_replans, filter_gain=args.filter
     )
@@ -123,10 +136,11 @@ def run_task(args: argparse.Namespace) -> int:
             if world:
                 options["world"] = world
         obs, _ = env.reset(seed=int(rng.integers(2**31)), options=options)
-        if args.video and episode == 0:
-            executor.on_step = lambda e: frames.append(e.render())
-        else:
-            executor.on_step = None
+        video = bool(args.video) and episode == 0
+        executor.on_step = _step_hook(video, frames, recorder)
+        if recorder is not None:
+            recorder.begin_episode(env)
+            executor.on_event = recorder.on_event
         result = executor.execute(goal, env, obs)
         results.append({**result.to_dict(), "scored_success": set(goal) <= env.facts()})
         if not args.json:
@@ -137,7 +151,11 @@ def run_task(args: argparse.Namespace) -> int:
                 f"; replans {result.replans}; {result.timings['total_s']:.2f} s"
             )
     if args.video and frames:
-        _write_video(args.video, frames)
+        _write_video(args.video, frames, domain.control_hz)
+    if recorder is not None:
+        path = recorder.close()
+        if not args.json:
+            print(f"rerun recording written to {path} (view it: rerun {path})")
     successes = sum(r["scored_success"] for r in results)
     if args.json:
         payload = {
@@ -152,10 +170,43 @@ def run_task(args: argparse.Namespace) -> int:
     return 0 if successes == len(results) else 1
 
 
-def _write_video(path: Path, frames: list[Any]) -> None:
+def _recorder(path: Path | None, domain: Domain) -> RunRecorder | None:
+    """The ``--rerun`` recorder (None without the flag).
+
+    Raises:
+        UsageError: not an ``.rrd`` file name, or rerun-sdk missing (exit 2, nothing run).
+    """
+    if path is None:
+        return None
+    if path.suffix != ".rrd":
+        raise UsageError(f"--rerun: {path} must end in .rrd")
+    from osg_control.execution.recording import RunRecorder
+
+    check_output_dir(path.parent, "recording folder")
+    return RunRecorder(path, domain)
+
+
+def _step_hook(
+    video: bool, frames: list[Any], recorder: RunRecorder | None
+) -> Callable[[Any], None] | None:
+    """The executor's ``on_step``: render a video frame, record the percept (or None)."""
+    if not video and recorder is None:
+        return None
+
+    def hook(env: Any) -> None:
+        frame = env.render() if video else None
+        if video:
+            frames.append(frame)
+        if recorder is not None:
+            recorder.on_step(env, frame)
+
+    return hook
+
+
+def _write_video(path: Path, frames: list[Any], fps: float) -> None:
     import imageio.v2 as imageio
 
-    atomic_write(path, lambda tmp: imageio.mimwrite(tmp, frames, fps=20))
+    atomic_write(path, lambda tmp: imageio.mimwrite(tmp, frames, fps=fps))
     print(f"video written to {path}")
 
 

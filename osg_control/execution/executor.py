@@ -142,6 +142,11 @@ class Executor:
         self.motion_model = motion_model
         self.on_step: Callable[[SkillEnv], Any] | None = None
         """Called after every env step (e.g. to record video frames)."""
+        self.on_event: Callable[[str, dict[str, Any]], Any] | None = None
+        """Called with ``(kind, fields)`` as an execution goes: ``plan`` (attempt, entry,
+        plan), ``skill`` (name, target node, its position), ``outcome`` (skill, success,
+        steps, failure), ``replan`` (attempt, failure), ``end`` (success, failure,
+        replans); e.g. to record a run (``execution.recording``)."""
         self.motion = MotionMemory()
         """The TCP commands sent since ``execute`` began: the classifier's motion input."""
 
@@ -293,6 +298,7 @@ class Executor:
             planning_time += time.perf_counter() - t0
             if attempt == 0:
                 result.entry_skill, result.plan = entry, plan
+            self._emit("plan", attempt=attempt, entry=entry, plan=plan)
             if not planned.solved:
                 result.failure = f"no plan: unreachable goal facts {list(planned.unreached)}"
                 break
@@ -317,14 +323,21 @@ class Executor:
                 break
             if attempt < self.max_replans:
                 result.replans += 1
+                self._emit("replan", attempt=attempt + 1, failure=failed)
         if result.success:
             result.failure = None
+        self._emit("end", success=result.success, failure=result.failure, replans=result.replans)
         result.final_facts = sorted(facts)
         result.timings = {
             "planning_s": round(planning_time, 6),
             "total_s": round(time.perf_counter() - started, 4),
         }
         return result
+
+    def _emit(self, kind: str, **fields: Any) -> None:
+        """Tell ``on_event`` (if set) what just happened."""
+        if self.on_event is not None:
+            self.on_event(kind, fields)
 
     def _run_sequence(
         self,
@@ -338,12 +351,15 @@ class Executor:
         """Run skills in order; stop at the first failure and return its reason."""
         for index, name in enumerate(sequence):
             skill = self.skills[name]
+            target = node_position(self.domain.nodes, skill.end, objects.offsets())
+            self._emit("skill", name=name, target=skill.end, position=target)
             outcome, obs = self.run_skill(env, skill, obs, tracker, objects)
             facts = env.percept().facts
             if outcome.success and not (skill.add_effects <= facts):
                 outcome.success = False
                 outcome.failure = f"expected effects {sorted(skill.add_effects - facts)} missing"
             result.outcomes.append(outcome)
+            self._emit("outcome", **{k: getattr(outcome, k) for k in OUTCOME_EVENT})
             if not outcome.success:
                 return obs, f"{name}: {outcome.failure}"
             if index < len(sequence) - 1 and env.episode_over:
@@ -361,6 +377,10 @@ class Executor:
                 if tracker is not None:
                     tracker.settle()
         return obs, None
+
+
+OUTCOME_EVENT = ("skill", "success", "steps", "failure")
+"""The ``SkillOutcome`` fields an ``outcome`` event carries."""
 
 
 def _open_gripper(env: SkillEnv, steps: int = GRIPPER_OPEN_STEPS) -> tuple[np.ndarray, str | None]:
