@@ -56,7 +56,7 @@ def test_report_writes_markdown_json_and_plots(tmp_path: Path) -> None:
             "episodes": 4,
             "rows": [{"skill": s.name, "rates": [1.0, 0.5], "scripted": 0.45} for s in SKILLS],
         },
-        "table_ii": {"accuracy": 0.7, "corrected_accuracy": 0.9},
+        "table_ii": {"accuracy": 0.7, "corrected_accuracy": 0.9, "num_states": 100},
     }
     written = write_report(figures, tmp_path, PUBLISHED)
     assert json.loads((tmp_path / "figures.json").read_text()) == figures
@@ -68,4 +68,5 @@ def test_report_writes_markdown_json_and_plots(tmp_path: Path) -> None:
     release_row = next(line for line in report.splitlines() if "| release-cube |" in line)
     assert release_row.rstrip().endswith("| — |")  # split off: the paper has no such row
     assert (tmp_path / "table_i.png").stat().st_size > 1000
-    assert len(written) == 3
+    assert (tmp_path / "table_ii.png").stat().st_size > 1000
+    assert len(written) == 4  # report, figures and a plot per table

@@ -45,7 +45,8 @@ DOCUMENTED_DEFAULT_FEATURES = {
     "index": "int64",
     "task_index": "int64",
 }
-"""The features every LeRobot frame carries, each of shape [1]."""
+"""The features every LeRobot frame carries, each of shape [1]. (These lists restate the
+layout on purpose: the test checks the writer against the documentation, not itself.)"""
 DOCUMENTED_EPISODE_COLUMNS = (
     "episode_index",
     "tasks",
@@ -183,13 +184,15 @@ def test_a_missing_or_malformed_info_is_named(
     copy: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
     (copy / "meta" / "info.json").write_text('{"codebase_version": "v3.0", "fps": ')
-    assert "info.json: not a readable JSON file" in _refused(copy, tmp_path, capsys)
+    assert "info.json: corrupt LeRobot info file" in _refused(copy, tmp_path, capsys)
+    (copy / "meta" / "info.json").write_text("[1, 2]")
+    assert "corrupt LeRobot info file (not a JSON object)" in _refused(copy, tmp_path, capsys)
     (copy / "meta" / "info.json").write_text('{"codebase_version": "v2.1", "fps": 20}')
     assert "field 'codebase_version' is 'v2.1'" in _refused(copy, tmp_path, capsys)
     (copy / "meta" / "info.json").write_text('{"codebase_version": "v3.0", "fps": 20}')
     assert "field 'features' must be a JSON object" in _refused(copy, tmp_path, capsys)
     (copy / "meta" / "info.json").unlink()
-    assert "info.json: missing" in _refused(copy, tmp_path, capsys)
+    assert "info.json: LeRobot info file not found" in _refused(copy, tmp_path, capsys)
 
 
 def test_a_feature_of_the_wrong_width_is_named(

@@ -43,6 +43,7 @@ from osg_control.data.validation import check_step_fields
 from osg_control.domain.base import Domain
 from osg_control.domain.spec import SkillSpec
 from osg_control.errors import DatasetError
+from osg_control.json_files import read_json_object
 
 STATE, ACTION, NEXT_STATE, REWARD = (
     FIELD_FEATURES[k] for k in ("observations", "actions", "next_observations", "rewards")
@@ -75,14 +76,7 @@ def read_info(root: Path, domain: Domain) -> dict[str, Any]:
             wrong width; names the file and the field.
     """
     path = root / INFO_FILE
-    if not path.is_file():
-        raise DatasetError(f"{path}: missing; not a LeRobot data set")
-    try:
-        info = json.loads(path.read_text())
-    except (OSError, UnicodeDecodeError, ValueError) as err:
-        raise DatasetError(f"{path}: not a readable JSON file ({err})") from err
-    if not isinstance(info, dict):
-        raise DatasetError(f"{path}: must hold a JSON object, got {type(info).__name__}")
+    info = read_json_object(path, "LeRobot info file", DatasetError)
     version = info.get("codebase_version")
     if version != CODEBASE_VERSION:
         raise DatasetError(

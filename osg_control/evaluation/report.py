@@ -1,19 +1,20 @@
-"""The reproduction report: Markdown beside the paper's numbers, JSON, and bar plots."""
+"""The reproduction report: Markdown beside the paper's numbers, JSON, and one plot per
+table (``report_plots``)."""
 
 from __future__ import annotations
 
 import json
 from collections.abc import Mapping
-from functools import partial
 from pathlib import Path
 from typing import Any
 
+from osg_control.evaluation.report_plots import write_plots
 from osg_control.io_safety import atomic_write
 
-PUBLISHED_KEYS = ("table_i", "table_ii", "table_iii", "task_averages")
+PUBLISHED_KEYS = ("table_i", "table_i_noise", "table_ii", "table_iii", "task_averages")
 """What a domain's ``published`` figures may hold: Table I rates per skill (one per noise
-level), Table II's accuracies, Table III's rates per start region, Tables IV/V's averages
-per task. Missing keys print as blanks."""
+level of ``table_i_noise``, in metres), Table II's accuracies, Table III's rates per start
+region, Tables IV/V's averages per task. Missing keys print as blanks."""
 
 
 def _md_table(header: list[str], rows: list[list[Any]]) -> list[str]:
@@ -29,6 +30,7 @@ def markdown(figures: dict[str, Any], published: Mapping[str, Any] | None = None
     of its domain (``Domain.published``, see ``PUBLISHED_KEYS``)."""
     published = published or {}
     paper_i = published.get("table_i", {})
+    paper_noise = published.get("table_i_noise", ())
     paper_ii = published.get("table_ii", {})
     paper_iii = list(published.get("table_iii", ()))
     paper_tasks = published.get("task_averages", {})
@@ -44,7 +46,9 @@ def markdown(figures: dict[str, Any], published: Mapping[str, Any] | None = None
     if "table_i" in figures:
         t = figures["table_i"]
         header = (
-            ["#", "skill"] + [f"σ={n:g}" for n in t["noise"]] + ["scripted", "paper σ=0/1/2 cm"]
+            ["#", "skill"]
+            + [f"σ={n:g}" for n in t["noise"]]
+            + ["scripted", "paper σ=" + "/".join(f"{n * 100:g}" for n in paper_noise) + " cm"]
         )
         rows = [
             [
@@ -102,41 +106,6 @@ def markdown(figures: dict[str, Any], published: Mapping[str, Any] | None = None
     return "\n".join(out)
 
 
-def bar_plots(figures: dict[str, Any], out_dir: Path) -> list[Path]:
-    """One PNG of success bars per table that was computed."""
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    written = []
-    plots: list[tuple[str, list[str], list[float]]] = []
-    if "table_i" in figures:
-        t = figures["table_i"]
-        plots.append(
-            ("table_i.png", [r["skill"] for r in t["rows"]], [r["rates"][-1] for r in t["rows"]])
-        )
-    if "table_iii" in figures:
-        t = figures["table_iii"]
-        plots.append(
-            ("table_iii.png", [r["start"] for r in t["rows"]], [r["success"] for r in t["rows"]])
-        )
-    if "tables_iv_v" in figures:
-        t = figures["tables_iv_v"]
-        plots.append(("tables_iv_v.png", t["tasks"], t["averages"][-1]))
-    for name, labels, values in plots:
-        fig, ax = plt.subplots(figsize=(8, 3.5))
-        ax.bar(range(len(values)), values, color="tab:blue")
-        ax.set_xticks(range(len(values)), labels, rotation=45, ha="right", fontsize=7)
-        ax.set_ylim(0, 1.05)
-        ax.axhline(0.95, color="tab:red", lw=0.8, ls="--")
-        ax.set_ylabel("success rate")
-        fig.tight_layout()
-        written.append(atomic_write(out_dir / name, partial(fig.savefig, dpi=110)))
-        plt.close(fig)
-    return written
-
-
 def write_report(
     figures: dict[str, Any], out_dir: Path, published: Mapping[str, Any] | None = None
 ) -> list[Path]:
@@ -144,4 +113,5 @@ def write_report(
     figures_text, report_text = json.dumps(figures, indent=2), markdown(figures, published)
     atomic_write(out_dir / "figures.json", lambda tmp: tmp.write_text(figures_text))
     atomic_write(out_dir / "report.md", lambda tmp: tmp.write_text(report_text))
-    return [out_dir / "report.md", out_dir / "figures.json", *bar_plots(figures, out_dir)]
+    plots = write_plots(figures, out_dir, published)
+    return [out_dir / "report.md", out_dir / "figures.json", *plots]
