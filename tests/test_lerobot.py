@@ -239,3 +239,26 @@ def test_an_existing_export_needs_force(sources: Path, exported: Path) -> None:
     assert main(["datasets", "lerobot", str(sources), "--out", str(exported)]) == 1
     assert main(["datasets", "lerobot", str(sources), "--out", str(exported), "--force"]) == 0
     assert json.loads((exported / "meta" / "info.json").read_text())["total_tasks"] == 2
+
+
+def test_data_without_next_states_or_worlds_imports_from_the_next_frames(
+    sources: Path, copy: Path, tmp_path: Path
+) -> None:
+    """A LeRobot data set of another origin: no next state, world or truncation features."""
+    dropped = ("next.observation.state", "next.world_state", "next.truncated")
+    _edit_info(copy, lambda info: [info["features"].pop(name) for name in dropped])
+    for file in (copy / "data" / "chunk-000").glob("*.parquet"):
+        pq.write_table(pq.read_table(file).drop_columns(list(dropped)), file)
+    out = tmp_path / "imported.h5"
+    args = ["datasets", "import", str(copy), "--skill", SKILLS[0], "--out", str(out)]
+    assert main(args) == 0
+    source, back = load_dataset(sources / f"{SKILLS[0]}.h5"), load_dataset(out)
+    np.testing.assert_array_equal(back.episode_lengths, source.episode_lengths - 1)
+    assert back.attrs["world_states"] == "unknown" and np.isnan(back.arrays["world_states"]).all()
+    assert not back.arrays["truncations"].any()
+    for index in range(source.num_episodes):
+        original, imported = source.episode(index), back.episode(index)
+        np.testing.assert_array_equal(imported.observations, original.observations[:-1])
+        np.testing.assert_array_equal(imported.next_observations, original.observations[1:])
+        np.testing.assert_array_equal(imported.actions, original.actions[:-1])
+        np.testing.assert_array_equal(imported.rewards, original.rewards[:-1])
