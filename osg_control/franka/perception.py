@@ -24,7 +24,7 @@ robot's known kinematics and actuators:
   loads a finger); 0 otherwise (empty or open hand). The shipped policies were trained
   on the contact force: on the microwave's handle it reads 6-10 N here against 8-13 N;
   during a knob sweep 0 against up to 60 N (the bar pressing the closed fingers). What
-  this difference costs on the benchmark is measured in docs/franka-kitchen.md.
+  this difference costs on the benchmark is measured in docs/results.md.
 - Objects: the observed object qpos (not ``achieved_goal``, the simulator's noise-free
   state); facts by the library's completion rule on them (the domain's ``facts_of``).
 
