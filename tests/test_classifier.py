@@ -198,6 +198,7 @@ def test_training_separates_synthetic_skills(model: StateClassifier, data: Class
     assert len(losses) == FAST.epochs and losses[-1] < losses[0]
 
 
+@pytest.mark.slow
 def test_the_epoch_with_the_best_validation_score_is_kept(tmp_path: Path) -> None:
     write_movement_datasets(tmp_path, t_range=(0.0, 1.0))  # overlapping: no epoch is perfect
     config = dataclasses.replace(FAST, epochs=6, validation_fraction=0.25)
@@ -237,6 +238,7 @@ def test_data_and_config_must_agree_on_the_validation_split(data: ClassifierData
         TrainConfig(validation_fraction=-0.1)
 
 
+@pytest.mark.slow
 def test_same_seed_same_weights(data: ClassifierData, model: StateClassifier) -> None:
     again = train_classifier(data, FAST)
     for (w1, b1), (w2, b2) in zip(model.layers, again.layers, strict=True):

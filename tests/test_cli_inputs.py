@@ -54,6 +54,7 @@ def test_bad_values_are_refused_before_any_work(argv, option, capsys, tmp_path, 
     assert not any(tmp_path.iterdir())  # nothing written
 
 
+@pytest.mark.slow
 def test_video_without_gl_backend_is_a_usage_error(tmp_path):
     env = {**os.environ, "MUJOCO_GL": "glfw", "DISPLAY": "", "OSG_CACHE_DIR": str(tmp_path)}
     env.pop("DISPLAY")
@@ -105,6 +106,7 @@ def test_top_level_handler_maps_errors_to_codes(exc, code, text, capsys, monkeyp
     assert "Traceback" in capsys.readouterr().err or code == EXIT_CODES["interrupted"]
 
 
+@pytest.mark.slow
 def test_sigterm_is_handled_like_ctrl_c(tmp_path):
     env = {**os.environ, "OSG_CACHE_DIR": str(tmp_path), "PYTHONPATH": str(Path.cwd())}
     argv = ["collect", "--skill", "grab-cube", "--episodes", "2000", "--workers", "1"]

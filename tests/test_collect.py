@@ -33,6 +33,7 @@ def _arrays(path: Path) -> dict[str, np.ndarray]:
     return data.arrays
 
 
+@pytest.mark.slow
 def test_same_seed_same_data_for_one_and_two_workers(tmp_path: Path) -> None:
     one = collect_skill(
         KITCHEN, SKILL, 6, 3, tmp_path / "w1", LocalExecutor(1), False, chunk_episodes=2
@@ -72,6 +73,7 @@ def test_interrupted_collection_resumes_without_loss_or_duplicates(tmp_path: Pat
     assert not parts_dir(out, get_skill(SKILL)).exists()
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("name", ["move-home-to-cube", "grab-cube"])
 def test_scripted_success_rate_is_in_a_sound_band(name: str) -> None:
     # 60 episodes: a true rate in [0.40, 0.50] lands in [0.25, 0.65] with > 99% probability
@@ -81,6 +83,7 @@ def test_scripted_success_rate_is_in_a_sound_band(name: str) -> None:
     assert 0.25 <= rate <= 0.65, f"{name}: scripted success rate {rate:.2f}"
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize(
     "name", ["grab-cube", "pick-up-cube", "slide-door-open", "release-handle", "release-cube"]
 )

@@ -141,6 +141,7 @@ def test_classifier_with_non_finite_weights_is_refused(tmp_path):
         StateClassifier.load(tmp_path / "clf")
 
 
+@pytest.mark.slow
 def test_training_stops_on_a_non_finite_loss(tmp_path):
     data = toy_data(tmp_path)
     config = dataclasses.replace(SMALL, critic_lr=1e38, actor_lr=1e38)

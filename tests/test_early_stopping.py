@@ -57,6 +57,7 @@ def test_the_rule_refuses_settings_below_one(field: str) -> None:
         EarlyStopping(**{field: 0})
 
 
+@pytest.mark.slow
 def test_skills_kept_in_a_batch_train_as_in_the_full_batch() -> None:
     full, full_replay = _batch([40, 50, 60])
     cut, cut_replay = _batch([40, 50, 60])
@@ -107,6 +108,7 @@ class ScriptedRates:
         return {"scripted": True}
 
 
+@pytest.mark.slow
 def test_training_rounds_stop_each_skill_by_the_rule_and_keep_its_best_checked_weights() -> None:
     trainer, replay = _batch([40, 50])
     names = ["grab-cube", "release-cube"]

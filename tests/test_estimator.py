@@ -118,6 +118,7 @@ def test_tracker_folds_each_reading_once_with_the_actions_before_it() -> None:
     assert tracker.read(fourth)[0] == pytest.approx(0.5 * estimate)
 
 
+@pytest.mark.slow
 def test_motion_model_matches_the_simulated_arm() -> None:
     # Refit on fresh scripted episodes of every skill (as MOTION_MODEL was fitted, on all
     # the data sets): if the controller's tracking changes, MOTION_MODEL must be refitted.

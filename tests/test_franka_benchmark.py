@@ -22,6 +22,7 @@ from osg_control.evaluation.benchmark import (  # noqa: E402
 KITCHEN_COMPLETE = ("microwave", "kettle", "light switch", "slide cabinet")
 
 
+@pytest.mark.slow
 def test_kitchen_complete_from_the_envs_reset_completes_all_four() -> None:
     """One episode on a fixed seed, the standard protocol (the env's reset, its 280-step
     limit, its own completion record): all four tasks, within the limit."""
@@ -41,6 +42,7 @@ def test_unknown_goal_set_and_task_are_named(capsys) -> None:
     assert code == 1 and "unknown task(s) ['toaster']" in err and "'microwave'" in err
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize(
     ("index", "noise", "filter_gain"),
     [(0, 0.0, None), (17, 0.0, None), (68, 0.0, None), (40, 0.02, 0.5)],
@@ -96,6 +98,7 @@ def test_bad_benchmark_options_exit_2_with_nothing_run(extra, message, capsys) -
     assert message in capsys.readouterr().err
 
 
+@pytest.mark.slow
 def test_the_benchmark_json_names_its_perception_and_the_env_options(capsys) -> None:
     argv = ["--domain", "franka-kitchen", "evaluate", "benchmark", "--episodes", "1",
             "--workers", "1", "--env-kwargs", '{"robot_noise_ratio": 0.01}', "--json"]  # fmt: skip

@@ -265,6 +265,7 @@ def test_cli_imports_with_json_and_refuses_other_domains(
     assert not out.exists()
 
 
+@pytest.mark.slow
 def test_the_imported_skills_train(source: Path, tmp_path: Path) -> None:
     import_d4rl(FRANKA, DATASET_ID, tmp_path / "data")
     trained = train_skills(

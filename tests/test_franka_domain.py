@@ -66,6 +66,7 @@ def _run_noise_free(env, chain: list, obs: np.ndarray) -> tuple[dict, int]:
     return info, steps
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("task", sorted(SUBTASK_CHAINS))
 def test_noise_free_scripted_skills_complete_their_task(task: str) -> None:
     """From the env's reset, driven to the subtask's first start node, its skills' scripts
@@ -83,6 +84,7 @@ def test_noise_free_scripted_skills_complete_their_task(task: str) -> None:
     env.close()
 
 
+@pytest.mark.slow
 def test_core_collection_runs_on_the_domain(tmp_path) -> None:
     """Algorithm 1 through the core's collector (which passes the core's ``EnvConfig``)."""
     from osg_control.data.collect import collect_skill
@@ -123,6 +125,7 @@ def test_kettle_skills_chain_from_reset_and_leave_it_upright() -> None:
     env.close()
 
 
+@pytest.mark.slow
 def test_push_kettle_under_algorithm1_noise_leaves_it_upright() -> None:
     """The core collector's episodes under 5 mm action noise move the kettle, not tip it."""
     from osg_control.data.collect import run_scripted_episode
@@ -137,6 +140,7 @@ def test_push_kettle_under_algorithm1_noise_leaves_it_upright() -> None:
         assert _kettle_tilt(world) < 0.05
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("skill", ["move-home-to-hinge", "move-hinge-to-home"])
 def test_noise_free_hinge_movement_reaches_its_end_node(skill: str) -> None:
     """Driven to the start node without a skill (a reset with a skill ending at home would

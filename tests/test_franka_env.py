@@ -89,6 +89,7 @@ def test_scaling_keeps_the_direction() -> None:
     np.testing.assert_allclose(small, np.full(7, 0.01 / 0.16))
 
 
+@pytest.mark.slow
 def test_env_step_reward_and_completion_run_as_shipped(adapter) -> None:
     obs, info = adapter.reset(seed=0)
     assert obs.shape == (10,) and info["world"].shape == (22,)
@@ -177,6 +178,7 @@ def test_reset_sets_up_a_skills_start_facts_through_the_envs_steps() -> None:
     env.close()
 
 
+@pytest.mark.slow
 def test_set_ups_ignore_the_episodes_observation_noise() -> None:
     """Table I evaluates a skill under 2 cm observation noise; its set-up (here: open the
     microwave and let go) still runs on the true state and succeeds."""

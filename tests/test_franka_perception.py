@@ -207,6 +207,7 @@ def test_the_core_env_config_maps_onto_the_domains_perceptions() -> None:
         franka_config(EnvConfig(perception=PerceptionSpec("robot")))
 
 
+@pytest.mark.slow
 def test_benchmark_reports_its_perception_and_max_steps() -> None:
     from osg_control.domain.registry import get_domain
     from osg_control.evaluation.benchmark import format_benchmark, run_benchmark

@@ -42,6 +42,7 @@ def _array_hashes(path: Path) -> dict[str, str]:
         return {key: hashlib.sha256(f[key][()].tobytes()).hexdigest() for key in f}
 
 
+@pytest.mark.slow
 def test_adding_skills_changes_no_other_skills_data_or_weights(tmp_path: Path) -> None:
     assert len(VALVE_SKILLS) == 5
     register_domain("kitchen-before-valve", _before_valve)

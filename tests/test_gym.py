@@ -9,6 +9,7 @@ import warnings
 
 import gymnasium
 import numpy as np
+import pytest
 from gymnasium.utils.env_checker import check_env
 
 import osg_control  # noqa: F401  (registers the envs)
@@ -55,6 +56,7 @@ def test_observation_bound_on_force_is_the_actuators_force_range() -> None:
     assert OBS_HIGH[8] == np.abs(env.model.actuator_forcerange[gripper]).max()
 
 
+@pytest.mark.slow
 def test_check_env_passes_without_warnings() -> None:
     render = _can_render()  # CI sets MUJOCO_GL=egl, so it checks render() too
     env = gymnasium.make(KITCHEN)

@@ -5,6 +5,7 @@ from __future__ import annotations
 from pathlib import Path
 
 import numpy as np
+import pytest
 from scipy.stats import fisher_exact
 
 from osg_control.cli import main
@@ -20,6 +21,7 @@ SKILL = "move-home-to-door"
 EPISODES = 40
 
 
+@pytest.mark.slow
 def test_trained_skill_beats_its_scripted_policy(tmp_path: Path) -> None:
     data = tmp_path / "data"
     collect_skill(KITCHEN, SKILL, 60, 0, data, None, False)

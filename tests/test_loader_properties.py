@@ -48,8 +48,15 @@ JSON_VALUES = st.recursive(
 )
 
 
-def _workdir() -> Path:
-    return Path(tempfile.mkdtemp(prefix="osg-prop-"))
+@pytest.fixture(scope="module")
+def scratch(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    """One folder per module under pytest's temp root, which pytest prunes (last 3 runs kept),
+    so the hundreds of examples leave nothing behind in the system temp folder."""
+    return tmp_path_factory.mktemp("prop")
+
+
+def _workdir(scratch: Path) -> Path:
+    return Path(tempfile.mkdtemp(prefix="example-", dir=scratch))
 
 
 def _must_load_or_name(path: Path, load, error) -> None:
@@ -69,8 +76,8 @@ def valid_dataset(tmp_path_factory: pytest.TempPathFactory) -> Path:
     edits=st.lists(st.tuples(st.sampled_from(FIELDS), st.none() | ARRAYS), max_size=3),
     attrs=st.dictionaries(st.sampled_from(["skill", "seed", "format_version"]), JSON_VALUES),
 )
-def test_hdf5_data_set_loads_or_is_named(valid_dataset, edits, attrs) -> None:
-    path = _workdir() / "grab-cube.h5"
+def test_hdf5_data_set_loads_or_is_named(scratch, valid_dataset, edits, attrs) -> None:
+    path = _workdir(scratch) / "grab-cube.h5"
     shutil.copy(valid_dataset, path)
     with h5py.File(path, "a") as f:
         for key, value in edits:
@@ -85,8 +92,8 @@ def test_hdf5_data_set_loads_or_is_named(valid_dataset, edits, attrs) -> None:
 
 @SETTINGS
 @given(data=st.binary(max_size=300), keep=st.integers(0, 4000))
-def test_arbitrary_bytes_as_data_set_are_named(valid_dataset, data, keep) -> None:
-    path = _workdir() / "grab-cube.h5"
+def test_arbitrary_bytes_as_data_set_are_named(scratch, valid_dataset, data, keep) -> None:
+    path = _workdir(scratch) / "grab-cube.h5"
     path.write_bytes(valid_dataset.read_bytes()[:keep] + data)
     _must_load_or_name(path, lambda: load_dataset(path), DatasetError)
 
@@ -124,9 +131,9 @@ def saved_skill(tmp_path_factory: pytest.TempPathFactory) -> tuple[Path, str]:
     ),
     drop=st.booleans(),
 )
-def test_skill_sidecar_loads_or_is_named(saved_skill, changes, drop) -> None:
+def test_skill_sidecar_loads_or_is_named(scratch, saved_skill, changes, drop) -> None:
     source, name = saved_skill
-    directory = Path(shutil.copytree(source, _workdir() / "skills"))
+    directory = Path(shutil.copytree(source, _workdir(scratch) / "skills"))
     _weights, sidecar_path = checkpoint_paths(directory, name)
     sidecar = json.loads(sidecar_path.read_text())
     for key, value in changes.items():
@@ -147,9 +154,9 @@ def test_skill_sidecar_loads_or_is_named(saved_skill, changes, drop) -> None:
 
 @SETTINGS
 @given(data=st.binary(max_size=400), keep=st.integers(0, 2000), file=st.sampled_from([0, 1]))
-def test_skill_checkpoint_bytes_load_or_are_named(saved_skill, data, keep, file) -> None:
+def test_skill_checkpoint_bytes_load_or_are_named(scratch, saved_skill, data, keep, file) -> None:
     source, name = saved_skill
-    directory = Path(shutil.copytree(source, _workdir() / "skills"))
+    directory = Path(shutil.copytree(source, _workdir(scratch) / "skills"))
     path = checkpoint_paths(directory, name)[file]
     path.write_bytes(path.read_bytes()[:keep] + data)
     _must_load_or_name(path, lambda: load_checkpoint(directory, name), CheckpointError)
@@ -170,6 +177,7 @@ def saved_classifier(tmp_path_factory: pytest.TempPathFactory) -> Path:
     return root / "clf"
 
 
+@pytest.mark.slow
 @SETTINGS
 @given(
     changes=st.dictionaries(
@@ -182,9 +190,9 @@ def saved_classifier(tmp_path_factory: pytest.TempPathFactory) -> Path:
     corrupt_weights=st.booleans(),
 )
 def test_classifier_files_load_or_are_named(
-    saved_classifier, changes, data, keep, corrupt_weights
+    scratch, saved_classifier, changes, data, keep, corrupt_weights
 ) -> None:
-    directory = Path(shutil.copytree(saved_classifier, _workdir() / "clf"))
+    directory = Path(shutil.copytree(saved_classifier, _workdir(scratch) / "clf"))
     sidecar_path = directory / SIDECAR_FILE
     sidecar = json.loads(sidecar_path.read_text())
     sidecar.update(changes)

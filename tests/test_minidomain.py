@@ -71,6 +71,7 @@ def test_registered_domain_is_listed(domain: Domain, capsys: pytest.CaptureFixtu
     assert [s["name"] for s in mini["skills"]] == [s.name for s in domain.skills]
 
 
+@pytest.mark.slow
 def test_graph_and_pddl_from_data(domain: Domain, trained: Path, tmp_path: Path) -> None:
     datasets = [load_dataset(trained / "data" / f"{s.name}.h5") for s in domain.skills]
     graph = graph_from_datasets(domain, datasets)
@@ -99,6 +100,7 @@ def test_plan(domain: Domain, capsys: pytest.CaptureFixture[str]) -> None:
     assert [step["action"] for step in steps] == PLAN
 
 
+@pytest.mark.slow
 def test_classifier_tells_the_movement_starts_apart(domain: Domain, trained: Path) -> None:
     classifier = StateClassifier.load(trained / "classifier", movement_classes(domain))
     env = domain.make_env()
@@ -110,6 +112,7 @@ def test_classifier_tells_the_movement_starts_apart(domain: Domain, trained: Pat
         assert classifier.predict(obs) == expected
 
 
+@pytest.mark.slow
 def test_execute_reaches_the_goal(domain: Domain, trained: Path) -> None:
     classifier = StateClassifier.load(trained / "classifier", movement_classes(domain))
     policies = load_policies(trained / "skills")
@@ -125,6 +128,7 @@ def test_execute_reaches_the_goal(domain: Domain, trained: Path) -> None:
     assert np.linalg.norm(env.tcp_pose()[0] - domain.nodes["button-down"].position) < 0.02
 
 
+@pytest.mark.slow
 def test_cli_run(trained: Path, capsys: pytest.CaptureFixture[str]) -> None:
     argv = ["--domain", DOMAIN_NAME, "run", "--goal", " ".join(GOAL), "--start", "home"]
     assert cli.main([*argv, "--models", str(trained), "--json"]) == 0
@@ -132,6 +136,7 @@ def test_cli_run(trained: Path, capsys: pytest.CaptureFixture[str]) -> None:
     assert report["success_rate"] == 1.0 and report["episodes"][0]["plan"] == PLAN
 
 
+@pytest.mark.slow
 def test_cli_train_stops_each_skill_on_its_held_out_success(
     domain: Domain, trained: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:

@@ -119,6 +119,7 @@ def test_files_get_the_umask_mode(tmp_path):
         os.umask(previous)
 
 
+@pytest.mark.slow
 def test_model_build_prints_nothing_and_leaves_no_mujoco_log(tmp_path):
     code = "from osg_control.kitchen.env import KitchenEnv; KitchenEnv().reset(seed=0)"
     env = {**os.environ, "PYTHONPATH": str(Path.cwd())}

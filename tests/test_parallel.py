@@ -55,6 +55,7 @@ def test_cli_rejects_an_unknown_backend(capsys: pytest.CaptureFixture[str]) -> N
     assert "choose from 'local', 'ray'" in capsys.readouterr().err
 
 
+@pytest.mark.slow
 @pytest.mark.skipif(not sys.platform.startswith("linux"), reason="reads /proc")
 @pytest.mark.parametrize("sig", [signal.SIGKILL, signal.SIGTERM])
 def test_pool_workers_exit_when_osg_collect_is_killed(tmp_path: Path, sig: int) -> None:
@@ -121,6 +122,7 @@ if __name__ == "__main__":
 """
 
 
+@pytest.mark.slow
 def test_an_interrupt_while_a_result_is_half_sent_still_exits(tmp_path: Path) -> None:
     """The pool's manager thread, blocked reading a result its killed worker never
     finished, must not hang the process's exit (the flake of the billion-episode test)."""

@@ -38,6 +38,7 @@ def exported(tmp_path_factory: pytest.TempPathFactory) -> list[Path]:
     return export_pddl(KITCHEN, tmp_path_factory.mktemp("pddl"), measured_graph(KITCHEN))
 
 
+@pytest.mark.slow
 def test_export_parse_export_is_stable(exported: list[Path], tmp_path: Path) -> None:
     domain = read_domain(exported[0])
     assert domain_to_string(domain) == domain_to_string(MEASURED)

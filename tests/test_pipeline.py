@@ -73,6 +73,7 @@ def _pddl_costs(path: Path) -> dict[str, int]:
     return {name: int(cost) for name, cost in found}
 
 
+@pytest.mark.slow
 def test_the_pddl_carries_the_costs_of_the_rates_table_i_measured(
     domain: Domain, run: Reproduction
 ) -> None:
@@ -92,6 +93,7 @@ def test_the_pddl_carries_the_costs_of_the_rates_table_i_measured(
     assert load_defaults(domain, run.out / "defaults").graph.edges == graph.edges
 
 
+@pytest.mark.slow
 def test_export_writes_the_costs_of_any_rates(domain: Domain, run: Reproduction, tmp_path) -> None:
     rates = {"move-home-to-button": 0.9, "move-button-to-home": 0.5, "press-button": 0.01}
     exported = export_measured_pddl(domain, run.datasets.directory, rates, tmp_path, draw=False)
@@ -101,6 +103,7 @@ def test_export_writes_the_costs_of_any_rates(domain: Domain, run: Reproduction,
     }  # fmt: skip
 
 
+@pytest.mark.slow
 def test_the_bundle_records_the_perception_noise_and_filter(
     domain: Domain, run: Reproduction
 ) -> None:
@@ -119,6 +122,7 @@ def test_the_bundle_records_the_perception_noise_and_filter(
     assert (run.out / "report.md").exists() and (run.out / "figures.json").exists()
 
 
+@pytest.mark.slow
 def test_a_rerun_keeps_the_checkpoints_trained_on_these_data(
     domain: Domain, run: Reproduction
 ) -> None:
@@ -216,6 +220,7 @@ def test_a_failed_stage_is_named_and_nothing_after_it_runs(domain: Domain, tmp_p
     assert not (tmp_path / "defaults").exists()
 
 
+@pytest.mark.slow
 def test_the_filter_motion_model_is_fitted_on_the_runs_data_and_shipped(
     domain: Domain, run: Reproduction
 ) -> None:

@@ -221,6 +221,7 @@ def test_hmax_is_admissible(seed: int) -> None:
     assert h <= (math.inf if result.cost is None else result.cost)
 
 
+@pytest.mark.slow
 @needs_fd
 @pytest.mark.parametrize("problem", PROBLEMS, ids=lambda p: p.stem)
 def test_astar_and_fast_downward_agree_on_committed_problems(problem: Path) -> None:

@@ -48,6 +48,7 @@ def test_fixture_is_solved_at_its_optimal_cost(name: str, planner: str) -> None:
     assert result.cost == OPTIMAL[name]
 
 
+@pytest.mark.slow
 @needs_fd
 @pytest.mark.parametrize("name", sorted(OPTIMAL))
 def test_fixture_cost_matches_fast_downward(name: str) -> None:
@@ -170,6 +171,7 @@ def test_unbroken_inline_pair_plans(tmp_path: Path) -> None:
     assert plan_files(tmp_path / "domain.pddl", tmp_path / "problem.pddl").actions == ("move a b",)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize(("name", "size"), [("gripper", 3), ("blocks", 5), ("logistics", 3)])
 def test_lmcut_is_admissible_and_dominates_hmax(name: str, size: int, tmp_path: Path) -> None:
     pair = read_pair(*write_classic(name, size, tmp_path))

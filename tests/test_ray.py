@@ -63,6 +63,7 @@ def _ray_workers_running(function: str) -> list[int]:
     return pids
 
 
+@pytest.mark.slow
 def test_ray_collection_has_the_same_bytes_as_the_local_pool(
     tmp_path: Path, ray_executor: RayExecutor
 ) -> None:
@@ -71,6 +72,7 @@ def test_ray_collection_has_the_same_bytes_as_the_local_pool(
     assert _sha256(local.path) == _sha256(remote.path)
 
 
+@pytest.mark.slow
 def test_ray_task_table_equals_the_local_one(ray_executor: RayExecutor) -> None:
     args = (None, 1, 0, 2, 0.02, ["open-door"], [0])
     local = task_table(KITCHEN, *args, executor=LocalExecutor(2))
@@ -79,6 +81,7 @@ def test_ray_task_table_equals_the_local_one(ray_executor: RayExecutor) -> None:
     assert len(local["rates"][0][0]) == 8
 
 
+@pytest.mark.slow
 @pytest.mark.skipif(not sys.platform.startswith("linux"), reason="reads /proc")
 def test_a_killed_ray_worker_has_its_chunk_rerun(tmp_path: Path, ray_executor: RayExecutor) -> None:
     reference = collect_skill(KITCHEN, SKILL, 12, 4, tmp_path / "ref", LocalExecutor(1), False, 4)

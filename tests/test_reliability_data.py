@@ -404,6 +404,7 @@ except OutputError as err:
 """
 
 
+@pytest.mark.slow
 def test_a_disk_filling_up_mid_collection_is_named_and_keeps_finished_chunks(tmp_path):
     with tmpfs(tmp_path / "disk", "size=48k") as disk:
         kept = write_synthetic_dataset(disk / "grab-cube.h5", episodes=1)

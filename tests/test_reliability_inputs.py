@@ -307,6 +307,7 @@ def test_a_skill_missing_from_the_models_folder_is_named_before_any_work(
     assert _snapshot(tmp_path) == before and not cache.exists()
 
 
+@pytest.mark.slow
 def test_a_models_folder_holding_the_named_skills_is_enough_for_eval_skills(
     tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
 ) -> None:

@@ -83,6 +83,7 @@ def _run_json(argv: list[str], capsys: pytest.CaptureFixture[str]) -> dict | lis
     return json.loads(out)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("verb", list(BACKEND_VERBS))
 def test_every_backend_verb_gives_the_same_results_on_local_and_ray(
     verb: str, ray_session: None, tmp_path: Path, capsys, monkeypatch
@@ -101,6 +102,7 @@ def test_every_backend_verb_gives_the_same_results_on_local_and_ray(
         assert results["ray"] == results["local"]
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("backend", ["local", "ray"])
 def test_jobs_are_drawn_lazily_with_a_bounded_window(
     backend: str, request: pytest.FixtureRequest
@@ -139,6 +141,7 @@ class _SilentServer:
         self.sock.close()
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("form", ["127.0.0.1:{port}", "ray://127.0.0.1:{port}"])
 def test_a_silent_address_is_an_error_naming_it_within_seconds(form: str) -> None:
     server = _SilentServer()
@@ -153,6 +156,7 @@ def test_a_silent_address_is_an_error_naming_it_within_seconds(form: str) -> Non
     assert time.monotonic() - started < 20
 
 
+@pytest.mark.slow
 def test_the_cli_names_a_silent_address(capsys) -> None:
     server = _SilentServer()
     address = f"127.0.0.1:{server.port}"
@@ -182,6 +186,7 @@ def _wait_for_chunk(parts: Path, proc: subprocess.Popen, seconds: float = 90) ->
     assert list(parts.rglob("*.h5")), "no chunk was written"
 
 
+@pytest.mark.slow
 def test_sigterm_during_a_ray_collect_exits_130(tmp_path: Path) -> None:
     argv = ["collect", "--skill", SKILL, "--episodes", "5000", "--workers", "1"]
     argv += ["--backend", "ray", "--out", str(tmp_path / "data")]
@@ -212,6 +217,7 @@ def _marked(mark: str) -> list[str]:
     return found
 
 
+@pytest.mark.slow
 @LINUX
 def test_a_sigkilled_ray_collect_leaves_no_ray_process(tmp_path: Path) -> None:
     mark = f"{os.getpid()}-{time.time_ns()}"
@@ -271,6 +277,7 @@ HUGE_RUNS = {
 RSS_LIMIT_KB = 1_500_000
 
 
+@pytest.mark.slow
 @LINUX
 @pytest.mark.parametrize("verb", list(HUGE_RUNS))
 def test_a_billion_episodes_start_at_once_in_flat_memory(verb: str, tmp_path: Path) -> None:
@@ -303,6 +310,7 @@ def test_a_billion_episodes_start_at_once_in_flat_memory(verb: str, tmp_path: Pa
     assert "Traceback" not in err
 
 
+@pytest.mark.slow
 @LINUX
 def test_ctrl_c_on_a_pool_collect_prints_no_traceback(tmp_path: Path) -> None:
     argv = ["collect", "--skill", SKILL, "--episodes", "5000", "--workers", "2"]
@@ -325,6 +333,7 @@ def test_ctrl_c_on_a_pool_collect_prints_no_traceback(tmp_path: Path) -> None:
     assert "KeyboardInterrupt" not in err
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("argv", [["domains"], ["domains", "--json"], ["--help"]])
 def test_a_closed_stdout_ends_quietly(argv: list[str], tmp_path: Path) -> None:
     proc = _osg(argv, _env(tmp_path), stdout=subprocess.PIPE, stderr=subprocess.PIPE)

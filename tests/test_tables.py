@@ -22,6 +22,7 @@ KITCHEN_DEFAULTS = KITCHEN.defaults_dir
 assert KITCHEN_DEFAULTS is not None
 
 
+@pytest.mark.slow
 def test_skill_table_shape_and_rates() -> None:
     table = skill_table(
         KITCHEN, KITCHEN_DEFAULTS / "skills", [0.0, 0.02], 2, 0, 1, ["grab-cube", "pick-up-cube"]
@@ -46,6 +47,7 @@ def test_reach_table_aggregates_its_rows() -> None:
     assert table["nearest_node_average"] == pytest.approx(np.mean(nearest))
 
 
+@pytest.mark.slow
 def test_task_table_cells_seeds_and_averages(monkeypatch) -> None:
     seen = []
     original = evaluate.run_task_episode
@@ -131,6 +133,7 @@ def _interrupt_last(x: int) -> int:
     return x * x
 
 
+@pytest.mark.slow
 def test_evaluate_tasks_resumes_after_an_interrupt(tmp_path: Path, monkeypatch) -> None:
     """An interrupted ``task_table`` keeps its finished episodes; the rerun gives the same
     table as an uninterrupted one and runs only the rest."""

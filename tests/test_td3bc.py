@@ -118,6 +118,7 @@ def actor_arrays(trainer: TD3BC, skill: int) -> list[np.ndarray]:
     return [array for layer in trainer.actor_layers(skill) for array in layer]
 
 
+@pytest.mark.slow
 def test_learns_to_move_toward_goal_from_noisy_demos(tmp_path: Path) -> None:
     data = toy_data(tmp_path)
     trainer = train([data], [1], steps=4000)

@@ -8,6 +8,8 @@ import subprocess
 import sys
 from pathlib import Path
 
+import pytest
+
 ROOT = Path(__file__).resolve().parents[1]
 
 
@@ -24,6 +26,7 @@ def _report(*command: str) -> dict:
     return json.loads(done.stdout)
 
 
+@pytest.mark.slow
 def test_bench_train_on_synthetic_data() -> None:
     """The synthetic data sets are valid ones (the loader's checks) and both configurations
     train on them."""
@@ -36,6 +39,7 @@ def test_bench_train_on_synthetic_data() -> None:
     assert batched["skill_updates_per_s"] > 0 and one["updates_per_s"] > 0
 
 
+@pytest.mark.slow
 def test_bench_control_reports_its_targets() -> None:
     report = _report("tools/bench_control.py", "--solves", "5", "--warmup", "4", "--env-steps", "5")
     assert set(report["ik"]) == {"mink-daqp", "mink-osqp", "pinocchio-daqp", "pinocchio-osqp"}

@@ -41,19 +41,28 @@ def register(subparsers: argparse._SubParsersAction) -> None:
         default="random",
         help="'random' (one of the domain's start regions, e.g. 15 cm / 0.2 rad) or a node name",
     )
-    run.add_argument("--episodes", type=int, default=1)
+    run.add_argument(
+        "--episodes", type=int, default=1, help="episodes to run, each from a new start (default 1)"
+    )
     run.add_argument(
         "--noise", type=float, default=None, help="the paper protocol's TCP noise sigma [m]"
     )
     add_perception_arguments(run)
     add_randomize_argument(run)
-    run.add_argument("--seed", type=int, default=0)
+    run.add_argument(
+        "--seed", type=int, default=0, help="seeds the starts and the noise (default 0)"
+    )
     run.add_argument(
         "--facts",
         default=None,
         help="world facts at the start, space-separated (default: the domain's start world)",
     )
-    run.add_argument("--max-replans", type=int, default=2)
+    run.add_argument(
+        "--max-replans",
+        type=int,
+        default=2,
+        help="times a failed plan is re-planned per episode (0: the paper's executor; default 2)",
+    )
     run.add_argument("--models", type=Path, default=None, help="defaults directory to use")
     run.add_argument("--video", type=Path, default=None, help="write an MP4 of the first episode")
     run.add_argument(
@@ -65,7 +74,11 @@ def register(subparsers: argparse._SubParsersAction) -> None:
         "nodes, joints, gripper, skills, plans, replans, failures (needs the [viz] extra)",
     )
     add_filter_argument(run)
-    run.add_argument("--json", action="store_true")
+    run.add_argument(
+        "--json",
+        action="store_true",
+        help="print one JSON object (models, perception, episodes, success rate)",
+    )
     run.set_defaults(func=run_task)
 
     skills = subparsers.add_parser("eval-skills", help="Table I: learned skills under noise")

@@ -14,11 +14,10 @@ precision phases; ``PRECISION_COMMAND``): the arm moves 0.862 of this step's com
 0.223 of the previous one (the servos carry velocity over). The residual is about 3.5 mm
 per step and axis there; with 2 cm reading noise the steady-state Kalman gain for that ratio
 is 0.16. The default gain stays 0.2 (the Kalman gain for the 4.5 mm residual before the
-joint-speed limit): on Table I at 2 cm, 200 episodes, gains 0.2 and 0.24 gave the same
-rates within sampling noise. For white reading noise of std sigma the estimate's
-std is ``sigma * sqrt(g / (2 - g))`` (0.33 sigma at g = 0.2). The filter uses nothing but
-what the policy already sees and does: no joint readings. Orientation and gripper features
-pass through unchanged (they carry no noise in this project's noise model).
+joint-speed limit; docs/results.md compares gains). For white reading noise of std sigma
+the estimate's std is ``sigma * sqrt(g / (2 - g))`` (0.33 sigma at g = 0.2). The filter
+uses nothing but what the policy already sees and does: no joint readings. Orientation and
+gripper features pass through unchanged (they carry no noise in this project's noise model).
 """
 
 from __future__ import annotations
@@ -43,8 +42,7 @@ PRECISION_COMMAND = 0.01
 grasps, where the filtered estimate decides where to close. Longer commands are slowed by
 the joint-speed limit (fitted alone, 1-2 cm steps give k_now 0.77 and 2-5 cm steps 0.64,
 against 0.86 below 1 cm); a model fitted on every step (0.682, 0.259) made the filter lag
-the slow phases, and open-pick-up fell from 0.934 to 0.866 (Tables IV/V, 2 cm, 800
-episodes)."""
+the slow phases (its cost on Tables IV/V: docs/results.md)."""
 
 
 def fit_motion_model(

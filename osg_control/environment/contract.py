@@ -4,7 +4,8 @@ adapter, or a user's own).
 Everything that decides (the executor, policies, classifier, fact detectors) reads only
 ``percept()`` and ``observe()``; ``facts()``, ``world_state()``, ``tcp_pose()`` and
 ``skill_success()`` are the simulator's truth, for scoring an episode, Algorithm 1's
-scripted collection and set-ups (``tests/test_perception_enforcement.py``).
+scripted collection and set-ups (``tests/test_perception.py``: the executor runs a task on
+an env whose truth accessors raise; ``tests/test_layers.py`` checks the source).
 """
 
 from __future__ import annotations

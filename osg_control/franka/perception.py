@@ -23,9 +23,8 @@ robot's known kinematics and actuators:
   observed position; in steady state equal to the contact force, since nothing else
   loads a finger); 0 otherwise (empty or open hand). The shipped policies were trained
   on the contact force: on the microwave's handle it reads 6-10 N here against 8-13 N;
-  during a knob sweep 0 against up to 60 N (the bar pressing the closed fingers). With
-  the true contact force put in the ``env`` percept, kitchen-mixed scored 92.0 against
-  90.5 (seed 0, 100 episodes): within the run-to-run spread.
+  during a knob sweep 0 against up to 60 N (the bar pressing the closed fingers). What
+  this difference costs on the benchmark is measured in docs/results.md.
 - Objects: the observed object qpos (not ``achieved_goal``, the simulator's noise-free
   state); facts by the library's completion rule on them (the domain's ``facts_of``).
 
