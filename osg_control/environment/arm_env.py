@@ -1,4 +1,4 @@
-"""``ArmEnv``: the Panda in a domain's scene as a Gymnasium env with the paper's state and action.
+"""``ArmEnv``: a robot arm in a domain's scene as a Gymnasium env with the paper's state and action.
 
 Observation (10-D, robot base frame): ``[x, y, z, qw, qx, qy, qz, gripper command,
 grip force, finger distance]`` — TCP position [m], TCP orientation (``w, x, y, z``, sign
@@ -10,7 +10,9 @@ Action (7-D): ``[dx, dy, dz, da, db, dg, g]`` — a relative TCP command (positi
 rotation vector [rad], base frame), each clipped to ``ACTION_BOUNDS``, and a gripper
 command: ``g < -0.5`` closes, ``g > 0.5`` opens, otherwise the gripper holds.
 
-The control rate is 20 Hz (25 physics steps of 2 ms). A differential-IK QP
+The arm is a ``RobotDescription`` (``control.description``): its joints, limits, drives,
+TCP, gripper and control rate (e.g. 20 Hz: 25 physics steps of 2 ms).
+A differential-IK QP
 (``osg_control.control.ik``) turns each command into joint position targets within joint and
 velocity limits; the position servos chase them within the velocity limits on every
 physics substep (``osg_control.control.servo``). With a ``skill``, the env gives the skill's
@@ -25,6 +27,7 @@ catalogue or scene object.
 
 from __future__ import annotations
 
+import logging
 from dataclasses import dataclass, field
 from functools import partial
 from typing import Any, ClassVar
@@ -33,6 +36,7 @@ import gymnasium as gym
 import mujoco
 import numpy as np
 
+from osg_control.control.description import RobotDescription
 from osg_control.control.divergence import DivergenceWatch, non_finite_state
 from osg_control.control.ik import (
     DiffIKController,
@@ -40,16 +44,7 @@ from osg_control.control.ik import (
     joint_reset_controller,
     solve_ik,
 )
-from osg_control.control.robot import (
-    ARM_JOINTS,
-    CONTROL_HZ,
-    FINGER_JOINTS,
-    FINGER_OPEN,
-    HOME_KEY,
-    HOME_Q,
-    TCP_SITE,
-    substeps_per_control_step,
-)
+from osg_control.control.robot_model import GRIPPER_ACTUATOR, HOME_KEY
 from osg_control.control.servo import uncap_drive
 from osg_control.domain.frames import node_position, offsets_of
 from osg_control.domain.spec import Node, ObjectFrame, SkillSpec
@@ -73,6 +68,8 @@ from osg_control.perception.percept import Percept
 from osg_control.perception.sensors import noisy_world, sensor_slices
 from osg_control.perception.spec import PerceptionSpec
 
+_LOG = logging.getLogger(__name__)
+
 __all__ = [
     "ACTION_BOUNDS",
     "GRIPPER_CLOSED_CMD",
@@ -88,8 +85,11 @@ ACTION_BOUNDS = np.array([0.02, 0.02, 0.02, 0.1, 0.1, 0.1, 1.0])
 OBS_LOW = np.array([-2.0, -2.0, -2.0, -1.0, -1.0, -1.0, -1.0, -1.0, 0.0, -0.01])
 OBS_HIGH = np.array([2.0, 2.0, 2.0, 1.0, 1.0, 1.0, 1.0, 1.0, 70.0, 0.1])
 """Observation bounds: TCP position within 2 m of the base (reach 0.86 m, plus noise), a
-unit quaternion, the gripper command, its force (the actuator's 70 N force range) and the
-finger distance (0 to 8 cm, with slack for contact penetration)."""
+unit quaternion, the gripper command, its force (a 70 N gripper's force range) and the
+finger distance (0 to 8 cm, with slack for contact penetration); an env's own bounds take
+its robot's gripper force and opening (``observation_bounds``)."""
+WIDTH_SLACK = 0.02
+"""Slack [m] on the finger distance's bound beyond the gripper's opening."""
 SIMULATED_PERCEPTIONS = ("paper", "robot", "sim")
 """The perceptions an ``ArmEnv`` simulates (``env`` is an outside env's own observation)."""
 RESET_OPTIONS = ("node", "position", "radius", "angle", "gripper", "facts", "world", "holding")
@@ -145,6 +145,14 @@ class EnvConfig:
             raise EnvOptionError(f"EnvConfig.ik must be an IKConfig, got {self.ik!r}")
 
 
+def observation_bounds(robot: RobotDescription) -> tuple[np.ndarray, np.ndarray]:
+    """``OBS_LOW``, ``OBS_HIGH`` with the robot's grip force and finger opening."""
+    high = OBS_HIGH.copy()
+    high[8] = robot.gripper.force
+    high[9] = robot.gripper.max_opening + WIDTH_SLACK
+    return OBS_LOW.copy(), high
+
+
 def _as_slice(indices: list[int]) -> slice | np.ndarray:
     """Model indices as a slice when consecutive (numpy then indexes without copying; the
     physics loop reads the arm's joints on every substep), else as an index array."""
@@ -155,7 +163,7 @@ def _as_slice(indices: list[int]) -> slice | np.ndarray:
 
 
 class ArmEnv(gym.Env):
-    """The Panda driven by relative TCP commands in a domain's scene (see module docstring).
+    """A robot arm driven by relative TCP commands in a domain's scene (see module docstring).
 
     Subclasses implement ``build_model``, ``read_world``, ``facts_of``, may override
     ``check_world``, ``place_world``, ``snap_start``, ``held_geoms`` and ``finger_opening``,
@@ -167,9 +175,10 @@ class ArmEnv(gym.Env):
         skill: the skill whose reward and termination the env gives, if any.
         config: noise, step budget, IK and random-start options.
         render_mode: ``"rgb_array"`` for ``render``.
+        robot: the arm (``control.description``; a domain's env gives its default).
     """
 
-    metadata = {"render_modes": ["rgb_array"], "render_fps": int(CONTROL_HZ)}
+    metadata = {"render_modes": ["rgb_array"]}
     camera = "overview"
     """The model camera ``render`` uses."""
     world_facts: tuple[str, ...] = ()
@@ -192,8 +201,12 @@ class ArmEnv(gym.Env):
         skill: SkillSpec | None = None,
         config: EnvConfig | None = None,
         render_mode: str | None = None,
+        *,
+        robot: RobotDescription,
     ) -> None:
         self.config = config or EnvConfig()
+        self.robot = robot
+        self.metadata = {**self.metadata, "render_fps": int(robot.control_hz)}
         if self.config.perception.name not in SIMULATED_PERCEPTIONS:
             raise EnvOptionError(
                 f"EnvConfig.perception: {type(self).__name__} simulates the perceptions "
@@ -205,17 +218,20 @@ class ArmEnv(gym.Env):
         self.render_mode = render_mode
         self.model = self.build_model()
         self.data = mujoco.MjData(self.model)
-        self.ik = DiffIKController(self.config.ik)
+        self.ik = DiffIKController(robot, self.config.ik)
         self._reset_ik: DiffIKController | None = None
-        self.n_substeps = substeps_per_control_step(self.model.opt.timestep)
-        self._arm_qpos = _as_slice([self.model.joint(j).qposadr[0] for j in ARM_JOINTS])
-        self._arm_dof = _as_slice([self.model.joint(j).dofadr[0] for j in ARM_JOINTS])
-        self._arm_act = _as_slice([self.model.actuator(j).id for j in ARM_JOINTS])
+        self._said_no_null_space = False
+        self.n_substeps = robot.substeps(self.model.opt.timestep)
+        joints = robot.arm.names
+        self._arm_qpos = _as_slice([self.model.joint(j).qposadr[0] for j in joints])
+        self._arm_dof = _as_slice([self.model.joint(j).dofadr[0] for j in joints])
+        self._arm_act = _as_slice([self.model.actuator(j).id for j in joints])
         if not self.config.limit_joint_speed:
-            uncap_drive(self.model, ARM_JOINTS)
+            uncap_drive(self.model, joints)
         self._control_step = ArmControlStep(
             self.model,
             self.data,
+            robot,
             self._arm_qpos,
             self._arm_dof,
             self._arm_act,
@@ -224,15 +240,19 @@ class ArmEnv(gym.Env):
         )
         self._step_speed_ratio = 0.0
         self.peak_joint_speed_ratio = 0.0
-        """Peak |arm joint velocity| / URDF limit over every simulated substep since the last
+        """Peak |arm joint velocity| / its limit over every simulated substep since the last
         reset (steps and joint resets; the start's settling is not commanded motion)."""
-        self._finger_qpos = np.array([self.model.joint(j).qposadr[0] for j in FINGER_JOINTS])
-        self._gripper_act = self.model.actuator("gripper").id
-        self._tcp = self.model.site(TCP_SITE).id
+        gripper = robot.gripper
+        self._finger_qpos = np.array([self.model.joint(j).qposadr[0] for j in gripper.joints])
+        self._finger_open = gripper.open_position
+        self._gripper_act = self.model.actuator(GRIPPER_ACTUATOR).id
+        self._tcp = self.model.site(robot.tcp.site).id
+        base = self.model.body_rootid[self.model.jnt_bodyid[self.model.joint(joints[0]).id]]
         self._robot_bodies = {
-            b for b in range(self.model.nbody) if self.model.body(b).name.startswith("panda_")
+            b for b in range(self.model.nbody) if self.model.body_rootid[b] == base
         }
-        self.observation_space = gym.spaces.Box(OBS_LOW, OBS_HIGH, (OBS_DIM,), np.float64)
+        """The robot's bodies: those under its base (attached to the scene's world)."""
+        self.observation_space = gym.spaces.Box(*observation_bounds(robot), (OBS_DIM,), np.float64)
         self.action_space = gym.spaces.Box(-ACTION_BOUNDS, ACTION_BOUNDS, (7,), np.float64)
         self._gripper_cmd = GRIPPER_OPEN_CMD
         self._steps = 0
@@ -241,7 +261,13 @@ class ArmEnv(gym.Env):
         self._renderer: mujoco.Renderer | None = None
         self._sensor_slices = sensor_slices(self.world_sensors)
         self.sensors = ArmSensors(
-            self.model, self._arm_qpos, self._finger_qpos, self._gripper_act, self._tcp
+            self.model,
+            self._arm_qpos,
+            self._finger_qpos,
+            self._gripper_act,
+            self._tcp,
+            gripper.width_scale,
+            "grip_force" in robot.sensors,
         )
         """The arm's simulated encoders, gripper and TCP readouts."""
         self._percept: Percept | None = None
@@ -251,7 +277,8 @@ class ArmEnv(gym.Env):
 
     # ----------------------------------------------------------------- the scene
     def build_model(self) -> mujoco.MjModel:
-        """The compiled scene with the Panda, a ``home`` keyframe and an ``overview`` camera."""
+        """The compiled scene with ``self.robot``, a ``home`` keyframe and an ``overview``
+        camera (``control.scene_model``)."""
         raise NotImplementedError
 
     def read_world(self) -> np.ndarray:
@@ -477,7 +504,7 @@ class ArmEnv(gym.Env):
     ) -> bool:
         """Teleport the arm (IK) and the world; return False if the start is in collision."""
         mujoco.mj_resetDataKeyframe(self.model, self.data, self.model.key(HOME_KEY).id)
-        q, converged = solve_ik(self.ik, HOME_Q, pos, rot, iterations=300)
+        q, converged = solve_ik(self.ik, np.array(self.robot.home_q), pos, rot, iterations=300)
         if not converged:
             return False
         self.data.qpos[self._arm_qpos] = q
@@ -485,10 +512,10 @@ class ArmEnv(gym.Env):
         mujoco.mj_kinematics(self.model, self.data)
         self.place_world(world, facts, holding)
         closed = gripper == "closed" or holding is not None
-        finger = self.finger_opening(holding) if holding else FINGER_OPEN
+        finger = self.finger_opening(holding) if holding else self._finger_open
         self.data.qpos[self._finger_qpos] = finger if (holding or not closed) else 0.0
         self._gripper_cmd = GRIPPER_CLOSED_CMD if closed else GRIPPER_OPEN_CMD
-        self.data.ctrl[self._gripper_act] = 0.0 if closed else FINGER_OPEN
+        self.data.ctrl[self._gripper_act] = 0.0 if closed else self._finger_open
         mujoco.mj_forward(self.model, self.data)
         if self._robot_in_collision(allowed_geoms=self.held_geoms(holding)):
             return False
@@ -549,7 +576,7 @@ class ArmEnv(gym.Env):
             # The controller reads the encoders: the perceived joints.
             q_target = self.ik.relative_step(self.percept().joints, action[:6])
             self.data.ctrl[self._gripper_act] = (
-                FINGER_OPEN if self._gripper_cmd == GRIPPER_OPEN_CMD else 0.0
+                self._finger_open if self._gripper_cmd == GRIPPER_OPEN_CMD else 0.0
             )
             failure = self._simulate(q_target)
         else:
@@ -635,7 +662,10 @@ class ArmEnv(gym.Env):
         """Drive the joints toward the home posture while the TCP holds its pose.
 
         Null-space motion: the TCP pose is an equality constraint of the IK QP and the
-        posture task pulls toward ``IKConfig.posture``. Runs until every joint is within
+        posture task pulls toward ``IKConfig.posture`` (the robot's home by default). An arm
+        without a null space (six joints or fewer, ``RobotDescription.redundant``) cannot
+        move with its TCP held: the reset logs so once and returns 0. Runs until every
+        joint is within
         ``tolerance`` [rad] of the posture or the posture error stops shrinking. Decided
         from the encoders alone, as a robot's controller would: the joints are read (with
         the perception's encoder noise) every step, the TCP is held where forward
@@ -654,12 +684,21 @@ class ArmEnv(gym.Env):
 
     def _drive_to_posture(self, max_steps: int, tolerance: float) -> int:
         """``joint_reset``'s loop (the percept is refreshed after it, whatever happens)."""
+        if not self.robot.redundant:
+            if not self._said_no_null_space:
+                _LOG.info(
+                    "joint reset skipped: robot %r has %d joints, no null space under its TCP task",
+                    self.robot.name,
+                    self.robot.n_joints,
+                )
+                self._said_no_null_space = True
+            return 0
         if self._reset_ik is None:
-            self._reset_ik = joint_reset_controller(self.config.ik)
+            self._reset_ik = joint_reset_controller(self.robot, self.config.ik)
         encoders = partial(self.sensors.encoders, self.data, self.config.perception, self.np_random)
         joints = encoders()
         held: tuple[np.ndarray, np.ndarray] | None = None  # the TCP pose to hold
-        posture = np.asarray(self.config.ik.posture)
+        posture = self.ik.posture
         previous = np.inf
         for step in range(max_steps):
             error = float(np.abs(joints - posture).max())
