@@ -12,7 +12,9 @@ import pytest
 import qpsolvers
 from pink.limits import ConfigurationLimit, VelocityLimit
 from scipy.spatial.transform import Rotation
+from toy_robot import TOY
 
+from osg_control.control.description import RobotDescription
 from osg_control.control.ik import (
     DiffIKController,
     IKConfig,
@@ -55,7 +57,8 @@ def random_cases(
     lower, upper = controller.backend.lower + 0.02, controller.backend.upper - 0.02
     cases = []
     for _ in range(count):
-        q = np.clip(HOME_Q + rng.normal(0.0, 0.4, 7), lower, upper)
+        home = controller.posture
+        q = np.clip(home + rng.normal(0.0, 0.4, home.size), lower, upper)
         pos, rot = controller.tcp_pose(q)
         target_rot = rotation_step(rot, rng.normal(0.0, 0.1, 3))
         cases.append((q, pos + rng.normal(0.0, reach, 3), target_rot))
@@ -79,7 +82,8 @@ def required(value: np.ndarray | None) -> np.ndarray:
 
 def box_from_inequalities(problem: qpsolvers.Problem) -> tuple[np.ndarray, np.ndarray]:
     """The box ``lb <= dq <= ub`` implied by rows ``+-e_i dq <= h`` (mink's and Pink's form)."""
-    lower, upper = np.full(7, -np.inf), np.full(7, np.inf)
+    n = required(problem.P).shape[0]
+    lower, upper = np.full(n, -np.inf), np.full(n, np.inf)
     for row, bound in zip(required(problem.G), required(problem.h), strict=True):
         (index,) = np.flatnonzero(row)
         if row[index] > 0:
@@ -114,14 +118,16 @@ def test_backends_build_the_same_qp(
         )
 
 
-def test_qp_is_minks_build_ik() -> None:
-    """The shared assembly reproduces ``mink.build_ik`` with mink's own tasks and limits."""
+@pytest.mark.parametrize("robot", [PANDA, TOY], ids=["panda", "toy6"])
+def test_qp_is_minks_build_ik(robot: RobotDescription) -> None:
+    """The shared assembly reproduces ``mink.build_ik`` with mink's own tasks and limits,
+    for seven joints and for six."""
     config = IKConfig(backend="mink")
-    backend = MinkBackend(config, PANDA)
-    controller = DiffIKController(PANDA, config)
+    backend = MinkBackend(config, robot)
+    controller = DiffIKController(robot, config)
     configuration = mink.Configuration(backend.model)
     frame_task = mink.FrameTask(
-        TCP_SITE,
+        robot.tcp.site,
         "site",
         position_cost=config.position_cost,
         orientation_cost=config.orientation_cost,
@@ -129,7 +135,7 @@ def test_qp_is_minks_build_ik() -> None:
         lm_damping=config.lm_damping,
     )
     posture_task = mink.PostureTask(backend.model, cost=config.posture_cost, gain=config.gain)
-    posture_task.set_target(HOME_Q)
+    posture_task.set_target(np.array(robot.home_q))
     names = [backend.model.joint(i).name for i in range(backend.model.njnt)]
     limits = [
         mink.ConfigurationLimit(backend.model, gain=config.limit_gain),
@@ -159,22 +165,24 @@ def test_qp_is_minks_build_ik() -> None:
         )
 
 
-def test_qp_is_pinks_build_ik() -> None:
-    """The Pinocchio backend's QP is ``pink.build_ik`` with Pink's tasks and limits."""
+@pytest.mark.parametrize("robot", [PANDA, TOY], ids=["panda", "toy6"])
+def test_qp_is_pinks_build_ik(robot: RobotDescription) -> None:
+    """The Pinocchio backend's QP is ``pink.build_ik`` with Pink's tasks and limits, for
+    seven joints and for six."""
     config = IKConfig(backend="pinocchio")
-    backend = PinocchioBackend(config, PANDA)
+    backend = PinocchioBackend(config, robot)
     model = backend.model
     frame_task = pink.FrameTask(
-        TCP_FRAME,
+        robot.tcp.frame,
         position_cost=config.position_cost,
         orientation_cost=config.orientation_cost,
         lm_damping=config.lm_damping,
         gain=config.gain,
     )
     posture_task = pink.PostureTask(cost=config.posture_cost, gain=config.gain)
-    posture_task.set_target(HOME_Q)
+    posture_task.set_target(np.array(robot.home_q))
     limits = [ConfigurationLimit(model, config_limit_gain=config.limit_gain), VelocityLimit(model)]
-    controller = DiffIKController(PANDA, config)
+    controller = DiffIKController(robot, config)
     for hard_tcp in (False, True):
         for q, target_pos, target_rot in random_cases(controller, 20, seed=3):
             pos, rot = controller.tcp_pose(q) if hard_tcp else (target_pos, target_rot)

@@ -121,14 +121,12 @@ def check_models(robot: RobotDescription) -> None:
     missing = [b for b in robot.gripper.bodies if b not in bodies]
     if missing:
         raise RobotDescriptionError(f"robot {name!r}: gripper bodies {missing} not in the model")
-    driven = joints[robot.gripper.joints[0]]
-    if driven.limited == mujoco.mjtLimited.mjLIMITED_TRUE and not (
-        driven.range[0] <= robot.gripper.open_position <= driven.range[1]
-    ):
+    driven = spec.compile().joint(robot.gripper.joints[0])
+    if driven.limited[0] and not driven.range[0] <= robot.gripper.open_position <= driven.range[1]:
         raise RobotDescriptionError(
             f"robot {name!r}: the gripper cannot be driven open: open_position "
             f"{robot.gripper.open_position} is outside joint {driven.name!r}'s range "
-            f"{list(driven.range)}"
+            f"{driven.range.tolist()}"
         )
     model = arm_model(robot)
     if model.nq != robot.n_joints:

@@ -14,7 +14,8 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable, Mapping
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
+from functools import partial
 from pathlib import Path
 from typing import Any, Protocol
 
@@ -134,6 +135,11 @@ class Domain:
             ``round(-ln p * 1000)`` (0: plans minimise failure only; a domain whose env has
             an episode step limit prefers the shorter of two likely plans with it).
         dataset_layouts: outside data-set layouts it imports (``DatasetLayout``).
+        robot: the registered robot (``osg_control.robots``) its env drives by default,
+            which ``make_env(robot=NAME)`` replaces; None: its env drives its own arm and no
+            other robot can be chosen.
+        robot_is_default: whether ``robot`` is the domain's own (False after
+            ``with_robot`` chose another).
     """
 
     name: str
@@ -159,11 +165,46 @@ class Domain:
     action_bounds: tuple[float, ...] = (0.02, 0.02, 0.02, 0.1, 0.1, 0.1, 1.0)
     step_cost: float = 0.0
     dataset_layouts: tuple[DatasetLayout, ...] = ()
+    robot: str | None = None
+    robot_is_default: bool = True
     skills_by_name: dict[str, SkillSpec] = field(init=False, repr=False, compare=False)
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "skills_by_name", {s.name: s for s in self.skills})
         validate_domain(self)
+
+    def with_robot(self, robot: str) -> Domain:
+        """This domain with its env built around the registered robot ``robot``.
+
+        Another robot than the domain's own has its own artifacts (``cache_name``) and the
+        shipped defaults of ``<defaults_dir>-<robot>`` if the domain ships them (none
+        otherwise: the default robot's policies do not drive another arm).
+
+        Raises:
+            DomainError: the domain's env drives its own arm (``robot`` is None).
+        """
+        if self.robot is None:
+            raise DomainError(
+                f"domain {self.name!r}: its env drives its own arm; no robot can be chosen"
+            )
+        if robot == self.robot:
+            return self
+        defaults = None
+        if self.defaults_dir is not None:
+            defaults = self.defaults_dir.with_name(f"{self.defaults_dir.name}-{robot}")
+        return replace(
+            self,
+            robot=robot,
+            robot_is_default=False,
+            make_env=partial(self.make_env, robot=robot),
+            defaults_dir=defaults if defaults is not None and defaults.is_dir() else None,
+        )
+
+    @property
+    def cache_name(self) -> str:
+        """The folder of its artifacts under the cache: ``name``, or ``name@robot`` with
+        another robot than its own (``with_robot``)."""
+        return self.name if self.robot_is_default else f"{self.name}@{self.robot}"
 
     def skill(self, name: str) -> SkillSpec:
         """Look a skill up by name.
@@ -255,6 +296,7 @@ class Domain:
             "watched_facts": sorted(self.watched_facts),
             "env_id": self.env_id,
             "perceptions": list(self.perceptions),
+            "robot": self.robot,
         }
 
 

@@ -21,6 +21,7 @@ from osg_control.domain.spec import SkillSpec
 from osg_control.environment.arm_env import ArmEnv, EnvConfig
 from osg_control.errors import SkillSpecError, lookup
 from osg_control.kitchen.detectors import WORLD_SENSORS, detect_grasps
+from osg_control.kitchen.domain import DEFAULT_ROBOT
 from osg_control.kitchen.options import WORLD_OPTIONS, check_world_options
 from osg_control.kitchen.scene import SceneIndex, build_kitchen_model
 from osg_control.kitchen.skills import CUBE, DOOR_OPENED, NODES, SKILLS_BY_NAME, WORLD_FACTS
@@ -32,8 +33,6 @@ from osg_control.kitchen.world import (
 )
 from osg_control.robots.registry import get_robot
 
-DEFAULT_ROBOT = "panda"
-"""The robot the kitchen is built around unless told otherwise (registry name)."""
 HANDLE_GRASP_SLACK = 0.015
 """How far along the handle fin [m] (x) a handle-holding start may grasp it: about the
 offset a grab under 2 cm observation noise ends with, so the slide's data covers it."""
