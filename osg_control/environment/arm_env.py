@@ -28,9 +28,8 @@ catalogue or scene object.
 from __future__ import annotations
 
 import logging
-from dataclasses import dataclass, field
 from functools import partial
-from typing import Any, ClassVar
+from typing import Any
 
 import gymnasium as gym
 import mujoco
@@ -40,33 +39,41 @@ from osg_control.control.description import RobotDescription
 from osg_control.control.divergence import DivergenceWatch, non_finite_state
 from osg_control.control.ik import (
     DiffIKController,
-    IKConfig,
     joint_reset_controller,
     solve_ik,
 )
 from osg_control.control.robot_model import GRIPPER_ACTUATOR, HOME_KEY
 from osg_control.control.servo import uncap_drive
-from osg_control.domain.frames import node_position, offsets_of
-from osg_control.domain.spec import Node, ObjectFrame, SkillSpec
+from osg_control.domain.frames import offsets_of
+from osg_control.domain.spec import Node, SkillSpec
 from osg_control.environment.actions import checked_action
+from osg_control.environment.config import (
+    ACTION_BOUNDS,
+    OBS_DIM,
+    OBS_HIGH,
+    OBS_LOW,
+    RESET_OPTIONS,
+    SIMULATED_PERCEPTIONS,
+    EnvConfig,
+    as_slice,
+    observation_bounds,
+)
 from osg_control.environment.options import (
     GRIPPER_STATES,
-    Bounds,
     check_facts_hold,
-    check_fields,
     check_names,
     check_start_options,
     choice_option,
     facts_option,
 )
 from osg_control.environment.poses import quat_rotation, sample_start_pose
+from osg_control.environment.scene_hooks import SceneHooks
 from osg_control.environment.sensing import ArmSensors
 from osg_control.environment.stepping import ArmControlStep
 from osg_control.environment.success import GRIPPER_CLOSED_CMD, GRIPPER_OPEN_CMD, success_holds
 from osg_control.errors import EnvOptionError, SimulationError
 from osg_control.perception.percept import Percept
 from osg_control.perception.sensors import noisy_world, sensor_slices
-from osg_control.perception.spec import PerceptionSpec
 
 _LOG = logging.getLogger(__name__)
 
@@ -74,100 +81,22 @@ __all__ = [
     "ACTION_BOUNDS",
     "GRIPPER_CLOSED_CMD",
     "GRIPPER_OPEN_CMD",
+    "OBS_DIM",
+    "OBS_HIGH",
+    "OBS_LOW",
     "ArmEnv",
     "EnvConfig",
     "success_holds",
 ]
 
-OBS_DIM = 10
-ACTION_BOUNDS = np.array([0.02, 0.02, 0.02, 0.1, 0.1, 0.1, 1.0])
-"""Per-step bound of each action component: 2 cm, 0.1 rad, and the gripper's [-1, 1]."""
-OBS_LOW = np.array([-2.0, -2.0, -2.0, -1.0, -1.0, -1.0, -1.0, -1.0, 0.0, -0.01])
-OBS_HIGH = np.array([2.0, 2.0, 2.0, 1.0, 1.0, 1.0, 1.0, 1.0, 70.0, 0.1])
-"""Observation bounds: TCP position within 2 m of the base (reach 0.86 m, plus noise), a
-unit quaternion, the gripper command, its force (a 70 N gripper's force range) and the
-finger distance (0 to 8 cm, with slack for contact penetration); an env's own bounds take
-its robot's gripper force and opening (``observation_bounds``)."""
-WIDTH_SLACK = 0.02
-"""Slack [m] on the finger distance's bound beyond the gripper's opening."""
-SIMULATED_PERCEPTIONS = ("paper", "robot", "sim")
-"""The perceptions an ``ArmEnv`` simulates (``env`` is an outside env's own observation)."""
-RESET_OPTIONS = ("node", "position", "radius", "angle", "gripper", "facts", "world", "holding")
-"""The options ``ArmEnv.reset`` knows; any other name is refused."""
 
-
-@dataclass(frozen=True)
-class EnvConfig:
-    """Options of ``KitchenEnv``.
-
-    Attributes:
-        perception: what the robot perceives and with what noise (``perception.spec``;
-            default: the paper's protocol without noise, i.e. the exact state).
-        max_steps: episode step budget (truncation); a skill's own budget wins if set;
-            None: no truncation (task execution, where the executor bounds each skill).
-        ik: the differential-IK controller's configuration.
-        start_radius: default random-start radius around the start pose [m].
-        start_angle: default random-start angle per axis [rad].
-        limit_joint_speed: keep the simulated joint speeds within the URDF velocity limits
-            on every physics substep (``control.servo``: the servo's clamped target and the
-            drive's speed saturation); off only to compare with the unlimited servo, which
-            peaks at 2.7x the limits.
-
-    Raises:
-        EnvOptionError: a field of the wrong type or outside its range (``BOUNDS``), named.
-    """
-
-    perception: PerceptionSpec = field(default_factory=PerceptionSpec)
-    max_steps: int | None = 200
-    ik: IKConfig = field(default_factory=IKConfig)
-    start_radius: float = 0.0
-    start_angle: float = 0.0
-    limit_joint_speed: bool = True
-
-    BOUNDS: ClassVar[dict[str, Bounds]] = {
-        "max_steps": Bounds(low=1, integer=True, optional=True),
-        "start_radius": Bounds(),
-        "start_angle": Bounds(),
-    }
-    """The range of each numeric field."""
-
-    def __post_init__(self) -> None:
-        check_fields(self, self.BOUNDS)
-        if not isinstance(self.limit_joint_speed, bool):
-            raise EnvOptionError(
-                f"EnvConfig.limit_joint_speed must be a bool, got {self.limit_joint_speed!r}"
-            )
-        if not isinstance(self.perception, PerceptionSpec):
-            raise EnvOptionError(
-                f"EnvConfig.perception must be a PerceptionSpec, got {self.perception!r}"
-            )
-        if not isinstance(self.ik, IKConfig):
-            raise EnvOptionError(f"EnvConfig.ik must be an IKConfig, got {self.ik!r}")
-
-
-def observation_bounds(robot: RobotDescription) -> tuple[np.ndarray, np.ndarray]:
-    """``OBS_LOW``, ``OBS_HIGH`` with the robot's grip force and finger opening."""
-    high = OBS_HIGH.copy()
-    high[8] = robot.gripper.force
-    high[9] = robot.gripper.max_opening + WIDTH_SLACK
-    return OBS_LOW.copy(), high
-
-
-def _as_slice(indices: list[int]) -> slice | np.ndarray:
-    """Model indices as a slice when consecutive (numpy then indexes without copying; the
-    physics loop reads the arm's joints on every substep), else as an index array."""
-    first = indices[0]
-    if indices == list(range(first, first + len(indices))):
-        return slice(first, first + len(indices))
-    return np.array(indices)
-
-
-class ArmEnv(gym.Env):
+class ArmEnv(SceneHooks, gym.Env):
     """A robot arm driven by relative TCP commands in a domain's scene (see module docstring).
 
-    Subclasses implement ``build_model``, ``read_world``, ``facts_of``, may override
-    ``check_world``, ``place_world``, ``snap_start``, ``held_geoms`` and ``finger_opening``,
-    and declare ``world_facts``, ``world_options`` and ``holdable``.
+    Subclasses implement the scene's hooks (``scene_hooks.SceneHooks``): ``build_model``,
+    ``read_world``, ``facts_of``; they may override ``check_world``, ``place_world``,
+    ``snap_start``, ``held_geoms`` and ``finger_opening``, and declare ``world_facts``,
+    ``world_options``, ``holdable``, ``objects`` and ``world_sensors``.
 
     Args:
         nodes: the domain's nodes (start poses and skills' termination poses).
@@ -181,18 +110,6 @@ class ArmEnv(gym.Env):
     metadata = {"render_modes": ["rgb_array"]}
     camera = "overview"
     """The model camera ``render`` uses."""
-    world_facts: tuple[str, ...] = ()
-    """The facts ``facts_of`` can give: the ``facts`` reset option may name only these
-    (empty: not declared; a fact the start world lacks is refused all the same)."""
-    world_options: tuple[str, ...] = ()
-    """The entries the ``world`` reset option may have (``check_world`` checks the values)."""
-    holdable: tuple[str, ...] = ()
-    """What a start may hold (the ``holding`` reset option)."""
-    objects: tuple[ObjectFrame, ...] = ()
-    """The objects nodes may be anchored to (the domain's ``objects``)."""
-    world_sensors: dict[str, str] = {}
-    """World field -> the sensor kind that reads it (``perception.sensors``), in the order of
-    ``read_world``'s vector."""
 
     def __init__(
         self,
@@ -223,9 +140,9 @@ class ArmEnv(gym.Env):
         self._said_no_null_space = False
         self.n_substeps = robot.substeps(self.model.opt.timestep)
         joints = robot.arm.names
-        self._arm_qpos = _as_slice([self.model.joint(j).qposadr[0] for j in joints])
-        self._arm_dof = _as_slice([self.model.joint(j).dofadr[0] for j in joints])
-        self._arm_act = _as_slice([self.model.actuator(j).id for j in joints])
+        self._arm_qpos = as_slice([self.model.joint(j).qposadr[0] for j in joints])
+        self._arm_dof = as_slice([self.model.joint(j).dofadr[0] for j in joints])
+        self._arm_act = as_slice([self.model.actuator(j).id for j in joints])
         if not self.config.limit_joint_speed:
             uncap_drive(self.model, joints)
         self._control_step = ArmControlStep(
@@ -274,75 +191,6 @@ class ArmEnv(gym.Env):
         self.anchor_offsets: dict[str, np.ndarray] = {}
         """Each object's true displacement from its nominal place at the last reset (the
         frame the env's own skill is scored in; scoring and scripted collection only)."""
-
-    # ----------------------------------------------------------------- the scene
-    def build_model(self) -> mujoco.MjModel:
-        """The compiled scene with ``self.robot``, a ``home`` keyframe and an ``overview``
-        camera (``control.scene_model``)."""
-        raise NotImplementedError
-
-    def read_world(self) -> np.ndarray:
-        """The world-state vector (the domain's ``world_fields``), a fresh array."""
-        raise NotImplementedError
-
-    def facts_of(self, world: np.ndarray) -> frozenset[str]:
-        """The domain's facts that hold in a world-state vector."""
-        raise NotImplementedError
-
-    def check_world(self, world: dict[str, Any], holding: str | None) -> None:
-        """Refuse explicit ``world`` reset options (their names are ``world_options``) that
-        mean nothing (e.g. non-finite) or contradict ``holding``.
-
-        Raises:
-            EnvOptionError: naming the option and its value.
-        """
-
-    def place_world(
-        self, world: dict[str, Any], facts: frozenset[str], holding: str | None
-    ) -> None:
-        """Put the scene's objects in place for a start (the arm is already placed and its
-        kinematics computed): ``world`` holds explicit options, ``facts`` the start facts."""
-
-    def placement_offsets(self, world: dict[str, Any]) -> dict[str, np.ndarray]:
-        """The displacement of each object the ``world`` reset option places (moves the
-        start of a skill whose start node is anchored to it)."""
-        return {}
-
-    def placement_world(
-        self, placements: dict[str, np.ndarray], holding: str | None
-    ) -> dict[str, Any]:
-        """The ``world`` reset options that put the objects at ``placements`` (those not
-        held: a held object is placed in the fingers)."""
-        return {}
-
-    def node_position(self, name: str) -> np.ndarray:
-        """Where a node is in the world as reset (its anchor's true displacement applied)."""
-        return node_position(self.nodes, name, self.anchor_offsets)
-
-    def detect_world(self, state: np.ndarray, world: np.ndarray) -> np.ndarray:
-        """The perceived world with its ``detected`` fields recomputed from the percepts
-        (``state``: the perceived 10-D state; e.g. a grasp from the finger width and the
-        object's perceived pose)."""
-        return world
-
-    def snap_start(
-        self,
-        pos: np.ndarray,
-        rot: np.ndarray,
-        holding: str | None,
-        world: dict[str, Any],
-        facts: frozenset[str],
-    ) -> tuple[np.ndarray, np.ndarray]:
-        """Adjust a sampled start pose so that a start holding an object is consistent."""
-        return pos, rot
-
-    def held_geoms(self, holding: str | None) -> set[int]:
-        """Geoms the robot may touch at a start holding ``holding``."""
-        return set()
-
-    def finger_opening(self, holding: str) -> float:
-        """Finger joint position [m] at a start holding ``holding``."""
-        return 0.0
 
     # ----------------------------------------------------------------- state
     @property
