@@ -9,6 +9,7 @@ exactly when the physics, IK and sensors did the same arithmetic.
 
 Usage:
     python tools/trajectory_digest.py [--domain kitchen] [--steps 60] [--episodes 2]
+        [--ik-backend pinocchio]
 """
 
 from __future__ import annotations
@@ -20,6 +21,7 @@ from typing import Any
 
 import numpy as np
 
+from osg_control.control.ik import IKConfig
 from osg_control.data.collect import run_scripted_episode
 from osg_control.domain.registry import get_domain
 from osg_control.environment.arm_env import EnvConfig
@@ -40,14 +42,19 @@ def _update(digest: Any, *values: Any) -> None:
             digest.update(repr(value).encode())
 
 
-def env_digest(domain_name: str, skills: list[str], steps: int, seed: int) -> str:
-    """The digest of ``steps`` random steps per skill and perception, then a joint reset."""
+def env_digest(
+    domain_name: str, skills: list[str], steps: int, seed: int, backend: str = "mink"
+) -> str:
+    """The digest of ``steps`` random steps per skill and perception, then a joint reset,
+    with the IK's ``backend``."""
     domain = get_domain(domain_name)
     by_name = {s.name: s for s in domain.skills}
     digest = hashlib.sha256()
     for k, (perception, noise) in enumerate(PERCEPTIONS):
         for i, name in enumerate(skills):
-            config = EnvConfig(perception=perception_spec(perception, noise))
+            config = EnvConfig(
+                perception=perception_spec(perception, noise), ik=IKConfig(backend=backend)
+            )
             env = domain.make_env(skill=by_name[name], config=config)
             rng = np.random.default_rng([seed, k, i])
             obs, info = env.reset(seed=seed + 100 * k + i)
@@ -91,13 +98,15 @@ def main() -> None:
     parser.add_argument("--steps", type=int, default=60, help="random steps per run")
     parser.add_argument("--episodes", type=int, default=2, help="scripted episodes per skill")
     parser.add_argument("--seed", type=int, default=0)
+    parser.add_argument("--ik-backend", default="mink", help="the env's IK backend")
     args = parser.parse_args()
     domain = get_domain(args.domain)
     names = args.skills or [s.name for s in domain.skills[:: max(1, len(domain.skills) // 6)]]
     result = {
         "skills": names,
         "env_steps": args.steps * len(names) * len(PERCEPTIONS),
-        "env": env_digest(args.domain, names, args.steps, args.seed),
+        "ik_backend": args.ik_backend,
+        "env": env_digest(args.domain, names, args.steps, args.seed, args.ik_backend),
         "collect": collect_digest(args.domain, names, args.episodes, args.seed),
     }
     print(json.dumps(result, indent=2))
