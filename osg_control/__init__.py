@@ -1,8 +1,8 @@
 """osg-control: Offline Skill Graph robot-control stack.
 
-MuJoCo kitchen with the example-robot-data Franka Panda, a differential-IK controller
-(mink or Pinocchio/Pink), TD3+BC skills learned from offline data, a skill graph exported
-as PDDL, a symbolic planner, a state-to-skill classifier and an executor.
+MuJoCo kitchen with example-robot-data arms (``osg_control.robots``), a differential-IK
+controller (mink or Pinocchio/Pink), TD3+BC skills learned from offline data, a skill graph
+exported as PDDL, a symbolic planner, a state-to-skill classifier and an executor.
 
 Importing the package registers its Gymnasium environments (``osg/Kitchen-v0``; see
 ``osg_control.registration``).

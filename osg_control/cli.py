@@ -8,10 +8,11 @@ collector; ``tools/bench_startup.py`` measures it.
 from __future__ import annotations
 
 import argparse
+import contextlib
 import importlib
 import os
 import sys
-from collections.abc import Collection, Sequence
+from collections.abc import Collection, Iterator, Sequence
 
 from osg_control import __version__
 from osg_control.commands import COMMAND_MODULES, DEFAULT_DOMAIN
@@ -32,6 +33,7 @@ VERBS: tuple[tuple[str, str, str], ...] = (
     ("plan", "plan", "plan a skill sequence for a goal"),
     ("reproduce", "reproduce", "run the whole pipeline and write a report"),
     ("domains", "domains", "list the registered domains (skills, facts, tasks, start regions)"),
+    ("robots", "robots", "list the registered robots (joints, limits, TCP, gripper)"),
 )
 """Every verb: its name, the ``osg_control.commands`` module that registers it, its help
 (a test checks these against the modules), in ``COMMAND_MODULES`` order."""
@@ -54,6 +56,12 @@ def build_parser(modules: Collection[str] | None = None) -> argparse.ArgumentPar
         default=DEFAULT_DOMAIN,
         help=f"the domain to work in (default: {DEFAULT_DOMAIN}; `osg domains` lists them)",
     )
+    parser.add_argument(
+        "--robot",
+        default=None,
+        help="the robot the domain's env drives (default: the domain's own; `osg robots` "
+        "lists them)",
+    )
     parser.add_argument("--debug", action="store_true", help="show tracebacks of errors")
     subparsers = parser.add_subparsers(dest="command", metavar="COMMAND")
     for module_name in COMMAND_MODULES:
@@ -66,7 +74,7 @@ def build_parser(modules: Collection[str] | None = None) -> argparse.ArgumentPar
     return parser
 
 
-GLOBAL_OPTIONS_WITH_VALUE = ("--domain",)
+GLOBAL_OPTIONS_WITH_VALUE = ("--domain", "--robot")
 """Options before the verb that take a value (the value is not the verb)."""
 
 
@@ -85,7 +93,8 @@ def _modules_for(argv: Sequence[str]) -> list[str]:
 
 
 def hoist_global_options(argv: Sequence[str]) -> list[str]:
-    """``argv`` with ``--domain NAME`` (or ``--domain=NAME``) moved before the verb, so that
+    """``argv`` with ``--domain NAME`` and ``--robot NAME`` (or ``--domain=NAME``, ...) moved
+    before the verb, so that
     ``osg reproduce --domain franka-kitchen`` means ``osg --domain franka-kitchen
     reproduce``."""
     words, hoisted = list(argv), []
@@ -113,6 +122,32 @@ def check_domain_name(name: str) -> None:
     lookup(dict.fromkeys(domain_names()), name, "domain", lambda m: UsageError(f"--domain: {m}"))
 
 
+def check_robot_name(name: str | None) -> None:
+    """``--robot`` (any verb) names a registered robot.
+
+    Raises:
+        UsageError: naming the option, the value and the known robots.
+    """
+    if name is None:
+        return
+    from osg_control.robots.registry import robot_names
+
+    lookup(dict.fromkeys(robot_names()), name, "robot", lambda m: UsageError(f"--robot: {m}"))
+
+
+@contextlib.contextmanager
+def selected_robot(args: argparse.Namespace) -> Iterator[None]:
+    """Run the command with ``--robot``'s robot in the domain (``Domain.with_robot``): every
+    ``get_domain`` of the domain gives it while the command runs, in forked workers too."""
+    if args.robot is None or args.command in ("domains", "robots"):
+        yield
+        return
+    from osg_control.domain.registry import domain_override, get_domain
+
+    with domain_override(get_domain(args.domain).with_robot(args.robot)):
+        yield
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     """Entry point; returns the process exit code (``errors.EXIT_CODES``: 0 success, 1 an
     osg-control error, 2 a bad command-line value, 3 no plan, 4 no answer within the
@@ -125,8 +160,10 @@ def main(argv: Sequence[str] | None = None) -> int:
             parser.print_help()
             return 0
         check_domain_name(args.domain)
+        check_robot_name(args.robot)
         check_args(args)
-        outcome.code = int(args.func(args) or 0)
+        with selected_robot(args):
+            outcome.code = int(args.func(args) or 0)
     return outcome.code
 
 

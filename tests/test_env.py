@@ -14,13 +14,13 @@ import pytest
 from gymnasium.utils.env_checker import check_env
 
 from osg_control.control.ik import IKConfig, joint_reset_controller
-from osg_control.control.robot import HOME_Q
 from osg_control.control.rotations import rotation_error
 from osg_control.environment.arm_env import ACTION_BOUNDS, OBS_DIM, EnvConfig
 from osg_control.kitchen.env import KitchenEnv
 from osg_control.kitchen.skills import NODES, TOP_DOWN_QUAT
 from osg_control.kitchen.world import CUBE_HALF_SIZE, world_facts, world_state_from_array
 from osg_control.perception.spec import PerceptionSpec
+from osg_control.robots.panda import PANDA
 
 ZERO_ACTION = np.zeros(7)
 
@@ -206,11 +206,11 @@ def test_diverged_physics_terminates_with_reason(env: KitchenEnv, in_log_dir: No
 # ------------------------------------------------------------------ joint reset
 def test_joint_reset_in_sim(env: KitchenEnv) -> None:
     env.reset(seed=0)
-    posture = np.asarray(env.config.ik.posture)
+    posture = env.ik.posture
     pos, rot = env.tcp_pose()
     # Park the arm elsewhere on the self-motion manifold of this TCP pose.
-    away = HOME_Q + np.array([0.6, 0.0, -0.6, 0.0, 0.4, 0.0, -0.4])
-    pusher = joint_reset_controller(IKConfig(posture=tuple(away)))
+    away = np.array(PANDA.home_q) + np.array([0.6, 0.0, -0.6, 0.0, 0.4, 0.0, -0.4])
+    pusher = joint_reset_controller(PANDA, IKConfig(posture=tuple(away)))
     q = env.arm_q
     for _ in range(40):
         q = pusher.reset_step(q, pos, rot)

@@ -12,20 +12,23 @@ import pytest
 import qpsolvers
 from pink.limits import ConfigurationLimit, VelocityLimit
 from scipy.spatial.transform import Rotation
+from toy_robot import TOY
 
+from osg_control.control.description import RobotDescription
 from osg_control.control.ik import (
     DiffIKController,
     IKConfig,
-    MinkBackend,
-    PinocchioBackend,
     joint_reset_controller,
     solve_ik,
 )
-from osg_control.control.robot import HOME_Q, TCP_FRAME, TCP_SITE
+from osg_control.control.ik_backends import MinkBackend, PinocchioBackend
 from osg_control.control.rotations import rotation_error, rotation_step
 from osg_control.errors import ControllerError
+from osg_control.robots.panda import PANDA
 
 BACKEND_NAMES = ("mink", "pinocchio")
+HOME_Q = np.array(PANDA.home_q)
+TCP_FRAME, TCP_SITE = PANDA.tcp.frame, PANDA.tcp.site
 SHOULDER = np.array([0.0, 0.0, 0.333])
 LIMIT_TOL = 1e-9
 """Slack on joint position [rad] and velocity [rad/s] limits: DAQP's primal tolerance is
@@ -37,13 +40,13 @@ OSQP_TOL = 1e-4
 @pytest.fixture(scope="module")
 def controllers() -> dict[str, DiffIKController]:
     """A default controller per backend (DAQP)."""
-    return {name: DiffIKController(IKConfig(backend=name)) for name in BACKEND_NAMES}
+    return {name: DiffIKController(PANDA, IKConfig(backend=name)) for name in BACKEND_NAMES}
 
 
 @pytest.fixture(scope="module")
 def reset_controllers() -> dict[str, DiffIKController]:
     """A joint-reset controller per backend."""
-    return {name: joint_reset_controller(IKConfig(backend=name)) for name in BACKEND_NAMES}
+    return {name: joint_reset_controller(PANDA, IKConfig(backend=name)) for name in BACKEND_NAMES}
 
 
 def random_cases(
@@ -54,7 +57,8 @@ def random_cases(
     lower, upper = controller.backend.lower + 0.02, controller.backend.upper - 0.02
     cases = []
     for _ in range(count):
-        q = np.clip(HOME_Q + rng.normal(0.0, 0.4, 7), lower, upper)
+        home = controller.posture
+        q = np.clip(home + rng.normal(0.0, 0.4, home.size), lower, upper)
         pos, rot = controller.tcp_pose(q)
         target_rot = rotation_step(rot, rng.normal(0.0, 0.1, 3))
         cases.append((q, pos + rng.normal(0.0, reach, 3), target_rot))
@@ -78,7 +82,8 @@ def required(value: np.ndarray | None) -> np.ndarray:
 
 def box_from_inequalities(problem: qpsolvers.Problem) -> tuple[np.ndarray, np.ndarray]:
     """The box ``lb <= dq <= ub`` implied by rows ``+-e_i dq <= h`` (mink's and Pink's form)."""
-    lower, upper = np.full(7, -np.inf), np.full(7, np.inf)
+    n = required(problem.P).shape[0]
+    lower, upper = np.full(n, -np.inf), np.full(n, np.inf)
     for row, bound in zip(required(problem.G), required(problem.h), strict=True):
         (index,) = np.flatnonzero(row)
         if row[index] > 0:
@@ -113,14 +118,16 @@ def test_backends_build_the_same_qp(
         )
 
 
-def test_qp_is_minks_build_ik() -> None:
-    """The shared assembly reproduces ``mink.build_ik`` with mink's own tasks and limits."""
+@pytest.mark.parametrize("robot", [PANDA, TOY], ids=["panda", "toy6"])
+def test_qp_is_minks_build_ik(robot: RobotDescription) -> None:
+    """The shared assembly reproduces ``mink.build_ik`` with mink's own tasks and limits,
+    for seven joints and for six."""
     config = IKConfig(backend="mink")
-    backend = MinkBackend(config)
-    controller = DiffIKController(config)
+    backend = MinkBackend(config, robot)
+    controller = DiffIKController(robot, config)
     configuration = mink.Configuration(backend.model)
     frame_task = mink.FrameTask(
-        TCP_SITE,
+        robot.tcp.site,
         "site",
         position_cost=config.position_cost,
         orientation_cost=config.orientation_cost,
@@ -128,7 +135,7 @@ def test_qp_is_minks_build_ik() -> None:
         lm_damping=config.lm_damping,
     )
     posture_task = mink.PostureTask(backend.model, cost=config.posture_cost, gain=config.gain)
-    posture_task.set_target(np.asarray(config.posture))
+    posture_task.set_target(np.array(robot.home_q))
     names = [backend.model.joint(i).name for i in range(backend.model.njnt)]
     limits = [
         mink.ConfigurationLimit(backend.model, gain=config.limit_gain),
@@ -158,22 +165,24 @@ def test_qp_is_minks_build_ik() -> None:
         )
 
 
-def test_qp_is_pinks_build_ik() -> None:
-    """The Pinocchio backend's QP is ``pink.build_ik`` with Pink's tasks and limits."""
+@pytest.mark.parametrize("robot", [PANDA, TOY], ids=["panda", "toy6"])
+def test_qp_is_pinks_build_ik(robot: RobotDescription) -> None:
+    """The Pinocchio backend's QP is ``pink.build_ik`` with Pink's tasks and limits, for
+    seven joints and for six."""
     config = IKConfig(backend="pinocchio")
-    backend = PinocchioBackend(config)
+    backend = PinocchioBackend(config, robot)
     model = backend.model
     frame_task = pink.FrameTask(
-        TCP_FRAME,
+        robot.tcp.frame,
         position_cost=config.position_cost,
         orientation_cost=config.orientation_cost,
         lm_damping=config.lm_damping,
         gain=config.gain,
     )
     posture_task = pink.PostureTask(cost=config.posture_cost, gain=config.gain)
-    posture_task.set_target(np.asarray(config.posture))
+    posture_task.set_target(np.array(robot.home_q))
     limits = [ConfigurationLimit(model, config_limit_gain=config.limit_gain), VelocityLimit(model)]
-    controller = DiffIKController(config)
+    controller = DiffIKController(robot, config)
     for hard_tcp in (False, True):
         for q, target_pos, target_rot in random_cases(controller, 20, seed=3):
             pos, rot = controller.tcp_pose(q) if hard_tcp else (target_pos, target_rot)
@@ -213,7 +222,7 @@ def test_daqp_and_osqp(
     agrees to ``OSQP_TOL`` in full (observed <= 3e-8 rad/s).
     """
     daqp_ik = controllers[backend]
-    osqp_ik = DiffIKController(IKConfig(backend=backend, solver="osqp"))
+    osqp_ik = DiffIKController(PANDA, IKConfig(backend=backend, solver="osqp"))
     for q, pos, rot in random_cases(daqp_ik, 40, seed=4):
         v_daqp = daqp_ik.solve_velocity(q, pos, rot)
         v_osqp = osqp_ik.solve_velocity(q, pos, rot)
@@ -221,7 +230,7 @@ def test_daqp_and_osqp(
         np.testing.assert_allclose(jacobian @ v_osqp, jacobian @ v_daqp, rtol=0, atol=OSQP_TOL)
         np.testing.assert_allclose(v_osqp, v_daqp, rtol=0, atol=0.05)
     daqp_reset = reset_controllers[backend]
-    osqp_reset = joint_reset_controller(IKConfig(backend=backend, solver="osqp"))
+    osqp_reset = joint_reset_controller(PANDA, IKConfig(backend=backend, solver="osqp"))
     for q, _, _ in random_cases(daqp_ik, 40, seed=5):
         pos, rot = daqp_ik.tcp_pose(q)
         np.testing.assert_allclose(
@@ -234,11 +243,11 @@ def test_daqp_and_osqp(
 
 def test_osqp_solves_are_independent_of_history() -> None:
     """The reused OSQP workspace gives a fresh one's answer (to rounding: no warm start)."""
-    used = DiffIKController(IKConfig(solver="osqp"))
+    used = DiffIKController(PANDA, IKConfig(solver="osqp"))
     cases = random_cases(used, 10, seed=6)
     for q, pos, rot in cases[1:]:
         used.solve_velocity(q, pos, rot)
-    fresh = DiffIKController(IKConfig(solver="osqp"))
+    fresh = DiffIKController(PANDA, IKConfig(solver="osqp"))
     np.testing.assert_allclose(
         used.solve_velocity(*cases[0]), fresh.solve_velocity(*cases[0]), rtol=0, atol=1e-12
     )
@@ -249,10 +258,10 @@ def test_mink_kinematics_reused_only_at_the_same_q() -> None:
     already, and redoes it for any other ``q``: every answer equals a fresh backend's bit
     for bit, whatever was asked before (a pose then a residual at the same q, as a relative
     step does, or a residual at another q, including one edited in place)."""
-    used = MinkBackend(IKConfig())
-    cases = random_cases(DiffIKController(), 6, seed=11)
+    used = MinkBackend(IKConfig(), PANDA)
+    cases = random_cases(DiffIKController(PANDA), 6, seed=11)
     for q, pos, rot in cases:
-        fresh = MinkBackend(IKConfig())
+        fresh = MinkBackend(IKConfig(), PANDA)
         for got, want in zip(used.tcp_pose(q), fresh.tcp_pose(q), strict=True):
             np.testing.assert_array_equal(got, want)
         for got, want in zip(
@@ -265,7 +274,7 @@ def test_mink_kinematics_reused_only_at_the_same_q() -> None:
     moved[3] += 0.1  # the same array, edited: not the configuration's q any more
     for got, want in zip(
         used.frame_residual(moved, pos, rot),
-        MinkBackend(IKConfig()).frame_residual(moved, pos, rot),
+        MinkBackend(IKConfig(), PANDA).frame_residual(moved, pos, rot),
         strict=True,
     ):
         np.testing.assert_array_equal(got, want)
@@ -365,12 +374,12 @@ def test_reset_step_holds_tcp_and_approaches_posture(
     # Move the joints away from home along the self-motion manifold of the home TCP pose,
     # by a joint reset toward another posture.
     away = HOME_Q + np.array([0.6, 0.0, -0.6, 0.0, 0.4, 0.0, -0.4])
-    pusher = joint_reset_controller(replace(reset.config, posture=tuple(away)))
+    pusher = joint_reset_controller(PANDA, replace(reset.config, posture=tuple(away)))
     pos, rot = reset.tcp_pose(HOME_Q)
     q = HOME_Q.copy()
     for _ in range(40):
         q = pusher.reset_step(q, pos, rot)
-    posture = np.asarray(reset.config.posture)
+    posture = reset.posture
     distances = [float(np.linalg.norm(q - posture))]
     assert distances[0] > 0.3
     for _ in range(20):
@@ -436,8 +445,15 @@ def test_bad_inputs_raise_controller_error(controllers: dict[str, DiffIKControll
 
 @pytest.mark.parametrize(
     "options",
-    [{"backend": "drake"}, {"solver": "quadprog-typo"}, {"gain": 0.0}, {"posture": (0.0,) * 6}],
+    [{"backend": "drake"}, {"solver": "quadprog-typo"}, {"gain": 0.0}],
 )
 def test_invalid_config_raises(options: dict[str, object]) -> None:
     with pytest.raises(ControllerError):
         IKConfig(**options)  # type: ignore[arg-type]
+
+
+@pytest.mark.parametrize("backend", BACKEND_NAMES)
+def test_posture_of_another_arm_is_refused(backend: str) -> None:
+    """A posture is checked against the robot's joints when the controller is built."""
+    with pytest.raises(ControllerError, match="posture has 6 values, robot 'panda' has 7"):
+        DiffIKController(PANDA, IKConfig(backend=backend, posture=(0.0,) * 6))

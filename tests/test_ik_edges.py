@@ -7,13 +7,15 @@ import numpy as np
 import pytest
 
 from osg_control.control.ik import DiffIKController, joint_reset_controller
-from osg_control.control.robot import HOME_Q
 from osg_control.errors import ControllerError
+from osg_control.robots.panda import PANDA
+
+HOME_Q = PANDA.home_q
 
 
 @pytest.fixture(scope="module")
 def reset_ik() -> DiffIKController:
-    return joint_reset_controller()
+    return joint_reset_controller(PANDA)
 
 
 def _at_limits(ik: DiffIKController) -> list[np.ndarray]:
@@ -44,7 +46,7 @@ def test_joint_reset_at_the_limits_never_raises_and_keeps_the_tcp(reset_ik) -> N
 
 
 def test_relative_step_a_little_past_a_limit_is_solved() -> None:
-    ik = DiffIKController()
+    ik = DiffIKController(PANDA)
     q = np.array(HOME_Q, dtype=float)
     q[3] = ik.backend.upper[3] + 1e-3
     q_next = ik.relative_step(q, np.array([0.01, 0.0, 0.0, 0.0, 0.0, 0.0]))
@@ -61,13 +63,13 @@ def test_relative_step_a_little_past_a_limit_is_solved() -> None:
     ],
 )
 def test_non_rotation_targets_are_refused(rot: np.ndarray) -> None:
-    ik = DiffIKController()
+    ik = DiffIKController(PANDA)
     pos, _ = ik.tcp_pose(np.array(HOME_Q))
     with pytest.raises(ControllerError, match="orthonormal"):
         ik.solve_velocity(np.array(HOME_Q), pos, rot)
 
 
 def test_a_proper_rotation_is_accepted() -> None:
-    ik = DiffIKController()
+    ik = DiffIKController(PANDA)
     pos, rot = ik.tcp_pose(np.array(HOME_Q))
     assert np.all(np.isfinite(ik.solve_velocity(np.array(HOME_Q), pos, rot)))

@@ -9,14 +9,15 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from osg_control.control.robot import ARM_JOINTS, urdf_velocity_limits
 from osg_control.control.servo import DAMPING_SUFFIX, SPEED_MARGIN
 from osg_control.domain.registry import get_domain
 from osg_control.evaluation.joint_speeds import full_speed_peak, peak_joint_speed
 from osg_control.execution.defaults import load_defaults
 from osg_control.kitchen.env import EnvConfig, KitchenEnv
+from osg_control.robots.panda import PANDA
 
 KITCHEN = get_domain("kitchen")
+ARM_JOINTS = PANDA.arm.names
 
 PEAK_TOLERANCE = 1.0 + 1e-9
 """Allowed peak |qvel| / limit: the limit itself, up to the rounding of ``limit / limit``."""
@@ -24,7 +25,7 @@ PEAK_TOLERANCE = 1.0 + 1e-9
 
 def test_the_capped_stiffness_caps_the_servos_velocity_set_point_below_the_limits() -> None:
     model = KitchenEnv().model
-    limits = urdf_velocity_limits()
+    limits = np.array(PANDA.arm.velocity)
     stiffness = [model.actuator(joint).id for joint in ARM_JOINTS]
     damping = [model.actuator(joint + DAMPING_SUFFIX).id for joint in ARM_JOINTS]
     cap = model.actuator_forcerange[stiffness, 1]

@@ -1,22 +1,29 @@
-"""The package's layering: the generic core imports no domain and names none of its things,
-and no layer imports one above it."""
+"""The package's layering: the generic core imports no domain and names none of its things
+nor any robot, and no layer imports one above it."""
 
 from __future__ import annotations
 
 import ast
+import re
 from pathlib import Path
 
 import pytest
 
 from osg_control.domain.registry import get_domain
+from osg_control.robots.registry import robot_names
 
 PACKAGE = Path(__file__).resolve().parents[1] / "osg_control"
 DOMAIN_PACKAGES = ("kitchen", "franka")
 """Sub-packages that are domains (the only places that may name their things)."""
+ROBOT_PACKAGE = "robots"
+"""The sub-package of robot modules: with the domains, the only place that names a robot;
+the core may import its registry and nothing else of it."""
+ROBOT_WORDS = ("panda",)
+"""Words that name a robot besides the registered robots' names (``robot_names``)."""
 LAYERS: dict[str, int] = {
     "errors": 0, "paths": 0, "seeding": 0, "registration": 0, "io_safety": 0, "json_files": 0,
     "__init__": 0,
-    "control": 1, "domain": 1, "parallel": 1, "perception": 1,
+    "control": 1, "domain": 1, "parallel": 1, "perception": 1, "robots": 1,
     "environment": 2,
     "data": 3,
     "learning": 4, "planning": 4,
@@ -71,7 +78,7 @@ def _strings(tree: ast.AST) -> list[tuple[int, str]]:
 
 
 def _core() -> list[tuple[str, Path]]:
-    return [(m, p) for m, p in _modules() if _layer(m) not in DOMAIN_PACKAGES]
+    return [(m, p) for m, p in _modules() if _layer(m) not in (*DOMAIN_PACKAGES, ROBOT_PACKAGE)]
 
 
 @pytest.mark.parametrize("module,path", _core(), ids=[m for m, _ in _core()])
@@ -79,6 +86,45 @@ def test_core_module_imports_no_domain(module: str, path: Path) -> None:
     tree = ast.parse(path.read_text())
     for name in _imports(tree):
         assert _layer(name) not in DOMAIN_PACKAGES, f"{module} imports {name}"
+
+
+@pytest.mark.parametrize("module,path", _core(), ids=[m for m, _ in _core()])
+def test_core_module_imports_no_robot(module: str, path: Path) -> None:
+    """The core reaches a robot through the registry only (``robots.registry.get_robot``)."""
+    for name in _imports(ast.parse(path.read_text())):
+        if _layer(name) == ROBOT_PACKAGE:
+            assert name.startswith("osg_control.robots.registry"), f"{module} imports {name}"
+
+
+def _robot_words_in(text: str) -> list[tuple[int, str]]:
+    """(line, word) of every robot word in ``text``: code, strings, comments and docs."""
+    words = {*ROBOT_WORDS, *robot_names()}
+    patterns = {w: re.compile(rf"(?<![a-z]){re.escape(w)}(?![a-z])") for w in sorted(words)}
+    return [
+        (number, word)
+        for number, line in enumerate(text.lower().splitlines(), 1)
+        for word, pattern in patterns.items()
+        if pattern.search(line)
+    ]
+
+
+def test_core_names_no_robot() -> None:
+    """No core module, command line help included, names a robot: each one is data in
+    ``osg_control.robots`` (``control.description.RobotDescription``)."""
+    offending = [
+        f"{path.relative_to(PACKAGE)}:{line}: {word}"
+        for _, path in _core()
+        for line, word in _robot_words_in(path.read_text())
+    ]
+    assert not offending, "\n".join(offending)
+
+
+def test_the_robot_word_check_finds_the_old_welded_panda() -> None:
+    """The check refuses what the core held before robots were descriptions (e88d9eb's
+    ``control/robot.py``, ``with_panda`` in ``control/scene_model.py``)."""
+    old = 'ARM_JOINTS = tuple(f"panda_joint{i}" for i in range(1, 8))\ndef with_panda(): ...\n'
+    assert _robot_words_in(old) == [(1, "panda"), (2, "panda")]
+    assert _robot_words_in("import pandas  # a word that holds a robot's name") == []
 
 
 def test_no_layer_imports_one_above_it() -> None:

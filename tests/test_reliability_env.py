@@ -11,7 +11,6 @@ import mujoco
 import numpy as np
 import pytest
 
-from osg_control.control.robot import urdf_velocity_limits
 from osg_control.control.servo import saturate_joint_speeds
 from osg_control.domain.registry import get_domain
 from osg_control.environment.arm_env import ACTION_BOUNDS, EnvConfig
@@ -22,6 +21,7 @@ from osg_control.execution.executor import Executor
 from osg_control.franka.arm import FrankaConfig
 from osg_control.kitchen.env import KitchenEnv
 from osg_control.perception.spec import PerceptionSpec
+from osg_control.robots.panda import PANDA
 
 KITCHEN = get_domain("kitchen")
 NAN = float("nan")
@@ -245,7 +245,7 @@ def test_saturation_sets_the_speed_to_the_limit_and_the_position_to_match(
     kitchen: KitchenEnv,
 ) -> None:
     kitchen.reset(seed=0)
-    limits = urdf_velocity_limits()
+    limits = np.array(PANDA.arm.velocity)
     h = kitchen.model.opt.timestep
     qvel = kitchen.data.qvel[kitchen._arm_dof]
     qvel[:] = limits * np.array([0.5, -0.9, 1.5, -2.0, 1.0, 0.0, -1.0])
@@ -261,7 +261,7 @@ def test_saturation_sets_the_speed_to_the_limit_and_the_position_to_match(
 def _servo_alone(env: KitchenEnv, target: np.ndarray) -> tuple[np.ndarray, np.ndarray, bool]:
     """The capped drive's substeps one by one without the saturation: the final qpos, qvel,
     and whether an arm joint ran faster than its limit on a substep."""
-    limits = urdf_velocity_limits()
+    limits = np.array(PANDA.arm.velocity)
     exceeded = False
     env.data.ctrl[env._arm_act] = target
     for _ in range(env.n_substeps):
@@ -314,7 +314,7 @@ def test_a_control_step_in_one_call_is_the_substep_loop_bit_for_bit() -> None:
 def test_full_speed_joint_motion_per_step_stays_within_the_limits() -> None:
     env = KitchenEnv()
     env.reset(seed=0, options={"node": "home"})
-    limits = urdf_velocity_limits()
+    limits = np.array(PANDA.arm.velocity)
     step_time = env.n_substeps * env.model.opt.timestep
     for _ in range(FULL_SPEED_STEPS):
         before = env.arm_q

@@ -11,11 +11,17 @@ import numpy as np
 import pinocchio as pin
 import pytest
 
-from osg_control.control import robot
-from osg_control.control.ik import IKConfig, MinkBackend, PinocchioBackend
-from osg_control.control.robot import ARM_JOINTS, HOME_Q, TCP_FRAME, TCP_SITE
+from osg_control.control import robot_model
+from osg_control.control.ik import IKConfig
+from osg_control.control.ik_backends import MinkBackend, PinocchioBackend
+from osg_control.control.robot_model import HOME_KEY, robot_spec
 from osg_control.errors import ModelNotFoundError, OSGError
 from osg_control.kitchen import scene
+from osg_control.robots.panda import PANDA, URDF, panda_pinocchio_arm
+
+ARM_JOINTS = PANDA.arm.names
+HOME_Q = np.array(PANDA.home_q)
+TCP_FRAME, TCP_SITE = PANDA.tcp.frame, PANDA.tcp.site
 
 N_CONFIGURATIONS = 100
 KINEMATICS_TOL = 1e-9
@@ -24,20 +30,20 @@ KINEMATICS_TOL = 1e-9
 @pytest.fixture(scope="module")
 def mujoco_arm() -> tuple[mujoco.MjModel, mujoco.MjData]:
     """The arm-only MuJoCo model the mink backend uses."""
-    model = MinkBackend(IKConfig(backend="mink")).model
+    model = MinkBackend(IKConfig(backend="mink"), PANDA).model
     return model, mujoco.MjData(model)
 
 
 @pytest.fixture(scope="module")
 def pinocchio_arm() -> tuple[pin.Model, pin.Data]:
     """The arm-only Pinocchio model the Pinocchio backend uses."""
-    model = PinocchioBackend(IKConfig(backend="pinocchio")).model
+    model = PinocchioBackend(IKConfig(backend="pinocchio"), PANDA).model
     return model, model.createData()
 
 
 def random_configurations(count: int, seed: int) -> np.ndarray:
     """``count`` arm configurations uniform within the URDF's joint limits."""
-    limits = robot.load_pinocchio_arm()
+    limits = panda_pinocchio_arm()
     rng = np.random.default_rng(seed)
     return rng.uniform(limits.lowerPositionLimit, limits.upperPositionLimit, (count, 7))
 
@@ -94,9 +100,9 @@ def test_tcp_pose_and_jacobian_agree_at_random_configurations(
 def test_kitchen_arm_matches_ik_model(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
     """The simulated arm (mounted at the kitchen's origin) has the IK model's kinematics."""
     monkeypatch.chdir(tmp_path)  # MuJoCo writes its warning log to the working directory
-    model = scene.build_kitchen_model()
+    model = scene.build_kitchen_model(PANDA)
     data = mujoco.MjData(model)
-    pin_model = robot.load_pinocchio_arm()
+    pin_model = panda_pinocchio_arm()
     pin_data = pin_model.createData()
     frame = pin_model.getFrameId(TCP_FRAME)
     qpos_index = np.array([model.joint(name).qposadr[0] for name in ARM_JOINTS])
@@ -112,8 +118,8 @@ def test_kitchen_arm_matches_ik_model(tmp_path: Path, monkeypatch: pytest.Monkey
 
 
 def test_home_keyframe_is_home_q() -> None:
-    model = robot.panda_spec(with_fingers=True).compile()
-    key = model.key(robot.HOME_KEY)
+    model = robot_spec(PANDA, with_gripper=True).compile()
+    key = model.key(HOME_KEY)
     np.testing.assert_allclose(key.qpos[:7], HOME_Q)
     np.testing.assert_allclose(key.ctrl[:7], HOME_Q)
     np.testing.assert_array_equal(key.ctrl[7:14], 0.0)  # the damping actuators hold still
@@ -123,19 +129,20 @@ def test_home_keyframe_is_home_q() -> None:
 # ------------------------------------------------------------------ model lookup errors
 @pytest.fixture
 def fresh_find_panda() -> Iterator[None]:
-    """Clear ``find_panda``'s cache before and after, so the real URDF is found again."""
-    robot.find_panda.cache_clear()
+    """Clear ``find_example_robot_data``'s cache before and after, so the real URDF is found
+    again."""
+    robot_model.find_example_robot_data.cache_clear()
     yield
-    robot.find_panda.cache_clear()
+    robot_model.find_example_robot_data.cache_clear()
 
 
 def test_missing_urdf_names_every_path_searched(
     tmp_path: Path, monkeypatch: pytest.MonkeyPatch, fresh_find_panda: None
 ) -> None:
     roots = [tmp_path / "first", tmp_path / "second"]
-    monkeypatch.setattr(robot, "_candidate_roots", lambda: roots)
+    monkeypatch.setattr(robot_model, "_example_robot_data_roots", lambda: roots)
     with pytest.raises(ModelNotFoundError) as caught:
-        robot.find_panda()
+        robot_model.find_example_robot_data(URDF)
     message = str(caught.value)
     for root in roots:
         assert str(root / "robots" / "panda_description" / "urdf" / "panda.urdf") in message
@@ -149,11 +156,11 @@ def test_missing_urdf_under_env_var_is_listed(
 ) -> None:
     """``EXAMPLE_ROBOT_DATA_DIR`` is searched first; an empty one shows in the error."""
     monkeypatch.setenv("EXAMPLE_ROBOT_DATA_DIR", str(tmp_path))
-    real_roots = robot._candidate_roots
+    real_roots = robot_model._example_robot_data_roots
     assert real_roots()[0] == tmp_path
-    monkeypatch.setattr(robot, "_candidate_roots", lambda: real_roots()[:1])
+    monkeypatch.setattr(robot_model, "_example_robot_data_roots", lambda: real_roots()[:1])
     with pytest.raises(ModelNotFoundError, match=str(tmp_path)):
-        robot.find_panda()
+        robot_model.find_example_robot_data(URDF)
 
 
 def test_env_var_urdf_takes_precedence(
@@ -163,7 +170,7 @@ def test_env_var_urdf_takes_precedence(
     urdf.parent.mkdir(parents=True)
     urdf.write_text("<robot name='panda'/>")
     monkeypatch.setenv("EXAMPLE_ROBOT_DATA_DIR", str(tmp_path))
-    assert robot.find_panda().urdf == urdf
+    assert robot_model.find_example_robot_data(URDF) == urdf
 
 
 def test_missing_kitchen_scene_names_every_candidate(
@@ -175,7 +182,7 @@ def test_missing_kitchen_scene_names_every_candidate(
     # The repository fallback is PACKAGE_DIR.parent / "robots": point it at a bare folder.
     monkeypatch.setattr(scene, "PACKAGE_DIR", tmp_path / "checkout" / "osg_control")
     with pytest.raises(ModelNotFoundError) as caught:
-        scene.build_kitchen_model()
+        scene.build_kitchen_model(PANDA)
     message = str(caught.value)
     assert str(empty / "kitchen.xml") in message
     assert str(tmp_path / "checkout" / "robots" / "kitchen.xml") in message

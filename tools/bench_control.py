@@ -35,10 +35,10 @@ import mujoco
 import numpy as np
 
 from osg_control.control.ik import DiffIKController, IKConfig
-from osg_control.control.robot import HOME_Q
 from osg_control.control.rotations import rotation_step
 from osg_control.environment.arm_env import ACTION_BOUNDS
 from osg_control.kitchen.env import KitchenEnv
+from osg_control.robots.panda import PANDA
 
 COMBINATIONS: tuple[tuple[str, str], ...] = (
     ("mink", "daqp"),
@@ -63,7 +63,7 @@ def ik_problems(
     lower, upper = controller.backend.lower + 0.05, controller.backend.upper - 0.05
     problems = []
     for _ in range(count):
-        q = np.clip(HOME_Q + rng.normal(0.0, 0.2, 7), lower, upper)
+        q = np.clip(np.array(PANDA.home_q) + rng.normal(0.0, 0.2, 7), lower, upper)
         pos, rot = controller.tcp_pose(q)
         offset = rng.uniform(-0.01, 0.01, 3)
         problems.append((q, pos + offset, rotation_step(rot, rng.normal(0.0, 0.03, 3))))
@@ -94,7 +94,7 @@ def bench_ik(solves: int, warmup: int, seed: int) -> dict[str, dict[str, float]]
     """Median and p90 microseconds per solve for every backend/solver combination."""
     results = {}
     for backend, solver in COMBINATIONS:
-        controller = DiffIKController(IKConfig(backend=backend, solver=solver))
+        controller = DiffIKController(PANDA, IKConfig(backend=backend, solver=solver))
         problems = ik_problems(controller, solves + warmup, np.random.default_rng(seed))
         for q, pos, rot in problems[:warmup]:
             controller.solve_velocity(q, pos, rot)

@@ -107,6 +107,7 @@ def _domain_values(args: argparse.Namespace) -> None:
         domain = get_domain(args.domain)
     except DomainError as err:
         raise UsageError(f"--domain: {err}") from None
+    _robot(args, domain)
     start = getattr(args, "start", None)
     if start is not None and start != "random" and start not in domain.nodes:
         raise UsageError(
@@ -124,6 +125,31 @@ def _domain_values(args: argparse.Namespace) -> None:
                 f"{', '.join(domain.facts)}"
             )
     _models(args, domain)
+
+
+def _robot(args: argparse.Namespace, domain: Domain) -> None:
+    """``--robot`` is a robot the domain's env can drive, whose description matches its
+    models; Ray's workers rebuild the domain by name, so they run its own robot only.
+
+    Raises:
+        UsageError: the domain drives its own arm, or ``--backend ray`` with another robot.
+        RobotDescriptionError: the robot's description does not match its models (exit 1).
+    """
+    robot = getattr(args, "robot", None)
+    if robot is None or robot == domain.robot:
+        return
+    if domain.robot is None:
+        raise UsageError(
+            f"--robot: domain {domain.name!r} drives its own arm; no robot can be chosen"
+        )
+    if getattr(args, "backend", None) == "ray":
+        raise UsageError(
+            f"--robot {robot} with --backend ray: Ray workers rebuild domain {domain.name!r} "
+            f"with its own robot ({domain.robot}); use --backend local"
+        )
+    from osg_control.robots.registry import get_robot
+
+    get_robot(robot)
 
 
 def _models(args: argparse.Namespace, domain: Domain) -> None:

@@ -17,27 +17,29 @@ QPSolver = Callable[[qpsolvers.Problem], "np.ndarray | None"]
 """Solves a box- and equality-constrained QP; None when it finds no solution."""
 
 
-def qp_solver(name: str, osqp_eps: float) -> QPSolver:
-    """A ``SOLVERS`` solver (``osqp_eps``: OSQP's absolute and relative tolerance)."""
-    return DaqpSolver() if name == "daqp" else OsqpSolver(osqp_eps)
+def qp_solver(name: str, osqp_eps: float, n: int) -> QPSolver:
+    """A ``SOLVERS`` solver for ``n`` unknowns (``osqp_eps``: OSQP's absolute and relative
+    tolerance)."""
+    return DaqpSolver(n) if name == "daqp" else OsqpSolver(osqp_eps, n)
 
 
 class DaqpSolver:
     """DAQP called directly: the box as simple bounds, the equality rows with sense 5
-    (DAQP's default settings)."""
+    (DAQP's default settings), for ``n`` unknowns."""
 
-    def __init__(self) -> None:
+    def __init__(self, n: int) -> None:
         import daqp
 
         self._solve = daqp.solve
-        self._no_rows = np.zeros((0, 7))
+        self._n = n
+        self._no_rows = np.zeros((0, n))
         self._senses: dict[int, np.ndarray] = {}
 
     def _sense(self, n_eq: int) -> np.ndarray:
         sense = self._senses.get(n_eq)
         if sense is None:
-            sense = np.zeros(7 + n_eq, dtype=np.intc)
-            sense[7:] = 5  # equality rows
+            sense = np.zeros(self._n + n_eq, dtype=np.intc)
+            sense[self._n :] = 5  # equality rows
             self._senses[n_eq] = sense
         return sense
 
@@ -60,10 +62,10 @@ class OsqpSolver:
     updated (``Px``, ``q``, ``Ax``, ``l``, ``u``): the sparsity pattern never changes, so
     the expensive Python-side setup runs once. Warm starting is off and the step size
     ``rho`` is reset before each solve, so a solve does not depend on the previous ones
-    (beyond rounding).
+    (beyond rounding). For ``n`` unknowns.
     """
 
-    def __init__(self, eps: float) -> None:
+    def __init__(self, eps: float, n: int) -> None:
         import osqp
 
         self._osqp = osqp
@@ -77,19 +79,21 @@ class OsqpSolver:
             "warm_starting": False,
             "verbose": False,
         }
-        # Upper triangle of the 7x7 Hessian in CSC (column-major) order.
-        cols, rows = np.tril_indices(7)
+        # Upper triangle of the n x n Hessian in CSC (column-major) order.
+        self._n = n
+        cols, rows = np.tril_indices(n)
         self._p_rows, self._p_cols = rows, cols
         self._p_pattern = sparse.csc_matrix(
-            (np.ones(rows.size), rows, np.concatenate([[0], np.cumsum(np.arange(1, 8))])),
-            shape=(7, 7),
+            (np.ones(rows.size), rows, np.concatenate([[0], np.cumsum(np.arange(1, n + 1))])),
+            shape=(n, n),
         )
         self._workspaces: dict[int, Any] = {}
 
     def __call__(self, problem: qpsolvers.Problem) -> np.ndarray | None:
         n_eq = 0 if problem.A is None else problem.A.shape[0]
         upper, lower = problem.ub, problem.lb
-        columns = np.ones((1 + n_eq, 7))  # column j of [I; A]: 1 at row j, then A[:, j]
+        n = self._n
+        columns = np.ones((1 + n_eq, n))  # column j of [I; A]: 1 at row j, then A[:, j]
         if problem.A is not None:
             columns[1:] = problem.A
             upper = np.concatenate([upper, problem.b])
@@ -98,9 +102,9 @@ class OsqpSolver:
         a_data = columns.ravel(order="F")
         solver = self._workspaces.get(n_eq)
         if solver is None:
-            indices = np.concatenate([[j, *range(7, 7 + n_eq)] for j in range(7)])
+            indices = np.concatenate([[j, *range(n, n + n_eq)] for j in range(n)])
             a_matrix = sparse.csc_matrix(
-                (a_data, indices, np.arange(8) * (1 + n_eq)), shape=(7 + n_eq, 7)
+                (a_data, indices, np.arange(n + 1) * (1 + n_eq)), shape=(n + n_eq, n)
             )
             p_matrix = self._p_pattern.copy()
             p_matrix.data = p_data

@@ -14,13 +14,13 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable, Mapping
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
+from functools import partial
 from pathlib import Path
 from typing import Any, Protocol
 
 import numpy as np
 
-from osg_control.control.rate import CONTROL_HZ
 from osg_control.domain.benchmark import Benchmark, validate_benchmark
 from osg_control.domain.spec import Node, ObjectFrame, SkillSpec, check_skill_fields
 from osg_control.errors import DomainError, SkillSpecError, lookup
@@ -135,8 +135,14 @@ class Domain:
             ``round(-ln p * 1000)`` (0: plans minimise failure only; a domain whose env has
             an episode step limit prefers the shorter of two likely plans with it).
         dataset_layouts: outside data-set layouts it imports (``DatasetLayout``).
-        control_hz: its env's control rate [Hz], one action per ``1 / control_hz`` s
-            (default: the core ``ArmEnv``'s); data-set exports time their frames by it.
+        own_control_hz: the control rate [Hz] of an env that drives its own arm (``robot``
+            None); a robot's env steps at its robot's rate. ``control_hz`` gives either;
+            data-set exports and recordings time their frames by it.
+        robot: the registered robot (``osg_control.robots``) its env drives by default,
+            which ``make_env(robot=NAME)`` replaces; None: its env drives its own arm and no
+            other robot can be chosen.
+        robot_is_default: whether ``robot`` is the domain's own (False after
+            ``with_robot`` chose another).
     """
 
     name: str
@@ -162,12 +168,57 @@ class Domain:
     action_bounds: tuple[float, ...] = (0.02, 0.02, 0.02, 0.1, 0.1, 0.1, 1.0)
     step_cost: float = 0.0
     dataset_layouts: tuple[DatasetLayout, ...] = ()
-    control_hz: float = CONTROL_HZ
+    own_control_hz: float | None = None
+    robot: str | None = None
+    robot_is_default: bool = True
     skills_by_name: dict[str, SkillSpec] = field(init=False, repr=False, compare=False)
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "skills_by_name", {s.name: s for s in self.skills})
         validate_domain(self)
+
+    def with_robot(self, robot: str) -> Domain:
+        """This domain with its env built around the registered robot ``robot``.
+
+        Another robot than the domain's own has its own artifacts (``cache_name``) and the
+        shipped defaults of ``<defaults_dir>-<robot>`` if the domain ships them (none
+        otherwise: the default robot's policies do not drive another arm).
+
+        Raises:
+            DomainError: the domain's env drives its own arm (``robot`` is None).
+        """
+        if self.robot is None:
+            raise DomainError(
+                f"domain {self.name!r}: its env drives its own arm; no robot can be chosen"
+            )
+        if robot == self.robot:
+            return self
+        defaults = None
+        if self.defaults_dir is not None:
+            defaults = self.defaults_dir.with_name(f"{self.defaults_dir.name}-{robot}")
+        return replace(
+            self,
+            robot=robot,
+            robot_is_default=False,
+            make_env=partial(self.make_env, robot=robot),
+            defaults_dir=defaults if defaults is not None and defaults.is_dir() else None,
+        )
+
+    @property
+    def control_hz(self) -> float:
+        """Its env's control rate [Hz]: one action per ``1 / control_hz`` s."""
+        if self.own_control_hz is not None:
+            return self.own_control_hz
+        assert self.robot is not None  # validate_domain: one of the two is set
+        from osg_control.robots.registry import get_robot
+
+        return get_robot(self.robot).control_hz
+
+    @property
+    def cache_name(self) -> str:
+        """The folder of its artifacts under the cache: ``name``, or ``name@robot`` with
+        another robot than its own (``with_robot``)."""
+        return self.name if self.robot_is_default else f"{self.name}@{self.robot}"
 
     def skill(self, name: str) -> SkillSpec:
         """Look a skill up by name.
@@ -259,6 +310,7 @@ class Domain:
             "watched_facts": sorted(self.watched_facts),
             "env_id": self.env_id,
             "perceptions": list(self.perceptions),
+            "robot": self.robot,
         }
 
 
@@ -274,8 +326,14 @@ def validate_domain(domain: Domain) -> None:
             raise DomainError(f"{where}: field {attr!r} is empty")
     if not callable(domain.facts_of) or not callable(domain.make_env):
         raise DomainError(f"{where}: fields 'facts_of' and 'make_env' must be callable")
-    if not (math.isfinite(domain.control_hz) and domain.control_hz > 0):
-        raise DomainError(f"{where}: field 'control_hz' must be a positive rate [Hz]")
+    rate = domain.own_control_hz
+    if (domain.robot is None) == (rate is None):
+        raise DomainError(
+            f"{where}: set exactly one of 'robot' (a robot's env) and 'own_control_hz' "
+            "(an env that drives its own arm)"
+        )
+    if rate is not None and not (math.isfinite(rate) and rate > 0):
+        raise DomainError(f"{where}: field 'own_control_hz' must be a positive rate [Hz]")
     facts = set(domain.facts)
     names = [s.name for s in domain.skills]
     duplicates = sorted({n for n in names if names.count(n) > 1})

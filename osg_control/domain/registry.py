@@ -8,7 +8,8 @@ notebook). Domains are built on first use and cached.
 
 from __future__ import annotations
 
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
+from contextlib import contextmanager
 from importlib.metadata import entry_points
 
 from osg_control.domain.base import Domain
@@ -24,6 +25,22 @@ def register_domain(name: str, factory: Callable[[], Domain]) -> None:
     """Make a domain available under ``name`` (replacing one of the same name)."""
     _FACTORIES[name] = factory
     _BUILT.pop(name, None)
+
+
+@contextmanager
+def domain_override(domain: Domain) -> Iterator[Domain]:
+    """Within the block, ``get_domain(domain.name)`` gives ``domain`` (e.g. the domain with
+    the robot ``osg --robot`` chose), in this process and in worker processes forked inside
+    the block; the registry is as before after it."""
+    saved = _BUILT.get(domain.name)
+    _BUILT[domain.name] = domain
+    try:
+        yield domain
+    finally:
+        if saved is None:
+            _BUILT.pop(domain.name, None)
+        else:
+            _BUILT[domain.name] = saved
 
 
 def _installed() -> dict[str, Callable[[], Callable[[], Domain]]]:

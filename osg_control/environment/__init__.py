@@ -1,1 +1,1 @@
-"""Environment layer: the Panda driven by relative TCP commands, in any domain's scene."""
+"""Environment layer: a robot arm driven by relative TCP commands, in any domain's scene."""

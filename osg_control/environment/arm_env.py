@@ -1,4 +1,4 @@
-"""``ArmEnv``: the Panda in a domain's scene as a Gymnasium env with the paper's state and action.
+"""``ArmEnv``: a robot arm in a domain's scene as a Gymnasium env with the paper's state and action.
 
 Observation (10-D, robot base frame): ``[x, y, z, qw, qx, qy, qz, gripper command,
 grip force, finger distance]`` — TCP position [m], TCP orientation (``w, x, y, z``, sign
@@ -10,7 +10,9 @@ Action (7-D): ``[dx, dy, dz, da, db, dg, g]`` — a relative TCP command (positi
 rotation vector [rad], base frame), each clipped to ``ACTION_BOUNDS``, and a gripper
 command: ``g < -0.5`` closes, ``g > 0.5`` opens, otherwise the gripper holds.
 
-The control rate is 20 Hz (25 physics steps of 2 ms). A differential-IK QP
+The arm is a ``RobotDescription`` (``control.description``): its joints, limits, drives,
+TCP, gripper and control rate (e.g. 20 Hz: 25 physics steps of 2 ms).
+A differential-IK QP
 (``osg_control.control.ik``) turns each command into joint position targets within joint and
 velocity limits; the position servos chase them within the velocity limits on every
 physics substep (``osg_control.control.servo``). With a ``skill``, the env gives the skill's
@@ -25,141 +27,76 @@ catalogue or scene object.
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+import logging
 from functools import partial
-from typing import Any, ClassVar
+from typing import Any
 
 import gymnasium as gym
 import mujoco
 import numpy as np
 
+from osg_control.control.description import RobotDescription
 from osg_control.control.divergence import DivergenceWatch, non_finite_state
 from osg_control.control.ik import (
     DiffIKController,
-    IKConfig,
     joint_reset_controller,
     solve_ik,
 )
-from osg_control.control.robot import (
-    ARM_JOINTS,
-    CONTROL_HZ,
-    FINGER_JOINTS,
-    FINGER_OPEN,
-    HOME_KEY,
-    HOME_Q,
-    TCP_SITE,
-    substeps_per_control_step,
-)
+from osg_control.control.robot_model import GRIPPER_ACTUATOR, HOME_KEY
 from osg_control.control.servo import uncap_drive
-from osg_control.domain.frames import node_position, offsets_of
-from osg_control.domain.spec import Node, ObjectFrame, SkillSpec
+from osg_control.domain.frames import offsets_of
+from osg_control.domain.spec import Node, SkillSpec
 from osg_control.environment.actions import checked_action
+from osg_control.environment.config import (
+    ACTION_BOUNDS,
+    OBS_DIM,
+    OBS_HIGH,
+    OBS_LOW,
+    RESET_OPTIONS,
+    SIMULATED_PERCEPTIONS,
+    EnvConfig,
+    as_slice,
+    observation_bounds,
+)
 from osg_control.environment.options import (
     GRIPPER_STATES,
-    Bounds,
     check_facts_hold,
-    check_fields,
     check_names,
     check_start_options,
     choice_option,
     facts_option,
 )
 from osg_control.environment.poses import quat_rotation, sample_start_pose
+from osg_control.environment.scene_hooks import SceneHooks
 from osg_control.environment.sensing import ArmSensors
 from osg_control.environment.stepping import ArmControlStep
 from osg_control.environment.success import GRIPPER_CLOSED_CMD, GRIPPER_OPEN_CMD, success_holds
 from osg_control.errors import EnvOptionError, SimulationError
 from osg_control.perception.percept import Percept
 from osg_control.perception.sensors import noisy_world, sensor_slices
-from osg_control.perception.spec import PerceptionSpec
+
+_LOG = logging.getLogger(__name__)
 
 __all__ = [
     "ACTION_BOUNDS",
     "GRIPPER_CLOSED_CMD",
     "GRIPPER_OPEN_CMD",
+    "OBS_DIM",
+    "OBS_HIGH",
+    "OBS_LOW",
     "ArmEnv",
     "EnvConfig",
     "success_holds",
 ]
 
-OBS_DIM = 10
-ACTION_BOUNDS = np.array([0.02, 0.02, 0.02, 0.1, 0.1, 0.1, 1.0])
-"""Per-step bound of each action component: 2 cm, 0.1 rad, and the gripper's [-1, 1]."""
-OBS_LOW = np.array([-2.0, -2.0, -2.0, -1.0, -1.0, -1.0, -1.0, -1.0, 0.0, -0.01])
-OBS_HIGH = np.array([2.0, 2.0, 2.0, 1.0, 1.0, 1.0, 1.0, 1.0, 70.0, 0.1])
-"""Observation bounds: TCP position within 2 m of the base (reach 0.86 m, plus noise), a
-unit quaternion, the gripper command, its force (the actuator's 70 N force range) and the
-finger distance (0 to 8 cm, with slack for contact penetration)."""
-SIMULATED_PERCEPTIONS = ("paper", "robot", "sim")
-"""The perceptions an ``ArmEnv`` simulates (``env`` is an outside env's own observation)."""
-RESET_OPTIONS = ("node", "position", "radius", "angle", "gripper", "facts", "world", "holding")
-"""The options ``ArmEnv.reset`` knows; any other name is refused."""
 
+class ArmEnv(SceneHooks, gym.Env):
+    """A robot arm driven by relative TCP commands in a domain's scene (see module docstring).
 
-@dataclass(frozen=True)
-class EnvConfig:
-    """Options of ``KitchenEnv``.
-
-    Attributes:
-        perception: what the robot perceives and with what noise (``perception.spec``;
-            default: the paper's protocol without noise, i.e. the exact state).
-        max_steps: episode step budget (truncation); a skill's own budget wins if set;
-            None: no truncation (task execution, where the executor bounds each skill).
-        ik: the differential-IK controller's configuration.
-        start_radius: default random-start radius around the start pose [m].
-        start_angle: default random-start angle per axis [rad].
-        limit_joint_speed: keep the simulated joint speeds within the URDF velocity limits
-            on every physics substep (``control.servo``: the servo's clamped target and the
-            drive's speed saturation); off only to compare with the unlimited servo, which
-            peaks at 2.7x the limits.
-
-    Raises:
-        EnvOptionError: a field of the wrong type or outside its range (``BOUNDS``), named.
-    """
-
-    perception: PerceptionSpec = field(default_factory=PerceptionSpec)
-    max_steps: int | None = 200
-    ik: IKConfig = field(default_factory=IKConfig)
-    start_radius: float = 0.0
-    start_angle: float = 0.0
-    limit_joint_speed: bool = True
-
-    BOUNDS: ClassVar[dict[str, Bounds]] = {
-        "max_steps": Bounds(low=1, integer=True, optional=True),
-        "start_radius": Bounds(),
-        "start_angle": Bounds(),
-    }
-    """The range of each numeric field."""
-
-    def __post_init__(self) -> None:
-        check_fields(self, self.BOUNDS)
-        if not isinstance(self.limit_joint_speed, bool):
-            raise EnvOptionError(
-                f"EnvConfig.limit_joint_speed must be a bool, got {self.limit_joint_speed!r}"
-            )
-        if not isinstance(self.perception, PerceptionSpec):
-            raise EnvOptionError(
-                f"EnvConfig.perception must be a PerceptionSpec, got {self.perception!r}"
-            )
-        if not isinstance(self.ik, IKConfig):
-            raise EnvOptionError(f"EnvConfig.ik must be an IKConfig, got {self.ik!r}")
-
-
-def _as_slice(indices: list[int]) -> slice | np.ndarray:
-    """Model indices as a slice when consecutive (numpy then indexes without copying; the
-    physics loop reads the arm's joints on every substep), else as an index array."""
-    first = indices[0]
-    if indices == list(range(first, first + len(indices))):
-        return slice(first, first + len(indices))
-    return np.array(indices)
-
-
-class ArmEnv(gym.Env):
-    """The Panda driven by relative TCP commands in a domain's scene (see module docstring).
-
-    Subclasses implement ``build_model``, ``read_world``, ``facts_of``, may override
-    ``check_world``, ``place_world``, ``snap_start``, ``held_geoms`` and ``finger_opening``,
-    and declare ``world_facts``, ``world_options`` and ``holdable``.
+    Subclasses implement the scene's hooks (``scene_hooks.SceneHooks``): ``build_model``,
+    ``read_world``, ``facts_of``; they may override ``check_world``, ``place_world``,
+    ``snap_start``, ``held_geoms`` and ``finger_opening``, and declare ``world_facts``,
+    ``world_options``, ``holdable``, ``objects`` and ``world_sensors``.
 
     Args:
         nodes: the domain's nodes (start poses and skills' termination poses).
@@ -167,23 +104,12 @@ class ArmEnv(gym.Env):
         skill: the skill whose reward and termination the env gives, if any.
         config: noise, step budget, IK and random-start options.
         render_mode: ``"rgb_array"`` for ``render``.
+        robot: the arm (``control.description``; a domain's env gives its default).
     """
 
-    metadata = {"render_modes": ["rgb_array"], "render_fps": int(CONTROL_HZ)}
+    metadata = {"render_modes": ["rgb_array"]}
     camera = "overview"
     """The model camera ``render`` uses."""
-    world_facts: tuple[str, ...] = ()
-    """The facts ``facts_of`` can give: the ``facts`` reset option may name only these
-    (empty: not declared; a fact the start world lacks is refused all the same)."""
-    world_options: tuple[str, ...] = ()
-    """The entries the ``world`` reset option may have (``check_world`` checks the values)."""
-    holdable: tuple[str, ...] = ()
-    """What a start may hold (the ``holding`` reset option)."""
-    objects: tuple[ObjectFrame, ...] = ()
-    """The objects nodes may be anchored to (the domain's ``objects``)."""
-    world_sensors: dict[str, str] = {}
-    """World field -> the sensor kind that reads it (``perception.sensors``), in the order of
-    ``read_world``'s vector."""
 
     def __init__(
         self,
@@ -192,8 +118,12 @@ class ArmEnv(gym.Env):
         skill: SkillSpec | None = None,
         config: EnvConfig | None = None,
         render_mode: str | None = None,
+        *,
+        robot: RobotDescription,
     ) -> None:
         self.config = config or EnvConfig()
+        self.robot = robot
+        self.metadata = {**self.metadata, "render_fps": int(robot.control_hz)}
         if self.config.perception.name not in SIMULATED_PERCEPTIONS:
             raise EnvOptionError(
                 f"EnvConfig.perception: {type(self).__name__} simulates the perceptions "
@@ -205,17 +135,20 @@ class ArmEnv(gym.Env):
         self.render_mode = render_mode
         self.model = self.build_model()
         self.data = mujoco.MjData(self.model)
-        self.ik = DiffIKController(self.config.ik)
+        self.ik = DiffIKController(robot, self.config.ik)
         self._reset_ik: DiffIKController | None = None
-        self.n_substeps = substeps_per_control_step(self.model.opt.timestep)
-        self._arm_qpos = _as_slice([self.model.joint(j).qposadr[0] for j in ARM_JOINTS])
-        self._arm_dof = _as_slice([self.model.joint(j).dofadr[0] for j in ARM_JOINTS])
-        self._arm_act = _as_slice([self.model.actuator(j).id for j in ARM_JOINTS])
+        self._said_no_null_space = False
+        self.n_substeps = robot.substeps(self.model.opt.timestep)
+        joints = robot.arm.names
+        self._arm_qpos = as_slice([self.model.joint(j).qposadr[0] for j in joints])
+        self._arm_dof = as_slice([self.model.joint(j).dofadr[0] for j in joints])
+        self._arm_act = as_slice([self.model.actuator(j).id for j in joints])
         if not self.config.limit_joint_speed:
-            uncap_drive(self.model, ARM_JOINTS)
+            uncap_drive(self.model, joints)
         self._control_step = ArmControlStep(
             self.model,
             self.data,
+            robot,
             self._arm_qpos,
             self._arm_dof,
             self._arm_act,
@@ -224,15 +157,19 @@ class ArmEnv(gym.Env):
         )
         self._step_speed_ratio = 0.0
         self.peak_joint_speed_ratio = 0.0
-        """Peak |arm joint velocity| / URDF limit over every simulated substep since the last
+        """Peak |arm joint velocity| / its limit over every simulated substep since the last
         reset (steps and joint resets; the start's settling is not commanded motion)."""
-        self._finger_qpos = np.array([self.model.joint(j).qposadr[0] for j in FINGER_JOINTS])
-        self._gripper_act = self.model.actuator("gripper").id
-        self._tcp = self.model.site(TCP_SITE).id
+        gripper = robot.gripper
+        self._finger_qpos = np.array([self.model.joint(j).qposadr[0] for j in gripper.joints])
+        self._finger_open = gripper.open_position
+        self._gripper_act = self.model.actuator(GRIPPER_ACTUATOR).id
+        self._tcp = self.model.site(robot.tcp.site).id
+        base = self.model.body_rootid[self.model.jnt_bodyid[self.model.joint(joints[0]).id]]
         self._robot_bodies = {
-            b for b in range(self.model.nbody) if self.model.body(b).name.startswith("panda_")
+            b for b in range(self.model.nbody) if self.model.body_rootid[b] == base
         }
-        self.observation_space = gym.spaces.Box(OBS_LOW, OBS_HIGH, (OBS_DIM,), np.float64)
+        """The robot's bodies: those under its base (attached to the scene's world)."""
+        self.observation_space = gym.spaces.Box(*observation_bounds(robot), (OBS_DIM,), np.float64)
         self.action_space = gym.spaces.Box(-ACTION_BOUNDS, ACTION_BOUNDS, (7,), np.float64)
         self._gripper_cmd = GRIPPER_OPEN_CMD
         self._steps = 0
@@ -241,81 +178,19 @@ class ArmEnv(gym.Env):
         self._renderer: mujoco.Renderer | None = None
         self._sensor_slices = sensor_slices(self.world_sensors)
         self.sensors = ArmSensors(
-            self.model, self._arm_qpos, self._finger_qpos, self._gripper_act, self._tcp
+            self.model,
+            self._arm_qpos,
+            self._finger_qpos,
+            self._gripper_act,
+            self._tcp,
+            gripper.width_scale,
+            "grip_force" in robot.sensors,
         )
         """The arm's simulated encoders, gripper and TCP readouts."""
         self._percept: Percept | None = None
         self.anchor_offsets: dict[str, np.ndarray] = {}
         """Each object's true displacement from its nominal place at the last reset (the
         frame the env's own skill is scored in; scoring and scripted collection only)."""
-
-    # ----------------------------------------------------------------- the scene
-    def build_model(self) -> mujoco.MjModel:
-        """The compiled scene with the Panda, a ``home`` keyframe and an ``overview`` camera."""
-        raise NotImplementedError
-
-    def read_world(self) -> np.ndarray:
-        """The world-state vector (the domain's ``world_fields``), a fresh array."""
-        raise NotImplementedError
-
-    def facts_of(self, world: np.ndarray) -> frozenset[str]:
-        """The domain's facts that hold in a world-state vector."""
-        raise NotImplementedError
-
-    def check_world(self, world: dict[str, Any], holding: str | None) -> None:
-        """Refuse explicit ``world`` reset options (their names are ``world_options``) that
-        mean nothing (e.g. non-finite) or contradict ``holding``.
-
-        Raises:
-            EnvOptionError: naming the option and its value.
-        """
-
-    def place_world(
-        self, world: dict[str, Any], facts: frozenset[str], holding: str | None
-    ) -> None:
-        """Put the scene's objects in place for a start (the arm is already placed and its
-        kinematics computed): ``world`` holds explicit options, ``facts`` the start facts."""
-
-    def placement_offsets(self, world: dict[str, Any]) -> dict[str, np.ndarray]:
-        """The displacement of each object the ``world`` reset option places (moves the
-        start of a skill whose start node is anchored to it)."""
-        return {}
-
-    def placement_world(
-        self, placements: dict[str, np.ndarray], holding: str | None
-    ) -> dict[str, Any]:
-        """The ``world`` reset options that put the objects at ``placements`` (those not
-        held: a held object is placed in the fingers)."""
-        return {}
-
-    def node_position(self, name: str) -> np.ndarray:
-        """Where a node is in the world as reset (its anchor's true displacement applied)."""
-        return node_position(self.nodes, name, self.anchor_offsets)
-
-    def detect_world(self, state: np.ndarray, world: np.ndarray) -> np.ndarray:
-        """The perceived world with its ``detected`` fields recomputed from the percepts
-        (``state``: the perceived 10-D state; e.g. a grasp from the finger width and the
-        object's perceived pose)."""
-        return world
-
-    def snap_start(
-        self,
-        pos: np.ndarray,
-        rot: np.ndarray,
-        holding: str | None,
-        world: dict[str, Any],
-        facts: frozenset[str],
-    ) -> tuple[np.ndarray, np.ndarray]:
-        """Adjust a sampled start pose so that a start holding an object is consistent."""
-        return pos, rot
-
-    def held_geoms(self, holding: str | None) -> set[int]:
-        """Geoms the robot may touch at a start holding ``holding``."""
-        return set()
-
-    def finger_opening(self, holding: str) -> float:
-        """Finger joint position [m] at a start holding ``holding``."""
-        return 0.0
 
     # ----------------------------------------------------------------- state
     @property
@@ -477,7 +352,7 @@ class ArmEnv(gym.Env):
     ) -> bool:
         """Teleport the arm (IK) and the world; return False if the start is in collision."""
         mujoco.mj_resetDataKeyframe(self.model, self.data, self.model.key(HOME_KEY).id)
-        q, converged = solve_ik(self.ik, HOME_Q, pos, rot, iterations=300)
+        q, converged = solve_ik(self.ik, np.array(self.robot.home_q), pos, rot, iterations=300)
         if not converged:
             return False
         self.data.qpos[self._arm_qpos] = q
@@ -485,10 +360,10 @@ class ArmEnv(gym.Env):
         mujoco.mj_kinematics(self.model, self.data)
         self.place_world(world, facts, holding)
         closed = gripper == "closed" or holding is not None
-        finger = self.finger_opening(holding) if holding else FINGER_OPEN
+        finger = self.finger_opening(holding) if holding else self._finger_open
         self.data.qpos[self._finger_qpos] = finger if (holding or not closed) else 0.0
         self._gripper_cmd = GRIPPER_CLOSED_CMD if closed else GRIPPER_OPEN_CMD
-        self.data.ctrl[self._gripper_act] = 0.0 if closed else FINGER_OPEN
+        self.data.ctrl[self._gripper_act] = 0.0 if closed else self._finger_open
         mujoco.mj_forward(self.model, self.data)
         if self._robot_in_collision(allowed_geoms=self.held_geoms(holding)):
             return False
@@ -549,7 +424,7 @@ class ArmEnv(gym.Env):
             # The controller reads the encoders: the perceived joints.
             q_target = self.ik.relative_step(self.percept().joints, action[:6])
             self.data.ctrl[self._gripper_act] = (
-                FINGER_OPEN if self._gripper_cmd == GRIPPER_OPEN_CMD else 0.0
+                self._finger_open if self._gripper_cmd == GRIPPER_OPEN_CMD else 0.0
             )
             failure = self._simulate(q_target)
         else:
@@ -635,7 +510,10 @@ class ArmEnv(gym.Env):
         """Drive the joints toward the home posture while the TCP holds its pose.
 
         Null-space motion: the TCP pose is an equality constraint of the IK QP and the
-        posture task pulls toward ``IKConfig.posture``. Runs until every joint is within
+        posture task pulls toward ``IKConfig.posture`` (the robot's home by default). An arm
+        without a null space (six joints or fewer, ``RobotDescription.redundant``) cannot
+        move with its TCP held: the reset logs so once and returns 0. Runs until every
+        joint is within
         ``tolerance`` [rad] of the posture or the posture error stops shrinking. Decided
         from the encoders alone, as a robot's controller would: the joints are read (with
         the perception's encoder noise) every step, the TCP is held where forward
@@ -654,12 +532,21 @@ class ArmEnv(gym.Env):
 
     def _drive_to_posture(self, max_steps: int, tolerance: float) -> int:
         """``joint_reset``'s loop (the percept is refreshed after it, whatever happens)."""
+        if not self.robot.redundant:
+            if not self._said_no_null_space:
+                _LOG.info(
+                    "joint reset skipped: robot %r has %d joints, no null space under its TCP task",
+                    self.robot.name,
+                    self.robot.n_joints,
+                )
+                self._said_no_null_space = True
+            return 0
         if self._reset_ik is None:
-            self._reset_ik = joint_reset_controller(self.config.ik)
+            self._reset_ik = joint_reset_controller(self.robot, self.config.ik)
         encoders = partial(self.sensors.encoders, self.data, self.config.perception, self.np_random)
         joints = encoders()
         held: tuple[np.ndarray, np.ndarray] | None = None  # the TCP pose to hold
-        posture = np.asarray(self.config.ik.posture)
+        posture = self.ik.posture
         previous = np.inf
         for step in range(max_steps):
             error = float(np.abs(joints - posture).max())

@@ -25,6 +25,8 @@ class ArmSensors:
         finger_qpos: the finger joints' qpos addresses.
         gripper_actuator: the gripper actuator's id (its force is the grip force).
         tcp_site: the TCP site's id.
+        width_scale: finger width [m] per unit of the finger joints' summed positions.
+        reports_force: whether the gripper reports its force (else the state reads 0 N).
     """
 
     def __init__(
@@ -34,17 +36,25 @@ class ArmSensors:
         finger_qpos: np.ndarray,
         gripper_actuator: int,
         tcp_site: int,
+        width_scale: float = 1.0,
+        reports_force: bool = True,
     ) -> None:
         self.model = model
         self.arm_qpos = arm_qpos
         self.finger_qpos = finger_qpos
         self.gripper_actuator = gripper_actuator
         self.tcp_site = tcp_site
+        self.width_scale = width_scale
+        self.reports_force = reports_force
         self._fk: mujoco.MjData | None = None
 
     def true_state(self, data: mujoco.MjData, gripper_cmd: float) -> np.ndarray:
         """The exact 10-D state (the simulator's TCP site)."""
-        return self._state(data, data, gripper_cmd, float(data.qpos[self.finger_qpos].sum()))
+        return self._state(data, data, gripper_cmd, self._width(data))
+
+    def _width(self, data: mujoco.MjData) -> float:
+        """The true finger width [m]: the finger joints' summed positions, scaled."""
+        return float(data.qpos[self.finger_qpos].sum()) * self.width_scale
 
     def perceived(
         self,
@@ -64,8 +74,7 @@ class ArmSensors:
                 self._fk = mujoco.MjData(self.model)
             self._fk.qpos[self.arm_qpos] = joints
             mujoco.mj_kinematics(self.model, self._fk)
-            fingers = float(data.qpos[self.finger_qpos].sum())
-            fingers += float(rng.normal(0.0, spec.finger_noise))
+            fingers = self._width(data) + float(rng.normal(0.0, spec.finger_noise))
             state = self._state(self._fk, data, gripper_cmd, fingers)
         if spec.tcp_noise > 0:
             state[:3] += rng.normal(0.0, spec.tcp_noise, 3)
@@ -87,7 +96,9 @@ class ArmSensors:
         """The 10-D state with the TCP of ``pose`` and the gripper of ``data``."""
         quat = np.zeros(4)
         mujoco.mju_mat2Quat(quat, pose.site_xmat[self.tcp_site])
-        force = abs(float(data.actuator_force[self.gripper_actuator]))
+        force = (
+            abs(float(data.actuator_force[self.gripper_actuator])) if self.reports_force else 0.0
+        )
         return np.concatenate(
             [pose.site_xpos[self.tcp_site], canonical_quat(quat), [gripper_cmd, force, fingers]]
         )

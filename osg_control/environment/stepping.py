@@ -7,8 +7,8 @@ from __future__ import annotations
 import mujoco
 import numpy as np
 
+from osg_control.control.description import RobotDescription
 from osg_control.control.divergence import DivergenceWatch
-from osg_control.control.robot import ARM_JOINTS, urdf_velocity_limits
 from osg_control.control.servo import SpeedWatch, saturate_joint_speeds
 
 _STEP_STATE = mujoco.mjtState.mjSTATE_INTEGRATION
@@ -20,15 +20,17 @@ class ArmControlStep:
 
     Args:
         model, data: the scene.
+        robot: the arm (its joints and their speed limits).
         arm_qpos, arm_dof, arm_act: the arm joints' qpos and dof addresses and actuators.
         n_substeps: physics substeps per control step.
-        limit_joint_speed: saturate a joint speed over its URDF limit (False: only measure).
+        limit_joint_speed: saturate a joint speed over its limit (False: only measure).
     """
 
     def __init__(
         self,
         model: mujoco.MjModel,
         data: mujoco.MjData,
+        robot: RobotDescription,
         arm_qpos: slice | np.ndarray,
         arm_dof: slice | np.ndarray,
         arm_act: slice | np.ndarray,
@@ -39,16 +41,16 @@ class ArmControlStep:
         self._arm_qpos, self._arm_dof, self._arm_act = arm_qpos, arm_dof, arm_act
         self.n_substeps = n_substeps
         self.limit_joint_speed = limit_joint_speed
-        self._velocity_limits = urdf_velocity_limits()
+        self._velocity_limits = np.array(robot.arm.velocity)
         self._speed_watch = SpeedWatch(
-            model, ARM_JOINTS, arm_dof, self._velocity_limits, n_substeps
+            model, robot.arm.names, arm_dof, self._velocity_limits, n_substeps
         )
         self._step_start = np.empty(mujoco.mj_stateSize(model, _STEP_STATE))
         self._watch = DivergenceWatch(data)
 
     def run(self, arm_target: np.ndarray) -> tuple[str | None, float]:
         """One control step toward ``arm_target``: the failure reason if the simulation
-        diverged (else None) and the peak joint speed ratio (|speed| / URDF limit) over its
+        diverged (else None) and the peak joint speed ratio (|speed| / limit) over its
         substeps.
 
         MuJoCo runs the substeps in one call and the speed sensors' history gives each

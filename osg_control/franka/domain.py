@@ -402,7 +402,7 @@ def franka_domain() -> Domain:
         step_cost=STEP_COST,
         perceptions=PERCEPTIONS,
         dataset_layouts=(DatasetLayout("d4rl", _is_d4rl, _import_d4rl),),
-        control_hz=CONTROL_HZ,
+        own_control_hz=CONTROL_HZ,
     )
 
 

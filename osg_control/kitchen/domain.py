@@ -13,6 +13,8 @@ from osg_control.kitchen.tasks import DEFAULT_WORLD, KITCHEN_TASKS
 from osg_control.kitchen.world import WORLD_FIELDS, world_facts, world_state_from_array
 from osg_control.paths import PACKAGE_DIR
 
+DEFAULT_ROBOT = "panda"
+"""The robot the kitchen is built around unless told otherwise (registry name)."""
 MEETING_NODES: tuple[str, ...] = ("home", "above-cube", "door-front", "cabinet-front")
 """Where the movement skills meet: four of the paper's eight start regions."""
 WATCHED_FACTS = frozenset({"holding-cube"})
@@ -64,7 +66,7 @@ def kitchen_domain() -> Domain:
     """The kitchen domain (registered as ``kitchen``)."""
     return Domain(
         name="kitchen",
-        description="MuJoCo kitchen: a sliding-door cabinet, a cube and a valve around a Panda",
+        description="MuJoCo kitchen: a sliding-door cabinet, a cube and a valve around a robot",
         nodes=NODES,
         facts=WORLD_FACTS,
         skills=SKILLS,
@@ -81,4 +83,5 @@ def kitchen_domain() -> Domain:
         defaults_dir=PACKAGE_DIR / "kitchen" / "defaults",
         env_id="osg/Kitchen-v0",
         published=PUBLISHED,
+        robot=DEFAULT_ROBOT,
     )

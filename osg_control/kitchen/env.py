@@ -1,10 +1,11 @@
-"""``KitchenEnv``: the kitchen scene around the Panda (``ArmEnv`` with the kitchen's world).
+"""``KitchenEnv``: the kitchen scene around a robot (``ArmEnv`` with the kitchen's world).
 
 The world-state vector is ``world.WORLD_FIELDS`` (door travel, valve angle, cube pose, which
 objects both fingers touch); its facts are ``world.world_facts``. A start world is given by
 facts (``door-open`` slides the door to ``skills.DOOR_OPENED``) or explicitly with the
 ``world`` reset option (``door_opening`` [m], ``cube_pos``); ``holding`` is ``"cube"`` or
-``"handle"``.
+``"handle"``. The robot is ``DEFAULT_ROBOT`` unless another is given (any registered
+``RobotDescription`` with a two-finger gripper).
 """
 
 from __future__ import annotations
@@ -14,11 +15,13 @@ from typing import Any
 import mujoco
 import numpy as np
 
+from osg_control.control.description import RobotDescription
 from osg_control.domain.frames import placement_offsets
 from osg_control.domain.spec import SkillSpec
 from osg_control.environment.arm_env import ArmEnv, EnvConfig
 from osg_control.errors import SkillSpecError, lookup
 from osg_control.kitchen.detectors import WORLD_SENSORS, detect_grasps
+from osg_control.kitchen.domain import DEFAULT_ROBOT
 from osg_control.kitchen.options import WORLD_OPTIONS, check_world_options
 from osg_control.kitchen.scene import SceneIndex, build_kitchen_model
 from osg_control.kitchen.skills import CUBE, DOOR_OPENED, NODES, SKILLS_BY_NAME, WORLD_FACTS
@@ -28,6 +31,7 @@ from osg_control.kitchen.world import (
     world_facts,
     world_state_from_array,
 )
+from osg_control.robots.registry import get_robot
 
 HANDLE_GRASP_SLACK = 0.015
 """How far along the handle fin [m] (x) a handle-holding start may grasp it: about the
@@ -37,7 +41,13 @@ _FINGER_ON = {"cube": CUBE_HALF_SIZE - 0.0005, "handle": 0.0095}
 
 
 class KitchenEnv(ArmEnv):
-    """The kitchen with the Panda driven by relative TCP commands (see ``ArmEnv``).
+    """The kitchen with a robot driven by relative TCP commands (see ``ArmEnv``).
+
+    Args:
+        skill: the skill (or its name) whose reward and termination the env gives.
+        config: noise, step budget, IK and random-start options.
+        render_mode: ``"rgb_array"`` for ``render``.
+        robot: a registered robot's name or a description (default ``DEFAULT_ROBOT``).
 
     Example:
         >>> env = KitchenEnv(skill="move-home-to-cube")
@@ -56,18 +66,21 @@ class KitchenEnv(ArmEnv):
         skill: str | SkillSpec | None = None,
         config: EnvConfig | None = None,
         render_mode: str | None = None,
+        robot: str | RobotDescription | None = None,
     ) -> None:
         spec = (
             lookup(SKILLS_BY_NAME, skill, "skill", SkillSpecError)
             if isinstance(skill, str)
             else skill
         )
-        super().__init__(NODES, "home", spec, config or EnvConfig(), render_mode)
-        self.scene = SceneIndex(self.model)
+        if not isinstance(robot, RobotDescription):
+            robot = get_robot(robot or DEFAULT_ROBOT)
+        super().__init__(NODES, "home", spec, config or EnvConfig(), render_mode, robot=robot)
+        self.scene = SceneIndex(self.model, robot)
 
     def build_model(self) -> mujoco.MjModel:
-        """The kitchen with the Panda (``scene.build_kitchen_model``)."""
-        return build_kitchen_model()
+        """The kitchen with the env's robot (``scene.build_kitchen_model``)."""
+        return build_kitchen_model(self.robot)
 
     def world(self) -> WorldState:
         """The kitchen's world state as named fields (door, valve, cube, grasps)."""

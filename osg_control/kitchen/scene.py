@@ -1,4 +1,4 @@
-"""The kitchen scene: ``robots/kitchen.xml`` furniture with the URDF Panda attached at the origin.
+"""The kitchen scene: ``robots/kitchen.xml`` furniture with a robot attached at the origin.
 
 Also finds the world's movable parts in the compiled model and reads their state
 (``world.WorldState``) for skill effects and evaluation. Policies never see it.
@@ -11,7 +11,8 @@ from pathlib import Path
 
 import mujoco
 
-from osg_control.control.scene_model import home_keyed_model, with_panda
+from osg_control.control.description import RobotDescription
+from osg_control.control.scene_model import home_keyed_model, with_robot
 from osg_control.errors import ModelNotFoundError
 from osg_control.kitchen.world import WorldState
 from osg_control.paths import PACKAGE_DIR
@@ -35,27 +36,26 @@ def kitchen_xml_path() -> Path:
     )
 
 
-def kitchen_spec() -> mujoco.MjSpec:
-    """Compose the kitchen with the Panda mounted at the world origin."""
-    return with_panda(mujoco.MjSpec.from_file(str(kitchen_xml_path())))
+def kitchen_spec(robot: RobotDescription) -> mujoco.MjSpec:
+    """Compose the kitchen with ``robot`` mounted at the world origin."""
+    return with_robot(mujoco.MjSpec.from_file(str(kitchen_xml_path())), robot)
 
 
-def build_kitchen_model() -> mujoco.MjModel:
+def build_kitchen_model(robot: RobotDescription) -> mujoco.MjModel:
     """Compile the kitchen with a full-state ``HOME_KEY`` keyframe (arm home, door shut)."""
-    return home_keyed_model(kitchen_spec())
+    return home_keyed_model(kitchen_spec(robot), robot)
 
 
 class SceneIndex:
-    """Ids of the named parts of a compiled kitchen model, looked up once."""
+    """Ids of the named parts of a compiled kitchen model (with ``robot``), looked up once."""
 
-    def __init__(self, model: mujoco.MjModel) -> None:
+    def __init__(self, model: mujoco.MjModel, robot: RobotDescription) -> None:
         self.door_qpos = model.joint("door_slide").qposadr[0]
         self.valve_qpos = model.joint("valve_hinge").qposadr[0]
         self.cube_qpos = model.joint("cube_free").qposadr[0]
         self.cube_geom = model.geom("cube").id
         self.handle_geom = model.geom("handle").id
-        self.left_finger = model.body("panda_leftfinger").id
-        self.right_finger = model.body("panda_rightfinger").id
+        self.left_finger, self.right_finger = (model.body(b).id for b in robot.gripper.bodies)
 
     def _grasped(self, model: mujoco.MjModel, data: mujoco.MjData) -> tuple[bool, bool]:
         """Whether the cube, and the handle, touch both fingers: one vectorised pass over

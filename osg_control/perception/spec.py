@@ -22,7 +22,7 @@ from typing import Any
 from osg_control.errors import UsageError
 
 ENCODER_NOISE = 5e-4
-"""Joint encoder noise [rad], per joint: about 0.4 mm at the Panda's TCP per joint (its
+"""Joint encoder noise [rad], per joint: about 0.4 mm at the kitchen arm's TCP per joint (its
 absolute encoders resolve far finer; the margin stands for calibration and backlash)."""
 FINGER_NOISE = 5e-4
 """Finger width noise [m] (the gripper's own width reading)."""

@@ -1,6 +1,6 @@
 """The TCP filter's motion model, fitted on a domain's own data sets (the filter stage).
 
-Each domain's arm answers its commands in its own way (the kitchen's Panda moves 0.86 of a
+Each domain's arm answers its commands in its own way (the kitchen's arm moves 0.86 of a
 sub-centimetre command and 0.22 of the last; FrankaKitchen's servos otherwise), so the
 model is fitted per domain on the data its skills are trained on and shipped in the
 defaults' manifest (``motion_model``), where the executor's filter reads it.

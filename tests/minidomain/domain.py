@@ -122,4 +122,5 @@ def mini_domain() -> Domain:
         facts_of=facts_of,
         make_env=make_env,
         hand_empty="hand-empty",
+        robot="panda",
     )

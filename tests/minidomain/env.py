@@ -9,10 +9,11 @@ import mujoco
 import numpy as np
 
 from minidomain.domain import FACTS, NODES, SKILLS, facts_of
-from osg_control.control.scene_model import home_keyed_model, with_panda
+from osg_control.control.scene_model import home_keyed_model, with_robot
 from osg_control.domain.spec import SkillSpec
 from osg_control.environment.arm_env import ArmEnv, EnvConfig
 from osg_control.perception.sensors import POSITION
+from osg_control.robots.registry import get_robot
 
 SCENE = Path(__file__).with_name("scene.xml")
 PRESSED_START = 0.015
@@ -22,7 +23,8 @@ PRESSED_START = 0.015
 def build_model() -> mujoco.MjModel:
     """``scene.xml`` with the Panda at the origin and a full-state ``HOME_KEY`` keyframe (the
     button up: its rest value)."""
-    return home_keyed_model(with_panda(mujoco.MjSpec.from_file(str(SCENE))))
+    robot = get_robot("panda")
+    return home_keyed_model(with_robot(mujoco.MjSpec.from_file(str(SCENE)), robot), robot)
 
 
 class MiniEnv(ArmEnv):
@@ -39,7 +41,9 @@ class MiniEnv(ArmEnv):
         render_mode: str | None = None,
     ) -> None:
         spec = {s.name: s for s in SKILLS}[skill] if isinstance(skill, str) else skill
-        super().__init__(NODES, "home", spec, config or EnvConfig(), render_mode)
+        super().__init__(
+            NODES, "home", spec, config or EnvConfig(), render_mode, robot=get_robot("panda")
+        )
         self._button_qpos = self.model.joint("button_slide").qposadr[0]
 
     def build_model(self) -> mujoco.MjModel:

@@ -1,0 +1,260 @@
+"""The IK's kinematic backends (``mink``, ``pinocchio``) and the QP assembly they share.
+
+Each backend computes the TCP frame task's error and Jacobian on its own model of the arm
+(``robot_model``); ``Backend.build_qp`` assembles the QP of ``control.ik`` around them for
+an arm of any number of joints, so both backends build the same QP by construction.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass
+
+import mujoco
+import numpy as np
+import qpsolvers
+
+from osg_control.control.description import RobotDescription
+from osg_control.control.qp import SOLVERS
+from osg_control.control.robot_model import robot_spec
+from osg_control.errors import ControllerError
+
+BACKEND_NAMES: tuple[str, ...] = ("mink", "pinocchio")
+"""The kinematic backends (``BACKENDS``' keys)."""
+
+
+@dataclass(frozen=True)
+class IKConfig:
+    """Weights, gains and limits of the differential-IK QP.
+
+    Attributes:
+        backend: ``"mink"`` (MuJoCo model) or ``"pinocchio"`` (Pinocchio on the URDF).
+        solver: the QP solver: ``"daqp"`` (default) or ``"osqp"``.
+        dt: integration step of one solve [s] (the env's control period).
+        position_cost: TCP position task weight [1/m].
+        orientation_cost: TCP orientation task weight [1/rad].
+        posture_cost: posture task weight toward ``posture`` [1/rad] (keep it low).
+        gain: task gain in (0, 1]: the fraction of the error to remove in one step.
+        lm_damping: Levenberg-Marquardt damping of the frame task (unitless).
+        damping: Tikhonov regularisation of the QP (unitless).
+        limit_gain: configuration-limit gain in (0, 1] (how fast limits may be approached).
+        velocity_scale: fraction of the robot's joint velocity limits allowed.
+        posture: nominal arm configuration [rad]; None: the robot's home posture.
+        osqp_eps: OSQP's absolute and relative tolerance (only with ``solver="osqp"``).
+    """
+
+    backend: str = "mink"
+    solver: str = "daqp"
+    dt: float = 0.05
+    position_cost: float = 1.0
+    orientation_cost: float = 0.5
+    posture_cost: float = 1e-3
+    gain: float = 1.0
+    lm_damping: float = 1e-6
+    damping: float = 1e-9
+    limit_gain: float = 0.95
+    velocity_scale: float = 1.0
+    posture: tuple[float, ...] | None = None
+    osqp_eps: float = 1e-9
+
+    def __post_init__(self) -> None:
+        if self.backend not in BACKEND_NAMES:
+            raise ControllerError(
+                f"unknown IK backend {self.backend!r}; known: {sorted(BACKEND_NAMES)}"
+            )
+        if self.solver not in SOLVERS:
+            raise ControllerError(f"unknown QP solver {self.solver!r}; supported: {SOLVERS}")
+        if self.solver not in qpsolvers.available_solvers:
+            raise ControllerError(
+                f"QP solver {self.solver!r} is not installed; available: "
+                f"{qpsolvers.available_solvers}"
+            )
+        if not (0.0 < self.gain <= 1.0 and 0.0 < self.limit_gain <= 1.0 and self.dt > 0):
+            raise ControllerError("IKConfig: gain and limit_gain must be in (0, 1], dt > 0")
+
+
+class Backend:
+    """Kinematics of the TCP frame task plus the QP assembly shared by every backend.
+
+    Subclasses implement ``tcp_pose`` and ``frame_residual``; ``build_qp`` is common, so
+    all backends build the same QP.
+
+    Attributes:
+        config: the controller's configuration.
+        robot: the arm's description.
+        lower: joint lower limits [rad] (n,).
+        upper: joint upper limits [rad] (n,).
+        velocity_limit: joint velocity limits [rad/s] (n,), the robot's times
+            ``velocity_scale``.
+
+    Raises:
+        ControllerError: a posture with another number of values than the arm has joints.
+    """
+
+    def __init__(self, config: IKConfig, robot: RobotDescription) -> None:
+        n = robot.n_joints
+        posture = robot.home_q if config.posture is None else config.posture
+        if len(posture) != n:
+            raise ControllerError(
+                f"IKConfig: posture has {len(posture)} values, robot {robot.name!r} has {n} joints"
+            )
+        self.config = config
+        self.robot = robot
+        self.n = n
+        self.lower = np.array(robot.arm.lower, dtype=float)
+        self.upper = np.array(robot.arm.upper, dtype=float)
+        self.velocity_limit = np.array(robot.arm.velocity) * config.velocity_scale
+        # Constants of the QP, so that build_qp does the per-step arithmetic only.
+        cost = np.array([config.position_cost] * 3 + [config.orientation_cost] * 3)
+        self._cost_column = cost[:, None]
+        self._gain_cost = config.gain * cost
+        self.posture = np.asarray(posture, dtype=float)
+        """The posture task's target [rad] (n,)."""
+        self._posture_gain = config.posture_cost**2 * config.gain
+        self._diagonal = config.posture_cost**2 + config.damping
+        # Both box rows at once: lower = max(gain (lower - q), -step), upper = min(gain
+        # (upper - q), step), as one clip of a (2, n) array between these rows.
+        step_limit = self.velocity_limit * config.dt
+        self._limits = np.stack([self.lower, self.upper])
+        self._box_floor = np.stack([-step_limit, np.full(n, -np.inf)])
+        self._box_ceiling = np.stack([np.full(n, np.inf), step_limit])
+
+    def tcp_pose(self, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """TCP position [m] and rotation matrix in the base frame at ``q``."""
+        raise NotImplementedError
+
+    def frame_residual(
+        self, q: np.ndarray, target_pos: np.ndarray, target_rot: np.ndarray
+    ) -> tuple[np.ndarray, np.ndarray]:
+        """TCP task error ``log(T_bt)`` (6,) and its Jacobian (6, n) at ``q``.
+
+        The error is a body twist in the TCP frame, linear part first.
+        """
+        raise NotImplementedError
+
+    def build_qp(
+        self, q: np.ndarray, target_pos: np.ndarray, target_rot: np.ndarray, hard_tcp: bool
+    ) -> qpsolvers.Problem:
+        """Assemble the QP in ``dq = v dt`` at ``q`` toward the target.
+
+        Args:
+            q: arm configuration [rad] (n,).
+            target_pos: TCP target position [m] (3,).
+            target_rot: TCP target rotation matrix (3, 3).
+            hard_tcp: make the TCP task an equality constraint (joint reset).
+
+        Returns:
+            ``qpsolvers.Problem`` with ``P``, ``q``, box bounds ``lb``/``ub`` and, if
+            ``hard_tcp``, the equality ``A dq = b``; no general inequalities.
+        """
+        config = self.config
+        error, jacobian = self.frame_residual(q, target_pos, target_rot)
+        linear = self._posture_gain * (q - self.posture)
+        if hard_tcp:
+            hessian = np.zeros((self.n, self.n))
+            hessian.flat[:: self.n + 1] = self._diagonal
+            equality_matrix: np.ndarray | None = jacobian
+            equality_vector: np.ndarray | None = -config.gain * error
+        else:
+            weighted_error = self._gain_cost * error
+            weighted_jacobian = self._cost_column * jacobian
+            hessian = weighted_jacobian.T @ weighted_jacobian
+            linear += weighted_error @ weighted_jacobian
+            lm_term = config.lm_damping * float(weighted_error @ weighted_error)
+            hessian.flat[:: self.n + 1] += self._diagonal + lm_term
+            equality_matrix = equality_vector = None
+        box = np.minimum(
+            np.maximum(config.limit_gain * (self._limits - q), self._box_floor), self._box_ceiling
+        )
+        return qpsolvers.Problem(
+            hessian, linear, A=equality_matrix, b=equality_vector, lb=box[0], ub=box[1]
+        )
+
+
+class MinkBackend(Backend):
+    """mink's ``FrameTask`` on the robot's arm-only MuJoCo model."""
+
+    def __init__(self, config: IKConfig, robot: RobotDescription) -> None:
+        import mink
+
+        super().__init__(config, robot)
+        self.model = robot_spec(robot, with_gripper=False).compile()
+        self.configuration = mink.Configuration(self.model)
+        self.frame_task = mink.FrameTask(
+            robot.tcp.site,
+            "site",
+            position_cost=config.position_cost,
+            orientation_cost=config.orientation_cost,
+            gain=config.gain,
+            lm_damping=config.lm_damping,
+        )
+        # The task's target is this SE3, overwritten in place each step (``set_target``
+        # would build and copy a new one every time).
+        self._target = mink.SE3(np.array([1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0]))
+        self.frame_task.transform_target_to_world = self._target
+        self._site = self.model.site(robot.tcp.site).id
+        self._posed_at = np.full(self.n, np.nan)  # the configuration's q (NaN: none yet)
+
+    def _pose(self, q: np.ndarray) -> None:
+        """Forward kinematics at ``q``, unless the configuration is there already (a
+        relative step or an IK iteration reads the pose, then linearises at the same q)."""
+        if not (q == self._posed_at).all():
+            self.configuration.update(q)
+            self._posed_at[:] = q
+
+    def tcp_pose(self, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        self._pose(q)
+        data = self.configuration.data
+        return data.site_xpos[self._site].copy(), data.site_xmat[self._site].reshape(3, 3).copy()
+
+    def frame_residual(
+        self, q: np.ndarray, target_pos: np.ndarray, target_rot: np.ndarray
+    ) -> tuple[np.ndarray, np.ndarray]:
+        self._pose(q)
+        target = self._target.wxyz_xyz
+        mujoco.mju_mat2Quat(target[:4], target_rot.ravel())
+        target[4:] = target_pos
+        return (
+            self.frame_task.compute_error(self.configuration),
+            self.frame_task.compute_jacobian(self.configuration),
+        )
+
+
+class PinocchioBackend(Backend):
+    """Pink's frame-task formulas, evaluated with Pinocchio on the robot's arm (no MuJoCo).
+
+    ``e = log6(T_bt)`` and ``J = -Jlog6(T_tb) J_b`` as in ``pink.tasks.FrameTask``, computed
+    without Pink's per-call ``Configuration`` and ``SE3`` copies.
+    """
+
+    def __init__(self, config: IKConfig, robot: RobotDescription) -> None:
+        import pinocchio as pin
+
+        super().__init__(config, robot)
+        self.model = robot.model.pinocchio()
+        self.model.velocityLimit = self.velocity_limit.copy()
+        self.data = self.model.createData()
+        self.frame_id = self.model.getFrameId(robot.tcp.frame)
+        self._pin = pin
+
+    def tcp_pose(self, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        self._pin.framesForwardKinematics(self.model, self.data, q)
+        placement = self.data.oMf[self.frame_id]
+        return placement.translation.copy(), placement.rotation.copy()
+
+    def frame_residual(
+        self, q: np.ndarray, target_pos: np.ndarray, target_rot: np.ndarray
+    ) -> tuple[np.ndarray, np.ndarray]:
+        pin = self._pin
+        pin.computeJointJacobians(self.model, self.data, q)
+        frame = pin.updateFramePlacement(self.model, self.data, self.frame_id)
+        target = pin.SE3(target_rot, target_pos)
+        error = pin.log6(frame.actInv(target)).vector
+        jacobian = pin.getFrameJacobian(self.model, self.data, self.frame_id, pin.LOCAL)
+        return error, -pin.Jlog6(target.actInv(frame)) @ jacobian
+
+
+BACKENDS: dict[str, Callable[[IKConfig, RobotDescription], Backend]] = {
+    "mink": MinkBackend,
+    "pinocchio": PinocchioBackend,
+}
