@@ -1,0 +1,1 @@
+"""Robot models: each robot's description files, MuJoCo spec and Pinocchio model."""
