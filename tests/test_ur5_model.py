@@ -3,6 +3,9 @@ the gripper lifts a 4.5 cm box in MuJoCo physics, and missing files are named.""
 
 from __future__ import annotations
 
+import json
+import subprocess
+import sys
 import warnings
 from pathlib import Path
 
@@ -15,7 +18,15 @@ from osg_control.control.servo import DAMPING_SUFFIX
 from osg_control.errors import ModelNotFoundError
 from osg_control.robots import files, ur5_model
 from osg_control.robots.reach import reach_pose
-from osg_control.robots.ur5_model import ARM_JOINTS, FINGER_JOINTS, HOME_Q, TCP_FRAME, TCP_SITE
+from osg_control.robots.ur5_model import (
+    ARM_JOINTS,
+    FINGER_JOINTS,
+    HOME_Q,
+    KITCHEN_BASE,
+    ORIGIN,
+    TCP_FRAME,
+    TCP_SITE,
+)
 
 KINEMATICS_TOL = 1e-9
 TOP_DOWN = (0.0, 1.0, 0.0, 0.0)
@@ -24,12 +35,13 @@ TOP_DOWN = (0.0, 1.0, 0.0, 0.0)
 
 @pytest.fixture(scope="module")
 def arm_model() -> mujoco.MjModel:
-    return ur5_model.ur5_spec(with_gripper=False).compile()
+    """The arm-only model an IK backend uses, placed as in the kitchen."""
+    return ur5_model.ur5_spec(with_gripper=False, base=KITCHEN_BASE).compile()
 
 
 @pytest.fixture(scope="module")
 def full_model() -> mujoco.MjModel:
-    return ur5_model.ur5_spec(with_gripper=True).compile()
+    return ur5_model.ur5_spec(with_gripper=True, base=KITCHEN_BASE).compile()
 
 
 def random_configurations(count: int, seed: int) -> np.ndarray:
@@ -65,13 +77,16 @@ def test_limits_come_from_the_urdf(full_model: mujoco.MjModel) -> None:
     np.testing.assert_array_equal(ur5_model.effort_limits(), [150, 150, 150, 28, 28, 28])
 
 
-def test_tcp_pose_and_jacobian_agree_at_random_configurations(
-    arm_model: mujoco.MjModel, full_model: mujoco.MjModel
-) -> None:
-    pin_model = ur5_model.load_pinocchio_arm()
+@pytest.mark.parametrize("base", [ORIGIN, KITCHEN_BASE, ((0.3, -0.2, 0.5), (0.6, 0.0, 0.0, 0.8))])
+def test_tcp_pose_and_jacobian_agree_at_random_configurations(base: ur5_model.Placement) -> None:
+    """MuJoCo's TCP site (arm-only and gripper models) and Pinocchio's TCP frame, with the
+    base placed alike."""
+    arm_model = ur5_model.ur5_spec(with_gripper=False, base=base).compile()
+    full_model = ur5_model.ur5_spec(with_gripper=True, base=base).compile()
+    pin_model = ur5_model.load_pinocchio_arm(base)
     pin_data = pin_model.createData()
     frame = pin_model.getFrameId(TCP_FRAME)
-    for q in random_configurations(100, seed=0):
+    for q in random_configurations(50, seed=0):
         pin_jacobian = pin.computeFrameJacobian(
             pin_model, pin_data, q, frame, pin.ReferenceFrame.LOCAL_WORLD_ALIGNED
         )
@@ -101,7 +116,7 @@ def test_tcp_is_between_the_pads(full_model: mujoco.MjModel) -> None:
 
 def test_home_posture(full_model: mujoco.MjModel) -> None:
     """The home key holds ``HOME_Q`` (inside the limits) with the fingers open, and puts the
-    TCP pointing down above the base's +x side."""
+    TCP pointing down at the kitchen's home node with the base at ``KITCHEN_BASE``."""
     lower, upper = ur5_model.joint_limits()
     assert np.all(HOME_Q > lower) and np.all(HOME_Q < upper)
     key = full_model.key(ur5_model.HOME_KEY)
@@ -122,7 +137,8 @@ BOX_AT = (0.5, -0.2)
 
 
 def _grasp_scene() -> tuple[mujoco.MjModel, mujoco.MjData]:
-    """The UR5 at the origin on a table top (z = 0) with a 4.5 cm, 80 g box on it."""
+    """The UR5 at ``KITCHEN_BASE`` on a table top (z = 0) with a 4.5 cm, 80 g box on it
+    where the kitchen's cube is."""
     spec = mujoco.MjSpec()
     spec.option.timestep = 0.002
     spec.option.integrator = mujoco.mjtIntegrator.mjINT_IMPLICITFAST
@@ -143,7 +159,7 @@ def _grasp_scene() -> tuple[mujoco.MjModel, mujoco.MjData]:
         friction=[1.5, 0.02, 0.001],
         condim=4,
     )
-    robot = ur5_model.ur5_spec(with_gripper=True)
+    robot = ur5_model.ur5_spec(with_gripper=True, base=KITCHEN_BASE)
     for key in list(robot.keys):
         robot.delete(key)
     with warnings.catch_warnings():
@@ -193,6 +209,40 @@ def test_gripper_closes_on_and_lifts_a_box(arm_model: mujoco.MjModel) -> None:
     assert touching == pads
 
 
+def test_reach_reports_an_unreachable_pose_and_refuses_bad_input(
+    arm_model: mujoco.MjModel,
+) -> None:
+    limits = dict(zip(ARM_JOINTS, ur5_model.velocity_limits(), strict=True))
+    far = reach_pose(arm_model, TCP_SITE, (2.0, 0.0, 0.3), TOP_DOWN, HOME_Q, limits, steps=100)
+    assert not far.reached() and far.position_error > 0.9
+    assert far.path.shape == (100, 6) and np.array_equal(far.path[-1], far.q)
+    with pytest.raises(ValueError, match="non-finite"):
+        reach_pose(arm_model, TCP_SITE, (np.nan, 0.0, 0.3), TOP_DOWN, HOME_Q, limits)
+    with pytest.raises(ValueError, match="shape"):
+        reach_pose(arm_model, TCP_SITE, (0.4, 0.0, 0.3), TOP_DOWN, HOME_Q[:5], limits)
+    with pytest.raises(ValueError, match="max_step"):
+        reach_pose(arm_model, TCP_SITE, (0.4, 0.0, 0.3), TOP_DOWN, HOME_Q, limits, max_step=0.0)
+
+
+def test_max_step_walks_the_straight_line(arm_model: mujoco.MjModel) -> None:
+    """With ``max_step`` the TCP follows the line to the goal at most that far per step."""
+    limits = dict(zip(ARM_JOINTS, ur5_model.velocity_limits(), strict=True))
+    goal = np.array([0.5, -0.2, 0.15])
+    reach = reach_pose(arm_model, TCP_SITE, goal, TOP_DOWN, HOME_Q, limits, 60, max_step=0.02)
+    assert reach.reached()
+    data = mujoco.MjData(arm_model)
+    points = []
+    for q in reach.path:
+        data.qpos[:] = q
+        mujoco.mj_kinematics(arm_model, data)
+        points.append(data.site(TCP_SITE).xpos.copy())
+    start = np.array([0.35, 0.0, 0.45])
+    line = (goal - start) / np.linalg.norm(goal - start)
+    off_line = [np.linalg.norm((p - start) - line * np.dot(p - start, line)) for p in points]
+    assert max(off_line) < 5e-3
+    assert np.max(np.linalg.norm(np.diff(points, axis=0), axis=1)) < 0.021
+
+
 # ------------------------------------------------------------------ files
 def test_a_missing_file_names_every_path_tried(
     tmp_path: Path, monkeypatch: pytest.MonkeyPatch
@@ -219,3 +269,45 @@ def test_the_environment_variable_is_searched_first(
     assert files.resolve_package_uris(text, ur5_model.URDF_PATH) == f"{tmp_path}/robots/x.stl"
     with pytest.raises(ModelNotFoundError, match="unresolved package://"):
         files.resolve_package_uris("package://other/x.stl", ur5_model.URDF_PATH)
+
+
+# ------------------------------------------------------------------ the kitchen placement
+def _reach_report(*arguments: str) -> dict:
+    done = subprocess.run(
+        [sys.executable, "tools/ur5_kitchen_reach.py", "--steps", "200", "--json", *arguments],
+        cwd=Path(__file__).resolve().parents[1],
+        capture_output=True,
+        text=True,
+        timeout=600,
+        check=False,
+    )
+    assert done.returncode == 0, done.stderr[-2000:]
+    return json.loads(done.stdout)
+
+
+def test_the_kitchen_placement_reaches_every_node_and_skill_path() -> None:
+    """At ``KITCHEN_BASE`` every node is reached TCP down and every skill's straight path is
+    reached clear of the furniture and of singularities; at the Panda's base (the origin)
+    ``release-handle``'s lift point is out of reach."""
+    report = _reach_report()
+    assert all(row["reached"] for row in report["nodes"])
+    assert all(row["position_error_m"] < 1e-4 for row in report["nodes"])
+    assert all(row["reached"] and not row["touches"] for row in report["skills"])
+    assert min(row["min_singular_value"] for row in report["skills"]) > 0.1
+    # With the door shut the arm reaching into the cabinet meets the door, and only there.
+    assert [r["node"] for r in report["nodes"] if r["touches_door_shut"]] == ["cube-inside"]
+    assert not any(row["touches_door_open"] for row in report["nodes"])
+    at_origin = _reach_report("--base", "0", "0", "0")
+    assert [r["skill"] for r in at_origin["skills"] if not r["reached"]] == ["release-handle"]
+
+
+def test_the_reach_tool_refuses_bad_values() -> None:
+    done = subprocess.run(
+        [sys.executable, "tools/ur5_kitchen_reach.py", "--max-step", "0"],
+        cwd=Path(__file__).resolve().parents[1],
+        capture_output=True,
+        text=True,
+        timeout=60,
+        check=False,
+    )
+    assert done.returncode == 2 and "--max-step" in done.stderr

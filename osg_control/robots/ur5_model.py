@@ -48,6 +48,9 @@ FLANGE_FRAME = "tool0"
 """The URDF's flange frame (z out of the flange), where the gripper is mounted."""
 FLANGE_BODY = "wrist_3_link"
 """The link that carries the flange (MuJoCo fuses ``tool0`` into it)."""
+_BASE_LINK = "base_link"
+_MARKER_LINK = "ee_link"
+"""The URDF's end-effector marker link, whose 1 cm collision box is dropped."""
 TCP_FRAME = "ur5_tcp"
 """The TCP frame added to the Pinocchio model."""
 TCP_SITE = "tcp"
@@ -65,15 +68,20 @@ GRIP_FORCE = 100.0
 TCP_DEPTH = 0.134
 """The TCP's distance from the flange along its z axis [m]: the pads' centre."""
 
-HOME_Q = np.array([-0.3171, -1.8482, 1.4045, -1.1271, -1.5708, -1.8879])
+HOME_Q = np.array([-0.9241, -1.9798, 1.4823, -1.0733, -1.5708, -2.4949])
 """Home arm configuration [rad]: elbow up, the TCP pointing down above the base's +x side
-(placed at ``KITCHEN_BASE``, it is at the kitchen's ``home`` node, 0.35 0 0.45)."""
+(placed at ``KITCHEN_BASE``, it is at the kitchen's home node, 0.35 0 0.45)."""
 
-KITCHEN_BASE_POS = (0.0, 0.0, 0.0)
-"""Where the UR5's base link goes in the kitchen [m]: where the Panda's base is, on the
-counter top at the world origin."""
-KITCHEN_BASE_QUAT = (1.0, 0.0, 0.0, 0.0)
-"""The base link's orientation (w, x, y, z) in the kitchen: the arm's q = 0 stretches along +x."""
+Placement = tuple[tuple[float, float, float], tuple[float, float, float, float]]
+"""A base link's position [m] and orientation (w, x, y, z) in the world."""
+ORIGIN: Placement = ((0.0, 0.0, 0.0), (1.0, 0.0, 0.0, 0.0))
+KITCHEN_BASE: Placement = ((0.10, 0.15, 0.0), (1.0, 0.0, 0.0, 0.0))
+"""Where the UR5's base link goes in the home kitchen: on the counter top, 10 cm ahead of and
+15 cm to the cabinet's side of the Panda's base (the origin), not rotated (q = 0 stretches the
+arm along +x). At the origin, ``release-handle``'s lift point (0.42 0.54 0.50, TCP down) is out
+of reach (3 cm short, the elbow straight); here every node and skill path is reached clear of
+the furniture, the TCP Jacobian's smallest singular value staying above 0.13
+(``tools/ur5_kitchen_reach.py``)."""
 
 # Gripper geometry in the flange frame (z out of the flange, fingers closing along y) [m].
 # A 75 mm coupling disc, a palm box, and per finger a link box reaching from the palm to the
@@ -116,8 +124,9 @@ def flange_to_tcp() -> tuple[np.ndarray, np.ndarray]:
     return np.array(tool0.translation) + rotation[:, 2] * TCP_DEPTH, rotation
 
 
-def load_pinocchio_arm():  # type: ignore[no-untyped-def]
-    """The arm's Pinocchio model (six joints, no gripper) with the TCP frame ``TCP_FRAME``.
+def load_pinocchio_arm(base: Placement = ORIGIN):  # type: ignore[no-untyped-def]
+    """The arm's Pinocchio model (six joints, no gripper) with the TCP frame ``TCP_FRAME``,
+    its base link at ``base`` in the model's world.
 
     Returns:
         A new ``pinocchio.Model`` (callers may modify it).
@@ -125,6 +134,11 @@ def load_pinocchio_arm():  # type: ignore[no-untyped-def]
     import pinocchio as pin
 
     model = pin.Model(_urdf_arm())
+    placement = pin.SE3(pin.Quaternion(*base[1]).normalized().matrix(), np.array(base[0]))
+    model.jointPlacements[1] = placement * model.jointPlacements[1]
+    for frame in list(model.frames)[1:]:  # the universe stays the world
+        if frame.parentJoint == 0:
+            frame.placement = placement * frame.placement
     flange = model.getFrameId(FLANGE_FRAME)
     position, rotation = flange_to_tcp()
     frame = model.frames[flange]
@@ -224,13 +238,16 @@ def _add_gripper(flange: mujoco.MjsBody, position: np.ndarray, quat: np.ndarray)
         )
 
 
-def ur5_spec(with_gripper: bool = True) -> mujoco.MjSpec:
+def ur5_spec(with_gripper: bool = True, base: Placement = ORIGIN) -> mujoco.MjSpec:
     """Build the UR5's MuJoCo spec from the URDF: TCP site, drives, home key and, with
     ``with_gripper``, the gripper and its actuator ``GRIPPER_ACTUATOR``.
 
     Args:
         with_gripper: mount the gripper. The arm-only model (``False``) is what an IK
             backend works on; its TCP site is at the same place.
+        base: where the base link goes in the spec's world (attach the spec at a scene's
+            origin: the IK models built with the same ``base`` then work in scene
+            coordinates).
 
     The actuators are, in order: a stiffness actuator per arm joint (named after it), a
     damping actuator per arm joint (``control.servo``), then the gripper's (its control is
@@ -238,10 +255,11 @@ def ur5_spec(with_gripper: bool = True) -> mujoco.MjSpec:
     """
     spec = mujoco.MjSpec.from_string(_urdf_for_mujoco())
     spec.modelname = "ur5"
+    root = spec.body(_BASE_LINK)
+    root.pos, root.quat = list(base[0]), list(base[1])
     flange = spec.body(FLANGE_BODY)
-    for geom in list(flange.geoms):
-        if geom.type == mujoco.mjtGeom.mjGEOM_BOX:
-            spec.delete(geom)  # the URDF's 1 cm ee_link marker box, inside the coupling
+    for geom in list(spec.body(_MARKER_LINK).geoms):
+        spec.delete(geom)  # a 1 cm box where the gripper's coupling is
     position, rotation = flange_to_tcp()
     quat = np.zeros(4)
     mujoco.mju_mat2Quat(quat, rotation.flatten())
