@@ -3,12 +3,12 @@ the gripper lifts a 4.5 cm box in MuJoCo physics, and missing files are named.""
 
 from __future__ import annotations
 
+import importlib.util
 import json
-import subprocess
-import sys
-import warnings
 from pathlib import Path
+from types import ModuleType
 
+import mink
 import mujoco
 import numpy as np
 import pinocchio as pin
@@ -50,18 +50,18 @@ def random_configurations(count: int, seed: int) -> np.ndarray:
 
 
 def mujoco_tcp(model: mujoco.MjModel, q: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """TCP position, rotation and 6 x 6 world-aligned Jacobian (linear; angular)."""
-    data = mujoco.MjData(model)
-    qpos = [model.joint(name).qposadr[0] for name in ARM_JOINTS]
-    data.qpos[qpos] = q
-    mujoco.mj_kinematics(model, data)
-    mujoco.mj_comPos(model, data)
-    site = model.site(TCP_SITE).id
-    jacobian = np.zeros((6, model.nv))
-    mujoco.mj_jacSite(model, data, jacobian[:3], jacobian[3:], site)
+    """TCP position, rotation and 6 x 6 world-aligned Jacobian (linear; angular), as mink
+    (the IK backend on the MuJoCo model) computes them."""
+    configuration = mink.Configuration(model)
+    qpos = configuration.q.copy()
+    qpos[[model.joint(name).qposadr[0] for name in ARM_JOINTS]] = q
+    configuration.update(qpos)
+    pose = configuration.get_transform_frame_to_world(TCP_SITE, "site")
+    rotation = pose.rotation().as_matrix()
+    local = configuration.get_frame_jacobian(TCP_SITE, "site")
+    aligned = np.vstack([rotation @ local[:3], rotation @ local[3:]])
     dofs = [model.joint(name).dofadr[0] for name in ARM_JOINTS]
-    rotation = data.site_xmat[site].reshape(3, 3)
-    return data.site_xpos[site].copy(), rotation.copy(), jacobian[:, dofs]
+    return pose.translation(), rotation, aligned[:, dofs]
 
 
 def test_limits_come_from_the_urdf(full_model: mujoco.MjModel) -> None:
@@ -159,13 +159,8 @@ def _grasp_scene() -> tuple[mujoco.MjModel, mujoco.MjData]:
         friction=[1.5, 0.02, 0.001],
         condim=4,
     )
-    robot = ur5_model.ur5_spec(with_gripper=True, base=KITCHEN_BASE)
-    for key in list(robot.keys):
-        robot.delete(key)
-    with warnings.catch_warnings():
-        warnings.filterwarnings("ignore", message="Attaching a spec with an empty prefix")
-        spec.attach(robot, frame=spec.worldbody.add_frame(), prefix="")
-        model = spec.compile()
+    ur5_model.attach_ur5(spec, KITCHEN_BASE)
+    model = spec.compile()
     data = mujoco.MjData(model)
     data.qpos[[model.joint(n).qposadr[0] for n in ARM_JOINTS]] = HOME_Q
     data.qpos[[model.joint(n).qposadr[0] for n in FINGER_JOINTS]] = ur5_model.FINGER_OPEN
@@ -184,6 +179,7 @@ def _move(model: mujoco.MjModel, data: mujoco.MjData, goal: np.ndarray, seconds:
         mujoco.mj_step(model, data)
 
 
+@pytest.mark.filterwarnings("ignore:Attaching a spec with an empty prefix")
 def test_gripper_closes_on_and_lifts_a_box(arm_model: mujoco.MjModel) -> None:
     model, data = _grasp_scene()
     limits = dict(zip(ARM_JOINTS, ur5_model.velocity_limits(), strict=True))
@@ -272,24 +268,29 @@ def test_the_environment_variable_is_searched_first(
 
 
 # ------------------------------------------------------------------ the kitchen placement
-def _reach_report(*arguments: str) -> dict:
-    done = subprocess.run(
-        [sys.executable, "tools/ur5_kitchen_reach.py", "--steps", "200", "--json", *arguments],
-        cwd=Path(__file__).resolve().parents[1],
-        capture_output=True,
-        text=True,
-        timeout=600,
-        check=False,
-    )
-    assert done.returncode == 0, done.stderr[-2000:]
-    return json.loads(done.stdout)
+def _reach_tool() -> ModuleType:
+    """``tools/ur5_kitchen_reach.py`` as a module."""
+    path = Path(__file__).resolve().parents[1] / "tools" / "ur5_kitchen_reach.py"
+    spec = importlib.util.spec_from_file_location("ur5_kitchen_reach", path)
+    assert spec is not None and spec.loader is not None
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
 
 
-def test_the_kitchen_placement_reaches_every_node_and_skill_path() -> None:
+def _reach_report(capsys: pytest.CaptureFixture[str], *arguments: str) -> dict:
+    assert _reach_tool().main(["--steps", "200", "--json", *arguments]) == 0
+    return json.loads(capsys.readouterr().out)
+
+
+@pytest.mark.filterwarnings("ignore:Attaching a spec with an empty prefix")
+def test_the_kitchen_placement_reaches_every_node_and_skill_path(
+    capsys: pytest.CaptureFixture[str],
+) -> None:
     """At ``KITCHEN_BASE`` every node is reached TCP down and every skill's straight path is
     reached clear of the furniture and of singularities; at the Panda's base (the origin)
     ``release-handle``'s lift point is out of reach."""
-    report = _reach_report()
+    report = _reach_report(capsys)
     assert all(row["reached"] for row in report["nodes"])
     assert all(row["position_error_m"] < 1e-4 for row in report["nodes"])
     assert all(row["reached"] and not row["touches"] for row in report["skills"])
@@ -297,17 +298,11 @@ def test_the_kitchen_placement_reaches_every_node_and_skill_path() -> None:
     # With the door shut the arm reaching into the cabinet meets the door, and only there.
     assert [r["node"] for r in report["nodes"] if r["touches_door_shut"]] == ["cube-inside"]
     assert not any(row["touches_door_open"] for row in report["nodes"])
-    at_origin = _reach_report("--base", "0", "0", "0")
+    at_origin = _reach_report(capsys, "--base", "0", "0", "0")
     assert [r["skill"] for r in at_origin["skills"] if not r["reached"]] == ["release-handle"]
 
 
-def test_the_reach_tool_refuses_bad_values() -> None:
-    done = subprocess.run(
-        [sys.executable, "tools/ur5_kitchen_reach.py", "--max-step", "0"],
-        cwd=Path(__file__).resolve().parents[1],
-        capture_output=True,
-        text=True,
-        timeout=60,
-        check=False,
-    )
-    assert done.returncode == 2 and "--max-step" in done.stderr
+def test_the_reach_tool_refuses_bad_values(capsys: pytest.CaptureFixture[str]) -> None:
+    with pytest.raises(SystemExit) as exit_info:
+        _reach_tool().main(["--max-step", "0"])
+    assert exit_info.value.code == 2 and "--max-step" in capsys.readouterr().err

@@ -41,13 +41,9 @@ HOME = kitchen_domain().home
 def kitchen_with_ur5(base: Placement) -> tuple[mujoco.MjModel, frozenset[int]]:
     """The kitchen with the UR5 attached at ``base``; the robot's geom ids."""
     scene = mujoco.MjSpec.from_file(str(kitchen_xml_path()))
-    robot = ur5_model.ur5_spec(with_gripper=True, base=base)
-    robot_bodies = {body.name for body in robot.bodies} - {robot.worldbody.name}
-    for key in list(robot.keys):
-        robot.delete(key)
+    robot_bodies = ur5_model.attach_ur5(scene, base)
     with warnings.catch_warnings():
         warnings.filterwarnings("ignore", message="Attaching a spec with an empty prefix")
-        scene.attach(robot, frame=scene.worldbody.add_frame(), prefix="")
         model = scene.compile()
     geoms = frozenset(
         g for g in range(model.ngeom) if model.body(model.geom_bodyid[g]).name in robot_bodies

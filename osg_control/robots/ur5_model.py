@@ -20,6 +20,7 @@ direction) and the fingers close along its y axis; the TCP lies between the pads
 from __future__ import annotations
 
 import re
+import warnings
 from functools import cache
 from xml.etree import ElementTree
 
@@ -299,6 +300,24 @@ def ur5_spec(with_gripper: bool = True, base: Placement = ORIGIN) -> mujoco.MjSp
         body.gravcomp = 0.0 if body.name == world else 1.0
     spec.add_key(name=HOME_KEY, qpos=qpos_home, ctrl=ctrl_home)
     return spec
+
+
+def attach_ur5(scene: mujoco.MjSpec, base: Placement = ORIGIN) -> frozenset[str]:
+    """Attach the UR5 with its gripper (placed at ``base``; its own keyframes dropped: a
+    scene's keyframe must cover the scene's joints too) at the origin of ``scene``.
+
+    Returns:
+        The names of the robot's bodies in ``scene``.
+    """
+    robot = ur5_spec(with_gripper=True, base=base)
+    for key in list(robot.keys):
+        robot.delete(key)
+    names = frozenset(body.name for body in robot.bodies) - {robot.worldbody.name}
+    with warnings.catch_warnings():
+        # The URDF's names are unique in a scene, so no prefix is needed.
+        warnings.filterwarnings("ignore", message="Attaching a spec with an empty prefix")
+        scene.attach(robot, frame=scene.worldbody.add_frame(), prefix="")
+    return names
 
 
 def _body_name(spec: mujoco.MjSpec, link: str) -> str:
