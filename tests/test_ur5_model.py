@@ -205,6 +205,34 @@ def test_gripper_closes_on_and_lifts_a_box(arm_model: mujoco.MjModel) -> None:
     assert touching == pads
 
 
+@pytest.mark.filterwarnings("ignore:Attaching a spec with an empty prefix")
+def test_drives_track_a_bounded_action_path(arm_model: mujoco.MjModel) -> None:
+    """Joint targets from the IK every 50 ms along a 2 cm-per-step path (the kitchen's action
+    bound): the simulated TCP stays within 1 cm of the IK's, the joints under their speed
+    limits, and it ends on it."""
+    model, data = _grasp_scene()
+    limits = ur5_model.velocity_limits()
+    by_name = dict(zip(ARM_JOINTS, limits, strict=True))
+    goal = (0.4, 0.35, 0.2)
+    reach = reach_pose(arm_model, TCP_SITE, goal, TOP_DOWN, HOME_Q, by_name, 60, max_step=0.02)
+    assert reach.reached()
+    actuators = [model.actuator(n).id for n in ARM_JOINTS]
+    dofs = [model.joint(n).dofadr[0] for n in ARM_JOINTS]
+    substeps = round(0.05 / model.opt.timestep)
+    ik_data = mujoco.MjData(arm_model)
+    lag, peak = [], 0.0
+    for q in reach.path:
+        data.ctrl[actuators] = q
+        for _ in range(substeps):
+            mujoco.mj_step(model, data)
+            peak = max(peak, float(np.max(np.abs(data.qvel[dofs]) / limits)))
+        ik_data.qpos[:] = q
+        mujoco.mj_kinematics(arm_model, ik_data)
+        lag.append(np.linalg.norm(data.site(TCP_SITE).xpos - ik_data.site(TCP_SITE).xpos))
+    assert max(lag) < 0.01 and lag[-1] < 1e-3
+    assert peak < 1.0
+
+
 def test_reach_reports_an_unreachable_pose_and_refuses_bad_input(
     arm_model: mujoco.MjModel,
 ) -> None:

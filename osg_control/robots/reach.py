@@ -49,6 +49,7 @@ def reach_pose(
     start_q: np.ndarray,
     velocity_limits: dict[str, float],
     steps: int = 400,
+    *,
     orientation_cost: float = 0.5,
     posture_cost: float = 1e-3,
     max_step: float | None = None,
