@@ -334,3 +334,76 @@ def test_the_reach_tool_refuses_bad_values(capsys: pytest.CaptureFixture[str]) -
     with pytest.raises(SystemExit) as exit_info:
         _reach_tool().main(["--max-step", "0"])
     assert exit_info.value.code == 2 and "--max-step" in capsys.readouterr().err
+
+
+@pytest.mark.filterwarnings("ignore:Attaching a spec with an empty prefix")
+def test_the_ur5_does_the_kitchen_stages_in_kitchen_physics() -> None:
+    """Straight-line IK paths at 2 cm per step through the kitchen's nodes and via points,
+    joint targets every 50 ms, the gripper closed and opened at the grasps: in the kitchen's
+    physics the fingers close on the handle's 2 cm fin and on the cube, the door opens, the
+    cube ends in the cabinet and the valve opens (the kitchen's own facts), with no MuJoCo
+    warning."""
+    from osg_control.kitchen import skills
+    from osg_control.kitchen.world import WorldState, world_facts
+
+    tool = _reach_tool()
+    arm = ur5_model.ur5_spec(with_gripper=False, base=KITCHEN_BASE).compile()
+    model, _ = tool.kitchen_with_ur5(KITCHEN_BASE)
+    data = mujoco.MjData(model)
+    arm_qpos = [model.joint(n).qposadr[0] for n in ARM_JOINTS]
+    actuators = [model.actuator(n).id for n in ARM_JOINTS]
+    gripper = model.actuator(ur5_model.GRIPPER_ACTUATOR).id
+    data.qpos[arm_qpos] = data.ctrl[actuators] = HOME_Q
+    data.qpos[[model.joint(n).qposadr[0] for n in FINGER_JOINTS]] = ur5_model.FINGER_OPEN
+    data.ctrl[gripper] = ur5_model.FINGER_OPEN
+    substeps = round(0.05 / model.opt.timestep)
+
+    def go(target: str | tuple[float, float, float], grip: float | None) -> None:
+        """Close or open the gripper (``grip``), then move to a node or a point."""
+        if grip is not None:
+            data.ctrl[gripper] = grip
+        point = skills.NODES[target].position if isinstance(target, str) else target
+        path = tool.reach_world(arm, point, TOP_DOWN, data.qpos[arm_qpos].copy(), 120, 0.02).path
+        for q in path:
+            data.ctrl[actuators] = q
+            mujoco.mj_step(model, data, substeps)
+
+    closed, opened = 0.0, ur5_model.FINGER_OPEN
+    steps: list[tuple[str | tuple[float, float, float], float | None]] = [
+        ("door-front", None),
+        ("handle", None),
+        ("handle", closed),
+        ("handle-open", None),
+        ("handle-open", opened),
+        (skills.RELEASE_LIFT, None),
+        ("above-cube", None),
+        ("cube-grasped", None),
+        ("cube-grasped", closed),
+        ("cube-lifted", None),
+        (skills.WALL_CLEAR, None),
+        ("place-front", None),
+        ("cube-inside", None),
+        ("cube-inside", opened),
+        ("cabinet-front", None),
+        ("home", None),
+        ("above-valve", None),
+        ("valve-lever", None),
+        *((skills.valve_push_point(angle), None) for angle in skills.VALVE_PUSH_ANGLES),
+    ]
+    held = []  # the gripper's width after each close: on the handle's fin, on the cube
+    for target, grip in steps:
+        go(target, grip)
+        if grip == closed:
+            held.append(sum(data.qpos[model.joint(n).qposadr[0]] for n in FINGER_JOINTS))
+    np.testing.assert_allclose(held, [0.02, 2 * BOX_HALF], atol=2e-3)
+    cube = data.qpos[model.joint("cube_free").qposadr[0] :][:7]
+    world = WorldState(
+        door_opening=float(data.qpos[model.joint("door_slide").qposadr[0]]),
+        valve_angle=float(data.qpos[model.joint("valve_hinge").qposadr[0]]),
+        cube_pos=(cube[0], cube[1], cube[2]),
+        cube_quat=(cube[3], cube[4], cube[5], cube[6]),
+        cube_grasped=False,
+        handle_grasped=False,
+    )
+    assert {"door-open", "cube-in-cabinet", "valve-open"} <= world_facts(world)
+    assert data.warning.number.sum() == 0
