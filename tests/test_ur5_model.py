@@ -241,7 +241,7 @@ def test_reach_reports_an_unreachable_pose_and_refuses_bad_input(
     with pytest.raises(ValueError, match="shape"):
         reach_pose(arm_model, TCP_SITE, (0.4, 0.0, 0.3), TOP_DOWN_QUAT, HOME_Q[:5], limits)
     with pytest.raises(ValueError, match="max_step"):
-        reach_pose(arm_model, TCP_SITE, (0.4, 0.0, 0.3), TOP_DOWN_QUAT, HOME_Q, limits, max_step=0.0)
+        reach_pose(arm_model, TCP_SITE, (0.4, 0, 0.3), TOP_DOWN_QUAT, HOME_Q, limits, max_step=0)
 
 
 def test_max_step_walks_the_straight_line(arm_model: mujoco.MjModel) -> None:
