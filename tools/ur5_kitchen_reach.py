@@ -5,8 +5,8 @@ Usage: python tools/ur5_kitchen_reach.py [--base X Y Z] [--steps N] [--max-step 
 Per node: mink differential IK (``robots.reach.reach_pose``: frame + posture tasks, joint
 position and velocity limits, 50 ms steps, the target walking a straight line at most
 ``--max-step`` per step) from ``HOME_Q`` toward the node's pose, then the arm put there in
-the kitchen scene (the door shut, then open; fingers open) and the scene geoms the robot
-touches listed. Per skill: its waypoints reached in turn from its start node's
+the kitchen scene (the door shut, then open; fingers open) and the geoms the robot touches
+listed (the scene's and its own). Per skill: its waypoints reached in turn from its start node's
 configuration, and what the robot touches along the way (every other step), the door open
 where the skill starts with it open. Contacts with what the fingers grasp or push (the cube,
 the door's handle, the valve's lever) are not counted; the scene stays still (the door does
@@ -54,8 +54,9 @@ def kitchen_with_ur5(base: Placement) -> tuple[mujoco.MjModel, frozenset[int]]:
 def touched(
     model: mujoco.MjModel, robot_geoms: frozenset[int], path: np.ndarray, door: float
 ) -> list[str]:
-    """The scene geoms the robot touches at any arm configuration of ``path`` (fingers
-    open), as robot geom/scene geom pairs with their deepest penetration [mm]."""
+    """The geoms the robot touches at any arm configuration of ``path`` (fingers open): the
+    scene's and its own (the pairs the SRDF leaves on), as robot geom/other geom pairs with
+    their deepest penetration [mm]."""
     data = mujoco.MjData(model)
     arm = [model.joint(name).qposadr[0] for name in ur5_model.ARM_JOINTS]
     for name in ur5_model.FINGER_JOINTS:
@@ -67,8 +68,8 @@ def touched(
         mujoco.mj_forward(model, data)
         for contact in data.contact[: data.ncon]:
             a, b = (int(g) for g in contact.geom)
-            if (a in robot_geoms) == (b in robot_geoms):
-                continue
+            if a not in robot_geoms and b not in robot_geoms:
+                continue  # the scene's own contacts (the cube on the counter)
             mine, other = (a, b) if a in robot_geoms else (b, a)
             if model.geom(other).name in MANIPULATED_GEOMS:
                 continue
