@@ -16,8 +16,8 @@ DOMAIN_PACKAGES = ("kitchen", "franka")
 LAYERS: dict[str, int] = {
     "errors": 0, "paths": 0, "seeding": 0, "registration": 0, "io_safety": 0, "json_files": 0,
     "__init__": 0,
-    "control": 1, "domain": 1, "parallel": 1, "perception": 1, "robots": 1,
-    "environment": 2,
+    "control": 1, "domain": 1, "parallel": 1, "perception": 1,
+    "environment": 2, "robots": 2,
     "data": 3,
     "learning": 4, "planning": 4,
     "classifier": 5,

@@ -95,6 +95,16 @@ def test_tcp_pose_and_jacobian_agree_at_random_configurations(base: ur5_model.Pl
             np.testing.assert_allclose(jacobian, pin_jacobian, rtol=0, atol=KINEMATICS_TOL)
 
 
+def test_the_bare_spec_is_links_joints_and_the_finger_coupling() -> None:
+    """What a robot description's MuJoCo builder returns: no actuator, site or key."""
+    model = ur5_model.ur5_bare_spec(KITCHEN_BASE).compile()
+    assert (model.nu, model.nsite, model.nkey, model.neq) == (0, 0, 0, 1)
+    joints = [model.joint(i).name for i in range(model.njnt)]
+    assert joints == [*ARM_JOINTS, *FINGER_JOINTS]
+    np.testing.assert_array_equal(model.joint(FINGER_JOINTS[0]).range, [0, ur5_model.FINGER_OPEN])
+    assert model.nexclude == len(ur5_model.disabled_collision_pairs()) == 10
+
+
 def test_tcp_is_between_the_pads(full_model: mujoco.MjModel) -> None:
     """The TCP lies midway between the pads' centres, on the closing axis (its y)."""
     data = mujoco.MjData(full_model)

@@ -47,8 +47,8 @@ FINGER_JOINTS: tuple[str, ...] = ("left_finger_joint", "right_finger_joint")
 FINGER_BODIES: tuple[str, ...] = ("left_finger", "right_finger")
 FLANGE_FRAME = "tool0"
 """The URDF's flange frame (z out of the flange), where the gripper is mounted."""
-FLANGE_BODY = "wrist_3_link"
-"""The link that carries the flange (MuJoCo fuses ``tool0`` into it)."""
+TCP_BODY = "wrist_3_link"
+"""The link that carries the flange and the TCP site (MuJoCo fuses ``tool0`` into it)."""
 _BASE_LINK = "base_link"
 _MARKER_LINK = "ee_link"
 """The URDF's end-effector marker link, whose 1 cm collision box is dropped."""
@@ -100,13 +100,22 @@ _PAD_MASS = 0.005
 _FINGER_HALF = (0.011, 0.006, (TCP_DEPTH + _PAD_HALF[2] - _PALM_BOTTOM) / 2)
 _FINGER_MASS = 0.045
 
-# Position-servo gains per arm joint [N m / rad] and damping [N m s / rad]: kv/kp of about
-# 15 ms, as the Panda's, so a 50 ms control step is tracked to within a few per cent.
-_ARM_KP = (6000.0, 6000.0, 4500.0, 2000.0, 2000.0, 2000.0)
-_ARM_KV = (90.0, 90.0, 70.0, 30.0, 30.0, 30.0)
-_ARMATURE = 0.1
-_GRIPPER_KP = 2000.0
-_GRIPPER_KV = 100.0
+SERVO_KP = (6000.0, 6000.0, 4500.0, 2000.0, 2000.0, 2000.0)
+"""Position-servo stiffness per arm joint [N m/rad] (``control.servo``'s drive)."""
+SERVO_KV = (90.0, 90.0, 70.0, 30.0, 30.0, 30.0)
+"""Servo damping per arm joint [N m s/rad]: kv/kp of about 15 ms, as the Panda's, so a 50 ms
+control step is tracked to within a few per cent."""
+ARM_ARMATURE = (0.1,) * 6
+"""Reflected rotor inertia per arm joint [kg m^2]."""
+GRIPPER_KP = 2000.0
+"""The gripper actuator's position gain [N/m]."""
+GRIPPER_KV = 100.0
+"""The gripper actuator's damping [N s/m]."""
+FINGER_ARMATURE = 0.1
+"""Each finger joint's reflected inertia [kg] ..."""
+FINGER_DAMPING = 20.0
+"""... and damping [N s/m]: light fingers otherwise reach metres per second and tunnel
+through thin parts."""
 
 
 @cache
@@ -116,8 +125,18 @@ def _urdf_arm():  # type: ignore[no-untyped-def]
     return pin.buildModelFromUrdf(str(find_robot_file(URDF_PATH)))
 
 
+def tcp_in_flange() -> tuple[tuple[float, float, float], tuple[float, float, float, float]]:
+    """The TCP site's position [m] and orientation (w, x, y, z) in ``TCP_BODY``."""
+    position, rotation = flange_to_tcp()
+    quat = np.zeros(4)
+    mujoco.mju_mat2Quat(quat, rotation.flatten())
+    x, y, z = (float(v) for v in position)
+    w, qx, qy, qz = (float(v) for v in quat)
+    return (x, y, z), (w, qx, qy, qz)
+
+
 def flange_to_tcp() -> tuple[np.ndarray, np.ndarray]:
-    """The TCP's position [m] and rotation matrix in the flange link's (``FLANGE_BODY``)
+    """The TCP's position [m] and rotation matrix in the flange link's (``TCP_BODY``)
     frame: the URDF's ``tool0`` placement, then ``TCP_DEPTH`` along its z axis."""
     model = _urdf_arm()
     tool0 = model.frames[model.getFrameId(FLANGE_FRAME)].placement
@@ -216,10 +235,6 @@ def _add_gripper(flange: mujoco.MjsBody, position: np.ndarray, quat: np.ndarray)
         )
         slide.range = [0.0, FINGER_OPEN]
         slide.limited = True
-        # Reflected inertia and damping of the drive: light fingers otherwise reach metres
-        # per second and tunnel through thin parts.
-        slide.armature = 0.1
-        slide.damping = [20.0, 0.0, 0.0]
         inner = 2 * pad_half[1]
         finger.add_geom(
             name=f"{name}_link",
@@ -239,65 +254,82 @@ def _add_gripper(flange: mujoco.MjsBody, position: np.ndarray, quat: np.ndarray)
         )
 
 
-def ur5_spec(with_gripper: bool = True, base: Placement = ORIGIN) -> mujoco.MjSpec:
-    """Build the UR5's MuJoCo spec from the URDF: TCP site, drives, home key and, with
-    ``with_gripper``, the gripper and its actuator ``GRIPPER_ACTUATOR``.
+def ur5_bare_spec(base: Placement = ORIGIN) -> mujoco.MjSpec:
+    """The bare UR5 from the URDF with the gripper mounted: links (collision meshes), joints,
+    inertias, the SRDF's excluded pairs, the fingers' slide joints and their coupling; no
+    actuator, TCP site or keyframe (``ur5_spec`` adds them).
 
     Args:
-        with_gripper: mount the gripper. The arm-only model (``False``) is what an IK
-            backend works on; its TCP site is at the same place.
         base: where the base link goes in the spec's world (attach the spec at a scene's
             origin: the IK models built with the same ``base`` then work in scene
             coordinates).
-
-    The actuators are, in order: a stiffness actuator per arm joint (named after it), a
-    damping actuator per arm joint (``control.servo``), then the gripper's (its control is
-    each finger's travel, 0 closed to ``FINGER_OPEN``).
     """
     spec = mujoco.MjSpec.from_string(_urdf_for_mujoco())
     spec.modelname = "ur5"
     root = spec.body(_BASE_LINK)
     root.pos, root.quat = list(base[0]), list(base[1])
-    flange = spec.body(FLANGE_BODY)
     for geom in list(spec.body(_MARKER_LINK).geoms):
         spec.delete(geom)  # a 1 cm box where the gripper's coupling is
-    position, rotation = flange_to_tcp()
-    quat = np.zeros(4)
-    mujoco.mju_mat2Quat(quat, rotation.flatten())
-    flange.add_site(name=TCP_SITE, pos=position, quat=quat, size=[0.005] * 3)
     for link1, link2 in disabled_collision_pairs():
-        spec.add_exclude(bodyname1=_body_name(spec, link1), bodyname2=_body_name(spec, link2))
-    limits = velocity_limits()
-    for name in ARM_JOINTS:
-        spec.joint(name).armature = _ARMATURE
+        spec.add_exclude(bodyname1=link1, bodyname2=link2)
+    tool0 = _urdf_arm().frames[_urdf_arm().getFrameId(FLANGE_FRAME)].placement
+    quat = np.zeros(4)
+    mujoco.mju_mat2Quat(quat, np.array(tool0.rotation).flatten())
+    _add_gripper(spec.body(TCP_BODY), np.array(tool0.translation), quat)
+    coupling = spec.add_equality(
+        type=mujoco.mjtEq.mjEQ_JOINT, name1=FINGER_JOINTS[1], name2=FINGER_JOINTS[0]
+    )
+    polynomial = np.zeros_like(coupling.data)
+    polynomial[1] = 1.0  # right = 0 + 1 * left: the two fingers move together
+    coupling.data = polynomial
+    coupling.solref = [0.005, 1.0]  # stiffer than the default 0.02 s: the fingers centre
+    return spec
+
+
+def ur5_spec(with_gripper: bool = True, base: Placement = ORIGIN) -> mujoco.MjSpec:
+    """The driven UR5: ``ur5_bare_spec(base)`` with the TCP site, gravity compensation, the
+    arm's drives, the gripper's actuator ``GRIPPER_ACTUATOR`` and the home key.
+
+    Args:
+        with_gripper: keep the fingers and the gripper's actuator. The arm-only model
+            (``False``) is what an IK backend works on; its TCP site is at the same place.
+        base: where the base link goes (``ur5_bare_spec``).
+
+    The actuators are, in order: a stiffness actuator per arm joint (named after it), a
+    damping actuator per arm joint (``control.servo``), then the gripper's (its control is
+    each finger's travel, 0 closed to ``FINGER_OPEN``).
+    """
+    spec = ur5_bare_spec(base)
+    position, quat = tcp_in_flange()
+    spec.body(TCP_BODY).add_site(name=TCP_SITE, pos=position, quat=quat, size=[0.005] * 3)
+    world = spec.worldbody.name
+    for body in spec.bodies:
+        body.gravcomp = 0.0 if body.name == world else 1.0
+    if not with_gripper:
+        for name in FINGER_BODIES:
+            spec.delete(spec.body(name))
+        for equality in list(spec.equalities):
+            spec.delete(equality)
+    for name, armature in zip(ARM_JOINTS, ARM_ARMATURE, strict=True):
+        spec.joint(name).armature = armature
     effort = tuple(float(e) for e in effort_limits())
-    add_speed_capped_drives(spec, ARM_JOINTS, _ARM_KP, _ARM_KV, effort, limits)
+    add_speed_capped_drives(spec, ARM_JOINTS, SERVO_KP, SERVO_KV, effort, velocity_limits())
     qpos_home = list(HOME_Q)
     ctrl_home = list(HOME_Q) + [0.0] * len(ARM_JOINTS)
     if with_gripper:
-        tool0 = _urdf_arm().frames[_urdf_arm().getFrameId(FLANGE_FRAME)].placement
-        mujoco.mju_mat2Quat(quat, np.array(tool0.rotation).flatten())
-        _add_gripper(flange, np.array(tool0.translation), quat.copy())
-        coupling = spec.add_equality(
-            type=mujoco.mjtEq.mjEQ_JOINT, name1=FINGER_JOINTS[1], name2=FINGER_JOINTS[0]
-        )
-        polynomial = np.zeros_like(coupling.data)
-        polynomial[1] = 1.0  # right = 0 + 1 * left: the two fingers move together
-        coupling.data = polynomial
-        coupling.solref = [0.005, 1.0]  # stiffer than the default 0.02 s: the fingers centre
         gripper = spec.add_actuator(
             name=GRIPPER_ACTUATOR, target=FINGER_JOINTS[0], trntype=mujoco.mjtTrn.mjTRN_JOINT
         )
-        gripper.set_to_position(kp=_GRIPPER_KP, kv=_GRIPPER_KV)
+        gripper.set_to_position(kp=GRIPPER_KP, kv=GRIPPER_KV)
         gripper.ctrlrange = [0.0, FINGER_OPEN]
         gripper.ctrllimited = True
         gripper.forcerange = [-GRIP_FORCE, GRIP_FORCE]
         gripper.forcelimited = True
+        for name in FINGER_JOINTS:
+            spec.joint(name).armature = FINGER_ARMATURE
+            spec.joint(name).damping = [FINGER_DAMPING, 0.0, 0.0]
         qpos_home += [FINGER_OPEN, FINGER_OPEN]
         ctrl_home.append(FINGER_OPEN)
-    world = spec.worldbody.name
-    for body in spec.bodies:
-        body.gravcomp = 0.0 if body.name == world else 1.0
     spec.add_key(name=HOME_KEY, qpos=qpos_home, ctrl=ctrl_home)
     return spec
 
@@ -318,8 +350,3 @@ def attach_ur5(scene: mujoco.MjSpec, base: Placement = ORIGIN) -> frozenset[str]
         warnings.filterwarnings("ignore", message="Attaching a spec with an empty prefix")
         scene.attach(robot, frame=scene.worldbody.add_frame(), prefix="")
     return names
-
-
-def _body_name(spec: mujoco.MjSpec, link: str) -> str:
-    """The MuJoCo body of a URDF link: the base link is fused into the world."""
-    return link if spec.body(link) is not None else "world"
