@@ -105,6 +105,18 @@ def test_the_bare_spec_is_links_joints_and_the_finger_coupling() -> None:
     assert model.nexclude == len(ur5_model.disabled_collision_pairs()) == 10
 
 
+@pytest.mark.parametrize(
+    "base",
+    [((0.0, 0.0), (1.0, 0.0, 0.0, 0.0)), ((0.0, np.nan, 0.0), (1.0, 0.0, 0.0, 0.0)),
+     ((0.0, 0.0, 0.0), (0.0, 0.0, 0.0, 0.0))],
+)  # fmt: skip
+def test_a_bad_placement_is_refused(base: ur5_model.Placement) -> None:
+    with pytest.raises(ValueError, match="base placement"):
+        ur5_model.ur5_bare_spec(base)
+    with pytest.raises(ValueError, match="base placement"):
+        ur5_model.load_pinocchio_arm(base)
+
+
 def test_tcp_is_between_the_pads(full_model: mujoco.MjModel) -> None:
     """The TCP lies midway between the pads' centres, on the closing axis (its y)."""
     data = mujoco.MjData(full_model)

@@ -5,7 +5,7 @@ Both models load the *same* URDF, so the arm's kinematics agree by construction 
 TCP pose and Jacobian to 1e-9); the TCP is placed in both from one figure, ``TCP_DEPTH`` along
 the URDF's ``tool0`` frame. MuJoCo cannot read the URDF's ``.dae`` visuals: they are dropped
 and the URDF's collision STLs (convex hulls in MuJoCo) are what is seen and what collides.
-example-robot-data's UR5 has no gripper, so ``ur5_spec`` mounts one on the flange, modelled
+example-robot-data's UR5 has no gripper, so ``ur5_bare_spec`` mounts one on the flange, modelled
 on a Robotiq 2F-85: two prismatic fingers driven together (an equality couples them, as a
 mimic joint would) by one position actuator, ``MAX_OPENING`` between the pads, friction pads
 with torsional friction. The real 2F-85's linkage (its fingertips swing on an arc) is not
@@ -118,6 +118,21 @@ FINGER_DAMPING = 20.0
 through thin parts."""
 
 
+def check_placement(base: Placement) -> None:
+    """Refuse a placement that is not a finite position and a non-zero quaternion.
+
+    Raises:
+        ValueError: naming the placement.
+    """
+    position, quat = np.asarray(base[0], dtype=float), np.asarray(base[1], dtype=float)
+    if position.shape != (3,) or quat.shape != (4,):
+        raise ValueError(f"base placement {base}: needs 3 position and 4 quaternion values")
+    if not (np.all(np.isfinite(position)) and np.all(np.isfinite(quat))):
+        raise ValueError(f"base placement {base}: not finite")
+    if np.linalg.norm(quat) < 1e-9:
+        raise ValueError(f"base placement {base}: the quaternion is zero")
+
+
 @cache
 def _urdf_arm():  # type: ignore[no-untyped-def]
     import pinocchio as pin
@@ -153,6 +168,7 @@ def load_pinocchio_arm(base: Placement = ORIGIN):  # type: ignore[no-untyped-def
     """
     import pinocchio as pin
 
+    check_placement(base)
     model = pin.Model(_urdf_arm())
     placement = pin.SE3(pin.Quaternion(*base[1]).normalized().matrix(), np.array(base[0]))
     model.jointPlacements[1] = placement * model.jointPlacements[1]
@@ -264,6 +280,7 @@ def ur5_bare_spec(base: Placement = ORIGIN) -> mujoco.MjSpec:
             origin: the IK models built with the same ``base`` then work in scene
             coordinates).
     """
+    check_placement(base)
     spec = mujoco.MjSpec.from_string(_urdf_for_mujoco())
     spec.modelname = "ur5"
     root = spec.body(_BASE_LINK)
