@@ -309,6 +309,15 @@ def test_a_file_without_checksums_still_loads(tmp_path):
         np.testing.assert_array_equal(unstamped.arrays[key], array)
 
 
+@pytest.mark.parametrize("field", ["observations", "rewards", "episode_successes"])
+def test_an_array_stripped_of_its_checksum_beside_checksummed_ones_is_refused(tmp_path, field):
+    path = write_synthetic_dataset(tmp_path / "grab-cube.h5")
+    with h5py.File(path, "a") as f:
+        del f[field].attrs[CHECKSUM_ATTR]
+    with pytest.raises(DatasetError, match=f"{field!r} lacks its sha256 content checksum"):
+        load_dataset(path)
+
+
 def _short_of(needed: int, by: int) -> Callable[[str], shutil._ntuple_diskusage]:
     """A ``shutil.disk_usage`` reporting ``needed - by`` bytes free (the rest is real)."""
     real = shutil.disk_usage

@@ -1,7 +1,8 @@
 """Trust checks for the chunk files of a resumable collection.
 
 A chunk is merged only if it is the chunk its name claims: a readable, valid data set
-(``load_dataset``) of the same skill spec, seed and episode range, in this format. A file
+(``load_dataset``: every field's values checked) whose every array carries its sha256
+checksum and matches it, of the same skill spec, seed and episode range, in this format. A file
 that fails is discarded with a warning and recomputed, never merged.
 """
 
@@ -26,7 +27,7 @@ def chunk_attrs(skill_json: str, seed: int, start: int, stop: int) -> dict[str, 
 def chunk_mismatch(path: Path, expected: dict[str, Any]) -> str | None:
     """Why the file at ``path`` is not the chunk ``expected`` describes; None if it is."""
     try:
-        dataset = load_dataset(path)
+        dataset = load_dataset(path, require_checksums=True)
     except DatasetError as err:
         return str(err)
     attrs = dataset.attrs
