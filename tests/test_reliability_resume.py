@@ -71,7 +71,7 @@ EDITS: list[tuple[str, Callable[[str], str], str]] = [
     ("flipped, checksum kept", _edit(_flip), "does not match its sha256"),
     ("success a string", _edit(_set_success("1.0"), reseal=True), "success must be 0 or 1"),
     ("success true", _edit(_set_success(True), reseal=True), "success must be 0 or 1"),
-    ("success NaN", _edit(_set_success(math.nan), reseal=True), "success must be 0 or 1"),
+    ("success NaN", _edit(_set_success(math.nan), reseal=True), "NaN is not a JSON number"),
     ("truncated", lambda text: text[: len(text) // 2], "unreadable"),
     ("not UTF-8", lambda text: "\udcff" + text, "unreadable"),
     ("checksum missing", _edit(_drop_checksum), "not a chunk of this version"),

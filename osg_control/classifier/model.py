@@ -250,8 +250,10 @@ class StateClassifier:
         sidecar_path = directory / SIDECAR_FILE
         weights_path = directory / WEIGHTS_FILE
         for path in (sidecar_path, weights_path):
-            if not path.is_file():
+            if not path.exists():
                 raise CheckpointError(f"{path}: classifier checkpoint file not found")
+            if not path.is_file():
+                raise CheckpointError(f"{path}: classifier checkpoint is not a regular file")
         sidecar = read_json_object(sidecar_path, "classifier sidecar", CheckpointError)
         if sidecar.get("format") != CHECKPOINT_FORMAT:
             raise CheckpointError(f"{sidecar_path}: not a {CHECKPOINT_FORMAT} sidecar")

@@ -22,6 +22,7 @@ from osg_control.evaluation.evaluate import format_task_table, task_table
 from osg_control.evaluation.resume import source_fingerprint
 from osg_control.execution.defaults import describe_models, models_fingerprint, models_in_use
 from osg_control.io_safety import check_output_dir
+from osg_control.json_files import JSONFormatError, parse_json
 from osg_control.parallel import open_executor
 from osg_control.paths import cache_dir
 
@@ -139,9 +140,9 @@ def run_benchmark_command(args: argparse.Namespace) -> int:
 def _json_object(text: str) -> dict[str, Any]:
     """``--env-kwargs``: a JSON object, else a usage error naming the option."""
     try:
-        value = json.loads(text)
-    except json.JSONDecodeError as err:
-        raise argparse.ArgumentTypeError(f"not JSON ({err})") from None
+        value = parse_json(text)
+    except JSONFormatError as err:
+        raise argparse.ArgumentTypeError(str(err)) from None
     if not isinstance(value, dict):
         raise argparse.ArgumentTypeError(f"must be a JSON object, got {text!r}")
     return value

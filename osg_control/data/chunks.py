@@ -8,13 +8,13 @@ that fails is discarded with a warning and recomputed, never merged.
 
 from __future__ import annotations
 
-import json
 import logging
 from pathlib import Path
 from typing import Any
 
 from osg_control.data.datasets import FORMAT_VERSION, load_dataset
 from osg_control.errors import DatasetError
+from osg_control.json_files import parse_json
 
 LOGGER = logging.getLogger(__name__)
 
@@ -33,7 +33,7 @@ def chunk_mismatch(path: Path, expected: dict[str, Any]) -> str | None:
     attrs = dataset.attrs
     if int(attrs.get("format_version", -1)) != FORMAT_VERSION:
         return f"format version {attrs.get('format_version')}, expected {FORMAT_VERSION}"
-    if json.loads(attrs["skill"]) != json.loads(expected["skill"]):
+    if parse_json(attrs["skill"]) != parse_json(expected["skill"]):
         return f"recorded for skill {dataset.skill_name!r} with another spec"
     for key in ("seed", "chunk_start", "chunk_stop"):
         if key not in attrs or int(attrs[key]) != int(expected[key]):

@@ -32,7 +32,6 @@ from __future__ import annotations
 
 import hashlib
 import io
-import json
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
@@ -49,6 +48,7 @@ from osg_control.data.validation import (
 )
 from osg_control.errors import DatasetError
 from osg_control.io_safety import atomic_write
+from osg_control.json_files import parse_json
 
 FORMAT_VERSION = 1
 OBS_DIM = 10
@@ -145,7 +145,7 @@ class Dataset:
     @property
     def skill_name(self) -> str:
         """The name of the skill recorded."""
-        return str(json.loads(self.attrs["skill"])["name"])
+        return str(parse_json(self.attrs["skill"])["name"])
 
     def episode(self, index: int) -> Episode:
         """Slice out one episode."""

@@ -20,7 +20,6 @@ episode. A refused import leaves the ``out`` file as it was.
 
 from __future__ import annotations
 
-import json
 from pathlib import Path
 from typing import Any
 
@@ -42,6 +41,7 @@ from osg_control.domain.base import Domain
 from osg_control.domain.spec import SkillSpec
 from osg_control.environment.arm_env import success_holds
 from osg_control.errors import DatasetError
+from osg_control.json_files import JSONFormatError, load_json, parse_json
 
 SUCCESS_SOURCES = ("rewards", "predicate")
 
@@ -67,8 +67,8 @@ def _read_metadata(data_dir: Path) -> dict[str, Any]:
     """
     path = data_dir / METADATA_FILE
     try:
-        metadata = json.loads(path.read_text())
-    except (OSError, UnicodeDecodeError, ValueError) as err:
+        metadata = load_json(path)
+    except (OSError, JSONFormatError) as err:
         raise DatasetError(f"{path}: not a readable JSON file ({err})") from err
     if not isinstance(metadata, dict):
         raise DatasetError(f"{path}: must hold a JSON object, got {type(metadata).__name__}")
@@ -78,7 +78,7 @@ def _read_metadata(data_dir: Path) -> dict[str, Any]:
 def _space_shape(metadata: dict[str, Any], key: str, path: Path) -> tuple[int, ...]:
     """The shape of the Box space ``metadata[key]`` (a JSON string, as Minari writes it)."""
     try:
-        space = json.loads(metadata[key])
+        space = parse_json(metadata[key], constants=True)
         if not isinstance(space, dict):
             raise ValueError("not a JSON object")
         kind, shape = space.get("type"), space.get("shape")

@@ -9,7 +9,6 @@ training and before an existing file is replaced.
 
 from __future__ import annotations
 
-import json
 from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
@@ -17,6 +16,7 @@ from typing import Any
 import numpy as np
 
 from osg_control.errors import DatasetError
+from osg_control.json_files import parse_json
 
 PER_EPISODE_KINDS = {
     "episode_starts": ("iu", "integer"),
@@ -130,7 +130,7 @@ def check_attrs(path: Path, attrs: Mapping[str, Any]) -> None:
         if key not in attrs:
             raise DatasetError(f"{path}: missing attribute {key!r}")
     try:
-        skill = json.loads(attrs["skill"])
+        skill = parse_json(attrs["skill"])
         if not isinstance(skill, dict) or not isinstance(skill.get("name"), str):
             raise ValueError("no skill name")
     except (TypeError, ValueError) as err:

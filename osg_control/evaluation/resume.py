@@ -28,7 +28,7 @@ from pathlib import Path
 from typing import Any, TypeVar
 
 from osg_control.io_safety import atomic_write
-from osg_control.json_files import is_json_number
+from osg_control.json_files import JSONFormatError, is_json_number, load_json
 from osg_control.paths import PACKAGE_DIR
 
 CHUNK_JOBS = 10
@@ -114,12 +114,12 @@ def _read_chunk(path: Path, keys: list[str], jobs: Sequence[Any], check: Check) 
     if not path.exists():
         return None
     try:
-        stored = json.loads(path.read_text(encoding="utf-8"))
+        stored = load_json(path)
         reason = _chunk_problem(stored, keys, jobs, check)
         if reason is None:
             return list(stored["results"])
-    except (OSError, ValueError, RecursionError) as err:
-        reason = f"unreadable ({type(err).__name__}: {err})"
+    except (OSError, JSONFormatError) as err:
+        reason = f"unreadable ({err})"
     LOGGER.warning("%s: discarded, %s; recomputing it", path, reason)
     path.unlink(missing_ok=True)
     return None

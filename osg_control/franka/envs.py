@@ -3,7 +3,6 @@ with its perception, and the D4RL benchmark's protocol (``BENCHMARK``)."""
 
 from __future__ import annotations
 
-import json
 from collections.abc import Mapping
 from dataclasses import replace
 from typing import Any
@@ -22,6 +21,7 @@ from osg_control.franka.domain import (
     world_of,
 )
 from osg_control.franka.perception import PERCEPTIONS
+from osg_control.json_files import parse_json
 from osg_control.perception.spec import PerceptionSpec, check_supported
 
 STEP_LIMIT = 280
@@ -161,7 +161,7 @@ def make_benchmark_env(
     if noise:
         spec = PerceptionSpec(spec.name, tcp_noise=noise)
     if isinstance(env_kwargs, str):
-        env_kwargs = json.loads(env_kwargs) if env_kwargs else None
+        env_kwargs = parse_json(env_kwargs) if env_kwargs else None
     return make_franka_env(
         config=FrankaConfig(perception=spec),
         tasks=list(tasks),

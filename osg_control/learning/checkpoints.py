@@ -35,7 +35,7 @@ from osg_control.data.datasets import ACTION_DIM, OBS_DIM
 from osg_control.domain.spec import SkillSpec, skill_from_json
 from osg_control.errors import CheckpointError, SkillSpecError
 from osg_control.io_safety import atomic_write
-from osg_control.json_files import read_json_object
+from osg_control.json_files import parse_json, read_json_object
 
 FORMAT_VERSION = 1
 OBS_CLIP = 10.0
@@ -220,7 +220,7 @@ def _read_sidecar(path: Path, name: str) -> dict[str, Any]:
 def _weights_skill(data: bytes) -> str | None:
     """The skill a safetensors file was saved for (its ``skill`` metadata), if recorded."""
     size = int.from_bytes(data[:8], "little")
-    header = json.loads(data[8 : 8 + size])  # valid: the file has loaded
+    header = parse_json(data[8 : 8 + size])  # valid: the file has loaded
     metadata = header.get("__metadata__") or {}
     return metadata.get("skill")
 
