@@ -37,6 +37,8 @@ Z = 2.576
 """Two-sided 99 % normal quantile: with several hundred cells, 95 % intervals would flag a
 few agreeing cells by chance on every run."""
 CONFIDENCE = 0.99
+MAX_TRIALS = 10**9
+"""The most trials a cell may count (a 401-digit count overflowed the interval)."""
 MIN_TRIALS = 30
 """The fewest trials a compared cell may have, on either side: at 30 trials a rate of 0.5
 is told from one of 0.9 (their 99 % intervals are disjoint); at 1 or 2 nothing is."""
@@ -93,7 +95,16 @@ class Comparison:
 
 
 def wilson_interval(rate: float, trials: int, z: float = Z) -> tuple[float, float]:
-    """The Wilson score interval of a success rate observed over ``trials`` trials."""
+    """The Wilson score interval of a success rate observed over ``trials`` trials.
+
+    Raises:
+        ValueError: a rate outside [0, 1] or a trial count above ``MAX_TRIALS``.
+    """
+    if not 0.0 <= rate <= 1.0 or trials > MAX_TRIALS:
+        raise ValueError(
+            f"a Wilson interval needs a rate in [0, 1] and at most {MAX_TRIALS:,} trials, "
+            f"got {rate!r} over {_shown(trials)}"
+        )
     if trials <= 0:
         return 0.0, 1.0
     denominator = 1 + z * z / trials
@@ -183,8 +194,10 @@ class _Fields:
     def trials(self, table: dict[str, Any], key: str, where: str) -> int:
         """A table's trial count ``table[key]``: a positive integer."""
         value = self.field(table, key, where)
-        if isinstance(value, bool) or not isinstance(value, int) or value <= 0:
-            raise self.fail(where, f"{key!r} must be a positive integer, got {_shown(value)}")
+        if isinstance(value, bool) or not isinstance(value, int) or not 0 < value <= MAX_TRIALS:
+            raise self.fail(
+                where, f"{key!r} must be a positive integer <= {MAX_TRIALS:,}, got {_shown(value)}"
+            )
         return value
 
     def cell(self, where: str, value: Any, trials: int) -> Cell:

@@ -31,7 +31,12 @@ import numpy as np
 
 from osg_control.classifier.motion import MotionMemory
 from osg_control.control.divergence import is_divergence
-from osg_control.control.estimator import MOTION_MODEL, TcpTracker
+from osg_control.control.estimator import (
+    MOTION_MODEL,
+    TcpFilter,
+    TcpTracker,
+    check_motion_model,
+)
 from osg_control.domain.base import Domain
 from osg_control.domain.frames import (
     Offsets,
@@ -44,6 +49,7 @@ from osg_control.environment.arm_env import GRIPPER_OPEN_CMD, EnvConfig
 from osg_control.environment.contract import SkillEnv
 from osg_control.environment.success import success_holds
 from osg_control.errors import SimulationError
+from osg_control.execution import MAX_REPLANS
 from osg_control.execution.entry import EntryChoice
 from osg_control.execution.locate import node_at
 from osg_control.execution.objects import ObjectTracker
@@ -128,6 +134,18 @@ class Executor:
         missing = sorted(set(domain.skills_by_name) - set(policies))
         if missing:
             raise ValueError(f"domain {domain.name!r}: no policy for skills {missing}")
+        if not (
+            isinstance(max_replans, int | np.integer)
+            and not isinstance(max_replans, bool)
+            and 0 <= max_replans <= MAX_REPLANS
+        ):
+            raise ValueError(
+                f"Executor max_replans must be a whole number in [0, {MAX_REPLANS}], "
+                f"got {max_replans!r}"
+            )
+        if filter_gain is not None:
+            TcpFilter(filter_gain, motion_model)  # refuses a bad gain or motion model
+        motion_model = check_motion_model(motion_model)
         self.domain = domain
         self.skills = domain.skills_by_name
         self._plans = PlanMemo(domain, graph_domain(domain, graph))
