@@ -34,6 +34,10 @@ HOME_Q = np.array([0.0, -0.785398, 0.0, -2.35619, 0.0, 1.5707, 0.785398])
 """Home arm configuration [rad] (the SRDF's ``default`` group state)."""
 FINGER_OPEN = 0.04
 """Finger joint travel when open [m] (each finger; distance between fingers is twice this)."""
+SHOULDER_HEIGHT = 0.333
+"""Height [m] of the shoulder (joint 2) above the arm's base."""
+REACH = 0.855
+"""The Panda's reach [m] from its shoulder: no TCP target farther away can be reached."""
 CONTROL_HZ = 20.0
 """The rate of the arm's control loop [Hz]: one IK solve and servo target per 50 ms."""
 

@@ -57,12 +57,15 @@ from osg_control.environment.actions import checked_action
 from osg_control.environment.options import (
     GRIPPER_STATES,
     Bounds,
+    check_env_arguments,
     check_facts_hold,
     check_fields,
     check_names,
     check_start_options,
     choice_option,
     facts_option,
+    node_option,
+    reset_options,
 )
 from osg_control.environment.poses import quat_rotation, sample_start_pose
 from osg_control.environment.sensing import ArmSensors
@@ -193,6 +196,7 @@ class ArmEnv(gym.Env):
         config: EnvConfig | None = None,
         render_mode: str | None = None,
     ) -> None:
+        check_env_arguments(type(self).__name__, skill, config, EnvConfig)
         self.config = config or EnvConfig()
         if self.config.perception.name not in SIMULATED_PERCEPTIONS:
             raise EnvOptionError(
@@ -414,11 +418,11 @@ class ArmEnv(gym.Env):
                 open ``gripper`` while ``holding``); nothing is simulated.
             SimulationError: no collision-free start, or the physics diverged placing it.
         """
-        super().reset(seed=seed)
-        options = dict(options or {})
+        options = reset_options(options)
         check_names(options, RESET_OPTIONS, "reset option")
-        node_name = options.get("node") or (self.skill.start if self.skill else self.home)
-        node = self.nodes[choice_option("node", node_name, self.nodes)]
+        node = self.nodes[
+            node_option(options, self.skill.start if self.skill else self.home, self.nodes)
+        ]
         gripper = choice_option("gripper", options.get("gripper", node.gripper), GRIPPER_STATES)
         holding = options.get("holding", self.skill.holding if self.skill else None)
         choice_option("holding", holding, (None, *self.holdable))
@@ -444,6 +448,7 @@ class ArmEnv(gym.Env):
         asked = options.get("facts")
         default_facts = self.skill.start_facts if self.skill else frozenset()
         facts = default_facts if asked is None else facts_option(asked, self.world_facts)
+        super().reset(seed=seed)  # after the checks: a refused reset changes nothing
         orientation = quat_rotation(node.orientation)
         for _attempt in range(50):
             pos, rot = sample_start_pose(self.np_random, centre, radius, angle, orientation)

@@ -283,7 +283,8 @@ class Executor:
         sequence has ended, before anything else moves: where an executor with
         ``max_replans = attempt`` would have stopped (Tables IV/V score every budget from
         one run this way)."""
-        goal = sorted(set(goal))
+        goal = _goal_facts(goal)
+        _check_observation(obs, env)
         started = time.perf_counter()
         self.motion = MotionMemory()  # the arm is taken to be at rest
         facts = env.percept().facts
@@ -402,6 +403,39 @@ def _episode_end(terminated: bool, truncated: bool) -> str | None:
     if truncated:
         return TIME_LIMIT
     return EPISODE_ENDED if terminated else None
+
+
+def _goal_facts(goal: Any) -> list[str]:
+    """The goal as sorted fact names.
+
+    Raises:
+        ValueError: a single string (its letters would be read as facts), or names that
+            are not strings.
+    """
+    if isinstance(goal, str) or not isinstance(goal, Iterable):
+        raise ValueError(f"execute: goal must be a collection of facts, got {goal!r}")
+    facts = list(goal)
+    if not all(isinstance(fact, str) for fact in facts):
+        raise ValueError(f"execute: goal must hold fact names (strings), got {goal!r}")
+    return sorted(set(facts))
+
+
+def _check_observation(obs: Any, env: SkillEnv) -> None:
+    """Refuse an observation that is not the env's: wrong shape or non-finite.
+
+    Raises:
+        ValueError: naming the shape expected and the one given.
+    """
+    space = getattr(env, "observation_space", None)
+    expected = getattr(space, "shape", None)
+    array = np.asarray(obs)
+    if array.dtype.kind not in "iuf" or (expected is not None and array.shape != expected):
+        raise ValueError(
+            f"execute: obs must be the env's observation of shape {expected}, got shape "
+            f"{array.shape} ({array.dtype})"
+        )
+    if not np.all(np.isfinite(array)):
+        raise ValueError("execute: obs has non-finite values")
 
 
 def load_executor(domain: Domain, directory: str | Path | None = None, **kwargs: Any) -> Executor:

@@ -61,7 +61,7 @@ class KitchenEnv(ArmEnv):
             lookup(SKILLS_BY_NAME, skill, "skill", SkillSpecError)
             if isinstance(skill, str)
             else skill
-        )
+        )  # anything else is checked (named) by ArmEnv
         super().__init__(NODES, "home", spec, config or EnvConfig(), render_mode)
         self.scene = SceneIndex(self.model)
 

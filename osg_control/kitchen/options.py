@@ -11,6 +11,7 @@ from typing import Any
 
 import numpy as np
 
+from osg_control.control.robot import REACH, SHOULDER_HEIGHT
 from osg_control.environment.options import finite_option
 from osg_control.errors import EnvOptionError
 from osg_control.kitchen.world import CABINET_INTERIOR_HIGH, CABINET_INTERIOR_LOW, CUBE_HALF_SIZE
@@ -34,9 +35,8 @@ COUNTER_OBSTACLES = {
 """Footprints (x, y) [m] on the counter's top that the cube would cut into."""
 REST_TOLERANCE = 0.005
 """How far [m] above its surface a cube position may lie (it settles in the start's 0.1 s)."""
-SHOULDER = np.array([0.0, 0.0, 0.333])
-REACH = 0.855
-"""The Panda's reach [m] from its shoulder (joint 2)."""
+SHOULDER = np.array([0.0, 0.0, SHOULDER_HEIGHT])
+"""The arm's shoulder (joint 2) in the kitchen's frame (the base at the origin)."""
 
 
 def check_world_options(world: dict[str, Any], holding: str | None) -> None:
