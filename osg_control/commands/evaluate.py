@@ -112,7 +112,7 @@ def run_benchmark_command(args: argparse.Namespace) -> int:
     from osg_control.evaluation.benchmark import benchmark_of, format_benchmark, run_benchmark
 
     domain = domain_of(args)
-    benchmark_of(domain)
+    _check_benchmark_options(benchmark_of(domain), args)
     perception = perception_of(args, domain)
     resume_dir = evaluation_cache(domain, "benchmark", args.models)
     with open_executor(args.backend, args.workers, args.address) as executor:
@@ -135,6 +135,28 @@ def run_benchmark_command(args: argparse.Namespace) -> int:
             env_kwargs=args.env_kwargs,
         )
     return print_result(domain, args, summary, format_benchmark)
+
+
+def _check_benchmark_options(bench: Any, args: argparse.Namespace) -> None:
+    """``--set``, ``--tasks`` and ``--env-kwargs`` against the benchmark, before any work.
+
+    Raises:
+        UsageError: both ``--set`` and ``--tasks``, an unknown goal set or task, or an env
+            option the env does not take (or out of its range); each named.
+    """
+    from osg_control.errors import DomainError, UsageError
+
+    if args.tasks and args.goal_set is not None:
+        raise UsageError("--tasks and --set exclude each other: give the goal set or its tasks")
+    for option, check in (
+        ("--tasks", lambda: args.tasks and bench.check_tasks(tuple(args.tasks))),
+        ("--set", lambda: args.goal_set is not None and bench.tasks_of(args.goal_set)),
+        ("--env-kwargs", lambda: bench.check_options(args.env_kwargs)),
+    ):
+        try:
+            check()
+        except DomainError as err:
+            raise UsageError(f"{option}: {err}") from None
 
 
 def _json_object(text: str) -> dict[str, Any]:
