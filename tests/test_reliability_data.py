@@ -223,6 +223,9 @@ def test_import_checks_actions_against_the_domains_bounds(
         for name in f:
             del f[name]["infos"]  # the kitchen's world states do not fit another domain
         f["episode_1/actions"][2, 0] = np.float32(value)
+    metadata = json.loads((source / "data" / "metadata.json").read_text())
+    del metadata["osg_skill"]  # recorded elsewhere: imported as another skill on purpose
+    (source / "data" / "metadata.json").write_text(json.dumps(metadata))
     skill = dom.skills[0].name
     out = tmp_path / f"{skill}.h5"
     if accepted:

@@ -150,6 +150,11 @@ def _domain_values(args: argparse.Namespace) -> None:
                 f"{_option(dest)}: unknown facts {unknown} in domain {domain.name!r}; its facts: "
                 f"{', '.join(domain.facts)}"
             )
+    if getattr(args, "randomize_objects", False) and not domain.objects:
+        raise UsageError(
+            f"--randomize-objects: domain {domain.name!r} has no objects with a placement "
+            "region to randomize"
+        )
     _models(args, domain)
 
 

@@ -10,7 +10,7 @@ from typing import TypeAlias
 from osg_control.commands import domain_of
 from osg_control.data.datasets import load_dataset
 from osg_control.errors import DatasetError
-from osg_control.json_files import read_json_object
+from osg_control.json_files import is_json_number, read_json_object
 from osg_control.planning.graph import (
     SkillGraph,
     graph_from_specs,
@@ -26,8 +26,12 @@ def _read_rates(path: Path | None) -> dict[str, float] | None:
     if path is None:
         return None
     rates = read_json_object(path, "success rates", DatasetError)
-    if not all(isinstance(v, int | float) for v in rates.values()):
-        raise DatasetError(f"{path}: expected a JSON object of skill name -> success rate")
+    bad = {k: v for k, v in rates.items() if not (is_json_number(v) and 0 <= v <= 1)}
+    if bad:
+        raise DatasetError(
+            f"{path}: expected a JSON object of skill name -> success rate in [0, 1]; "
+            f"not rates: {bad}"
+        )
     return {str(k): float(v) for k, v in rates.items()}
 
 

@@ -78,11 +78,33 @@ def run_export(args: argparse.Namespace) -> int:
     return 0
 
 
+def _refuse_out_in_source(source: str, out: Path) -> None:
+    """Refuse an ``--out`` that is the source data set or lies inside it (the import
+    would overwrite what it reads).
+
+    Raises:
+        UsageError: naming both paths.
+    """
+    from osg_control.data.minari_import import minari_root
+    from osg_control.errors import UsageError
+
+    target = Path(out).expanduser().resolve()
+    for candidate in (Path(source).expanduser(), minari_root() / str(source)):
+        if candidate.exists():
+            place = candidate.resolve()
+            if target == place or place in target.parents:
+                raise UsageError(
+                    f"--out {out} is inside the source data set {source}: the import would "
+                    "overwrite what it reads; write it elsewhere"
+                )
+
+
 def run_import(args: argparse.Namespace) -> int:
     """Import and print the new data set's summary (an outside layout: its importer's)."""
     from osg_control.errors import UsageError
 
     domain = domain_of(args)
+    _refuse_out_in_source(args.source, args.out)
     layouts = {layout.name: layout for layout in domain.dataset_layouts}
     name = args.layout
     if name == "auto":

@@ -99,6 +99,27 @@ def _seed(metadata: dict[str, Any], path: Path) -> int:
     return seed
 
 
+def _check_recorded_skill(metadata: dict[str, Any], skill: SkillSpec, path: Path) -> None:
+    """Refuse importing as ``skill`` a data set this package exported for another skill
+    (its ``osg_skill`` metadata): the episodes were recorded for that skill's start and goal.
+
+    Raises:
+        DatasetError: naming both skills, or an unreadable ``osg_skill``.
+    """
+    if "osg_skill" not in metadata:
+        return
+    try:
+        recorded = parse_json(metadata["osg_skill"])
+        name = recorded["name"] if isinstance(recorded, dict) else None
+    except (TypeError, KeyError, JSONFormatError) as err:
+        raise DatasetError(f"{path}: field 'osg_skill' is no skill spec ({err})") from err
+    if name != skill.name:
+        raise DatasetError(
+            f"{path}: the data set was recorded for skill {name!r} (osg_skill), but it is "
+            f"imported as skill {skill.name!r}"
+        )
+
+
 def check_layout(metadata: dict[str, Any], skill: SkillSpec, path: Path) -> None:
     """Raise ``DatasetError`` naming both shapes if the spaces are not the skill's
     (``path``: the metadata file)."""
@@ -223,6 +244,7 @@ def import_minari(
     data_dir = resolve(source)
     metadata = _read_metadata(data_dir)
     check_layout(metadata, skill, data_dir / METADATA_FILE)
+    _check_recorded_skill(metadata, skill, data_dir / METADATA_FILE)
     seed = _seed(metadata, data_dir / METADATA_FILE)
     main = data_dir / MAIN_FILE
     try:
