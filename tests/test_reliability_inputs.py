@@ -21,6 +21,7 @@ from osg_control.domain.registry import get_domain
 from osg_control.errors import EXIT_CODES, CheckpointError, PDDLError
 from osg_control.evaluation.check import compare
 from osg_control.execution import defaults
+from osg_control.learning.checkpoints import NORMALISATION_KEYS, values_sha256
 
 ROOT = Path(__file__).resolve().parents[1]
 SHIPPED = ROOT / "osg_control/kitchen/defaults"
@@ -323,6 +324,11 @@ def _edit_sidecar(name: str, edit: Callable[[dict[str, Any]], None]) -> Callable
         path = skills / f"{name}.json"
         sidecar = json.loads(path.read_text())
         edit(sidecar)
+        # resealed: these checks are about values that are consistent but wrong
+        # (tests/test_reliability_sidecars.py covers edits that break the checksum)
+        sidecar["normalisation_sha256"] = values_sha256(
+            {key: sidecar[key] for key in NORMALISATION_KEYS}
+        )
         path.unlink()  # a link to the shipped file: replace it, never write through it
         path.write_text(json.dumps(sidecar))
 
