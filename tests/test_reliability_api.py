@@ -112,7 +112,9 @@ def test_a_refused_first_reset_leaves_the_made_env_usable() -> None:
 EXECUTE: list[tuple[str, Callable[[Any, Any, Any], Any], str]] = [
     ("obs of 3", lambda ex, env, obs: ex.execute(["door-open"], env, np.zeros(3)), "shape (10,)"),
     ("obs NaN", lambda ex, env, obs: ex.execute(["door-open"], env, obs * np.nan), "non-finite"),
-    ("goal a string", lambda ex, env, obs: ex.execute("door-open", env, obs), "collection"),
+    ("goal a number", lambda ex, env, obs: ex.execute(5, env, obs), "collection"),
+    ("goal atom", lambda ex, env, obs: ex.execute("(on a b)", env, obs), "facts or one (at NODE)"),
+    ("unknown node", lambda ex, env, obs: ex.execute("(at nowhere)", env, obs), "unknown node"),
     ("goal nested", lambda ex, env, obs: ex.execute([["door-open"]], env, obs), "fact names"),
 ]
 
@@ -126,3 +128,15 @@ def test_execute_refuses_what_is_not_a_goal_or_an_observation(
     with pytest.raises(ValueError) as raised:
         call(executor, kitchen_env, obs)
     assert fragment in str(raised.value), case
+
+
+def test_an_at_node_goal_is_reached_and_scored(kitchen_env: Any) -> None:
+    """``(at NODE)`` was driven to and then reported failed (``(at`` is no world fact)."""
+    executor = load_executor(KITCHEN)
+    obs, _ = kitchen_env.reset(seed=0)
+    result = executor.execute("(at above-valve)", kitchen_env, obs)
+    assert result.success and result.plan == ["move-home-to-valve"]
+    assert result.goal == ["(at above-valve)"]
+    obs, _ = kitchen_env.reset(seed=0)
+    both = executor.execute(["door-open", "(at home)"], kitchen_env, obs)
+    assert both.success and "door-open" in kitchen_env.facts()

@@ -80,3 +80,14 @@ def test_a_models_folder_without_a_manifest_says_it_plans_at_uniform_costs(
         assert cli.main(["plan", "--goal", "door-open", "--models", str(models)]) == 0
     assert "uniform" not in caplog.text
     capsys.readouterr()
+
+
+def test_an_at_node_goal_is_run_and_scored_on_the_truth(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
+) -> None:
+    monkeypatch.chdir(tmp_path)
+    assert cli.main(["run", "--goal", "(at above-valve)", "--json"]) == 0
+    out = json.loads(capsys.readouterr().out)
+    assert out["success_rate"] == 1.0 and out["episodes"][0]["scored_success"] is True
+    assert cli.main(["run", "--goal", "(at nowhere)"]) == EXIT_CODES["usage"]
+    assert "--goal: goal (at nowhere): unknown node" in capsys.readouterr().err

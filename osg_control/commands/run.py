@@ -18,11 +18,12 @@ from osg_control.commands import (
     perception_of,
 )
 from osg_control.domain.base import Domain
-from osg_control.domain.frames import sample_placements
+from osg_control.domain.frames import offsets_of, sample_placements
 from osg_control.errors import UsageError
 from osg_control.evaluation.skill_table import format_skill_table, skill_table
 from osg_control.execution.defaults import defaults_root, describe_models, models_in_use
 from osg_control.execution.executor import load_executor, task_env_config
+from osg_control.execution.goals import parse_goal
 from osg_control.io_safety import atomic_write, check_output_dir
 from osg_control.parallel import open_executor
 from osg_control.perception.spec import perception_spec
@@ -98,7 +99,10 @@ def run_task(args: argparse.Namespace) -> int:
     """Run ``--episodes`` executions of the goal and report each (exit 1 if any failed)."""
     domain = domain_of(args)
     perception = perception_of(args, domain)
-    goal = args.goal.split()
+    try:
+        goal = parse_goal(args.goal, domain)
+    except ValueError as err:
+        raise UsageError(f"--goal: {err}") from None
     facts = domain.start_world if args.facts is None else tuple(args.facts.split())
     if args.video:
         check_output_dir(args.video.parent, "video folder")
@@ -127,8 +131,10 @@ def run_task(args: argparse.Namespace) -> int:
             executor.on_step = lambda e: frames.append(e.render())
         else:
             executor.on_step = None
-        result = executor.execute(goal, env, obs)
-        results.append({**result.to_dict(), "scored_success": set(goal) <= env.facts()})
+        result = executor.execute(goal.atoms(), env, obs)
+        truth = offsets_of(domain.objects, domain.world_fields, env.world_state())
+        scored = goal.holds(domain, env.facts(), env.true_state(), truth)  # the truth scores
+        results.append({**result.to_dict(), "scored_success": scored})
         if not args.json:
             status = "success" if result.success else f"FAILED ({result.failure})"
             entry = f"entry {result.entry_skill}, " if result.entry_skill else ""

@@ -342,6 +342,10 @@ class ArmEnv(gym.Env):
             self.data.site_xmat[self._tcp].reshape(3, 3).copy(),
         )
 
+    def true_state(self) -> np.ndarray:
+        """Truth (scoring): the 10-D state of the simulator (the ``sim`` percept's state)."""
+        return self.sensors.true_state(self.data, self._gripper_cmd)
+
     def world_state(self) -> np.ndarray:
         """The scene's true state beyond the robot: for scoring and labels, never for
         deciding (``percept().world`` is what the robot perceives)."""

@@ -51,6 +51,7 @@ from osg_control.environment.success import success_holds
 from osg_control.errors import SimulationError
 from osg_control.execution import MAX_REPLANS
 from osg_control.execution.entry import EntryChoice
+from osg_control.execution.goals import parse_goal
 from osg_control.execution.locate import node_at
 from osg_control.execution.objects import ObjectTracker
 from osg_control.execution.results import (
@@ -283,7 +284,8 @@ class Executor:
         sequence has ended, before anything else moves: where an executor with
         ``max_replans = attempt`` would have stopped (Tables IV/V score every budget from
         one run this way)."""
-        goal = _goal_facts(goal)
+        target = parse_goal(goal, self.domain)
+        goal = target.atoms()
         _check_observation(obs, env)
         started = time.perf_counter()
         self.motion = MotionMemory()  # the arm is taken to be at rest
@@ -294,9 +296,13 @@ class Executor:
         )
         objects = ObjectTracker(self.domain)
         objects.update(env.percept())
+
+        def reached(facts_now: Iterable[str], obs_now: np.ndarray) -> bool:
+            return target.holds(self.domain, facts_now, obs_now, objects.offsets())
+
         planning_time = 0.0
         for attempt in range(self.max_replans + 1):
-            if set(goal) <= facts:
+            if reached(facts, obs):
                 result.success = True
                 break
             if self.domain.hand_empty in facts and obs[7] != GRIPPER_OPEN_CMD:
@@ -304,7 +310,7 @@ class Executor:
                 self.motion.still(GRIPPER_OPEN_STEPS)
                 if result.failure:
                     if not is_divergence(result.failure):  # the env's episode is over
-                        result.success = set(goal) <= env.percept().facts
+                        result.success = reached(env.percept().facts, env.observe())
                     break
             t0 = time.perf_counter()
             seen = obs if tracker is None else tracker.read(obs)
@@ -322,17 +328,16 @@ class Executor:
             if after_attempt is not None:
                 after_attempt(attempt, result)
             if not failed:
-                result.success = set(goal) <= facts
+                result.success = reached(facts, obs)
                 if not result.success:
-                    result.failure = (
-                        f"plan finished but goal facts {sorted(set(goal) - facts)} missing"
-                    )
+                    missing = target.missing(self.domain, facts, obs, objects.offsets())
+                    result.failure = f"plan finished but goal facts {missing} missing"
                 break
             result.failure = failed
             if is_divergence(failed):
                 break  # the world was reset: never replan
             if TIME_LIMIT in failed or EPISODE_ENDED in failed:
-                result.success = set(goal) <= facts  # the env's episode is over: no replan
+                result.success = reached(facts, obs)  # the env's episode is over: no replan
                 break
             if attempt < self.max_replans:
                 result.replans += 1
@@ -403,21 +408,6 @@ def _episode_end(terminated: bool, truncated: bool) -> str | None:
     if truncated:
         return TIME_LIMIT
     return EPISODE_ENDED if terminated else None
-
-
-def _goal_facts(goal: Any) -> list[str]:
-    """The goal as sorted fact names.
-
-    Raises:
-        ValueError: a single string (its letters would be read as facts), or names that
-            are not strings.
-    """
-    if isinstance(goal, str) or not isinstance(goal, Iterable):
-        raise ValueError(f"execute: goal must be a collection of facts, got {goal!r}")
-    facts = list(goal)
-    if not all(isinstance(fact, str) for fact in facts):
-        raise ValueError(f"execute: goal must hold fact names (strings), got {goal!r}")
-    return sorted(set(facts))
 
 
 def _check_observation(obs: Any, env: SkillEnv) -> None:
