@@ -32,16 +32,17 @@ USAGE = [
 ]
 
 
-@pytest.mark.parametrize(("argv", "fragment"), USAGE, ids=[" ".join(u[0])[:50] for u in USAGE])
-def test_values_that_meant_something_else_exit_2(
-    argv: list[str],
-    fragment: str,
-    tmp_path: Path,
-    monkeypatch: pytest.MonkeyPatch,
-    capsys: pytest.CaptureFixture[str],
-) -> None:
+@pytest.fixture(autouse=True)
+def _isolated(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    """Each command runs in an empty folder with its own cache (to show nothing written)."""
     monkeypatch.chdir(tmp_path)
     monkeypatch.setenv("OSG_CACHE_DIR", str(tmp_path / "cache"))
+
+
+@pytest.mark.parametrize(("argv", "fragment"), USAGE, ids=[" ".join(u[0])[:50] for u in USAGE])
+def test_values_that_meant_something_else_exit_2(
+    argv: list[str], fragment: str, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
     assert cli.main(argv) == EXIT_CODES["usage"]
     captured = capsys.readouterr()
     assert fragment in captured.err and "internal error" not in captured.err
@@ -83,9 +84,8 @@ def test_a_models_folder_without_a_manifest_says_it_plans_at_uniform_costs(
 
 
 def test_an_at_node_goal_is_run_and_scored_on_the_truth(
-    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
+    capsys: pytest.CaptureFixture[str],
 ) -> None:
-    monkeypatch.chdir(tmp_path)
     assert cli.main(["run", "--goal", "(at above-valve)", "--json"]) == 0
     out = json.loads(capsys.readouterr().out)
     assert out["success_rate"] == 1.0 and out["episodes"][0]["scored_success"] is True
