@@ -57,6 +57,7 @@ from osg_control.domain.spec import SkillSpec
 from osg_control.environment.actions import scale_into
 from osg_control.environment.success import GRIPPER_CLOSED_CMD, GRIPPER_OPEN_CMD
 from osg_control.errors import DatasetError, UsageError
+from osg_control.franka.arm import env_joint_limits
 from osg_control.franka.d4rl_source import KitchenEpisode, completions, read_source
 from osg_control.franka.domain import SUBTASK_CHAINS, TASK_FACTS
 from osg_control.franka.perception import FrankaSensors
@@ -193,6 +194,30 @@ def _write_all(out: Path, files: dict[str, tuple[list[Episode], dict[str, Any]]]
         shutil.rmtree(staging, ignore_errors=True)
 
 
+JOINT_SLACK = 0.05
+"""How far [rad] an observed arm joint may lie past the env's limit: the env's own
+observation noise (``robot_noise_ratio``) and its position servo's overshoot, with
+margin. A value beyond (1e30 rad) is no pose the arm can take."""
+
+
+def check_joint_limits(episode: KitchenEpisode, lower: np.ndarray, upper: np.ndarray) -> None:
+    """Refuse an episode whose observed arm joints (the observation's first 7 values) lie
+    past the arm's limits by more than ``JOINT_SLACK``.
+
+    Raises:
+        DatasetError: naming the episode, the step, the joint, its value and its range.
+    """
+    joints = episode.observations[:, : len(lower)]
+    outside = np.argwhere((joints < lower - JOINT_SLACK) | (joints > upper + JOINT_SLACK))
+    if len(outside):
+        step, joint = (int(i) for i in outside[0])
+        raise DatasetError(
+            f"{episode.name}: field 'observations/observation' at step {step}: arm joint "
+            f"{joint + 1} = {float(joints[step, joint])!r} rad is outside its range "
+            f"[{lower[joint]:.4f}, {upper[joint]:.4f}] (+-{JOINT_SLACK}): no pose the arm can take"
+        )
+
+
 def import_d4rl(domain: Domain, source: str | Path, out: str | Path) -> D4RLImport:
     """Convert a D4RL kitchen-layout Minari data set (folder or id) into one data set file
     per skill in the folder ``out``; returns the summary.
@@ -216,6 +241,9 @@ def import_d4rl(domain: Domain, source: str | Path, out: str | Path) -> D4RLImpo
     per_skill: dict[str, list[Episode]] = {}
     counts: dict[str, Counter[str]] = {k: Counter() for k in ("skip", "start", "same", "from")}
     adapter = make_franka_env()
+    lower, upper = env_joint_limits(adapter.kitchen)
+    for episode in source_episodes:  # all checked before anything is converted or written
+        check_joint_limits(episode, lower, upper)
     try:
         for episode in source_episodes:
             events, at_start = completions(episode)
