@@ -224,7 +224,7 @@ def _corrupt(source: Path, change: str) -> None:
     ("change", "message"),
     [
         ("nan", r"episode_1: field 'observations/observation' has a non-finite value at step 5"),
-        ("joint", r"episode_1: field 'observations/observation' at step 5: arm joint 4 = 1e\+30"),
+        ("joint", r"episode_1: field 'observations/observation' at step 5, component 3: 1e\+30"),
         ("shape", r"episode_1: field 'actions' has shape \(40, 8\), expected \(N, 9\)"),
         ("missing", r"episode_1: missing field 'rewards'"),
         ("goal", r"episode_1: missing field 'observations/desired_goal/kettle'"),

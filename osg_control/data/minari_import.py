@@ -36,7 +36,7 @@ from osg_control.data.datasets import (
     write_episodes,
 )
 from osg_control.data.minari_export import DATA_DIR, MAIN_FILE, METADATA_FILE, minari_root
-from osg_control.data.validation import check_step_fields
+from osg_control.data.validation import check_step_fields, check_within
 from osg_control.domain.base import Domain
 from osg_control.domain.spec import SkillSpec
 from osg_control.environment.arm_env import success_holds
@@ -166,14 +166,8 @@ def _check_actions(actions: np.ndarray, bounds: tuple[float, ...], where: str) -
         DatasetError: naming ``where``, the step, the component and the bound.
     """
     limit = np.asarray(bounds, dtype=np.float32)
-    outside = np.argwhere(np.abs(actions.astype(np.float32)) > limit)
-    if len(outside):
-        step, component = (int(i) for i in outside[0])
-        raise DatasetError(
-            f"{where}: field 'actions' at step {step}, component {component}: "
-            f"{float(actions[step, component])!r} is outside the domain's action bounds "
-            f"[-{float(limit[component]):g}, {float(limit[component]):g}]"
-        )
+    values = actions.astype(np.float32)
+    check_within(values, -limit, limit, where, "actions", "the domain's action bounds")
 
 
 def _episode(domain: Domain, group: h5py.Group, skill: SkillSpec, how: str, where: str) -> Episode:

@@ -138,3 +138,24 @@ def check_attrs(path: Path, attrs: Mapping[str, Any]) -> None:
     seed = attrs["seed"]
     if isinstance(seed, bool) or not isinstance(seed, int | np.integer) or int(seed) < 0:
         raise DatasetError(f"{path}: attribute 'seed' must be a non-negative integer, got {seed!r}")
+
+
+def check_within(
+    values: np.ndarray, low: Any, high: Any, where: str, field: str, what: str
+) -> None:
+    """Refuse the first entry of a (T, n) array outside ``[low, high]`` (per column).
+
+    Raises:
+        DatasetError: ``<where>: field '<field>' at step t, component c: v is outside
+        <what> [low, high]``.
+    """
+    low = np.broadcast_to(np.asarray(low, dtype=float), values.shape[1:])
+    high = np.broadcast_to(np.asarray(high, dtype=float), values.shape[1:])
+    outside = np.argwhere((values < low) | (values > high))
+    if len(outside):
+        step, column = (int(i) for i in outside[0])
+        raise DatasetError(
+            f"{where}: field {field!r} at step {step}, component {column}: "
+            f"{float(values[step, column])!r} is outside {what} "
+            f"[{float(low[column]):g}, {float(high[column]):g}]"
+        )

@@ -52,6 +52,7 @@ import numpy as np
 
 from osg_control.control.rotations import quat_to_matrix, rotation_error
 from osg_control.data.datasets import Episode, dataset_bytes, write_episodes
+from osg_control.data.validation import check_within
 from osg_control.domain.base import Domain
 from osg_control.domain.spec import SkillSpec
 from osg_control.environment.actions import scale_into
@@ -207,15 +208,14 @@ def check_joint_limits(episode: KitchenEpisode, lower: np.ndarray, upper: np.nda
     Raises:
         DatasetError: naming the episode, the step, the joint, its value and its range.
     """
-    joints = episode.observations[:, : len(lower)]
-    outside = np.argwhere((joints < lower - JOINT_SLACK) | (joints > upper + JOINT_SLACK))
-    if len(outside):
-        step, joint = (int(i) for i in outside[0])
-        raise DatasetError(
-            f"{episode.name}: field 'observations/observation' at step {step}: arm joint "
-            f"{joint + 1} = {float(joints[step, joint])!r} rad is outside its range "
-            f"[{lower[joint]:.4f}, {upper[joint]:.4f}] (+-{JOINT_SLACK}): no pose the arm can take"
-        )
+    check_within(
+        episode.observations[:, : len(lower)],
+        lower - JOINT_SLACK,
+        upper + JOINT_SLACK,
+        episode.name,
+        "observations/observation",
+        "the arm's joint limits [rad] (no pose the arm can take)",
+    )
 
 
 def import_d4rl(domain: Domain, source: str | Path, out: str | Path) -> D4RLImport:
