@@ -11,6 +11,7 @@ an integer of more than Python's 4,300 digits; ``NaN`` or ``Infinity``, which ar
 from __future__ import annotations
 
 import json
+import math
 from pathlib import Path
 from typing import Any
 
@@ -98,6 +99,40 @@ def read_json_object(path: Path, what: str, error: type[OSGError]) -> dict[str, 
     if not isinstance(data, dict):
         raise error(f"{path}: corrupt {what} (not a JSON object)")
     return data
+
+
+def dump_json(value: Any, indent: int | None = 2) -> str:
+    """``value`` as JSON text for a command's ``--json``: always valid JSON.
+
+    Raises:
+        OSGError: the value holds NaN or an infinity (which ``json.dumps`` would print as
+            bare ``NaN``, not JSON), naming where.
+    """
+    try:
+        return json.dumps(value, indent=indent, allow_nan=False)
+    except ValueError:
+        raise OSGError(
+            f"the result holds a non-finite number at {_non_finite(value) or '?'}: it has no "
+            "JSON form (a bug: please report it)"
+        ) from None
+
+
+def _non_finite(value: Any, where: str = "") -> str | None:
+    """The path of the first NaN or infinity in ``value``, if any."""
+    if isinstance(value, float) and not math.isfinite(value):
+        return where or "the top level"
+    items = (
+        value.items()
+        if isinstance(value, dict)
+        else enumerate(value)
+        if isinstance(value, list | tuple)
+        else ()
+    )
+    for key, item in items:
+        found = _non_finite(item, f"{where}[{key!r}]")
+        if found:
+            return found
+    return None
 
 
 def is_json_number(value: object) -> bool:

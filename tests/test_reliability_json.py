@@ -8,6 +8,7 @@ package's error naming the file (exit 1 on the CLI), never an internal error or 
 from __future__ import annotations
 
 import json
+import math
 import os
 import time
 from collections.abc import Callable
@@ -148,3 +149,15 @@ def test_the_reader_accepts_ordinary_json_and_bounds_memory(tmp_path: Path) -> N
     assert time.perf_counter() - started < 5.0
     (tmp_path / "ok.json").write_text(json.dumps({"k": 1}))
     assert json_files.read_json_object(tmp_path / "ok.json", "x", OSGError) == {"k": 1}
+
+
+@pytest.mark.parametrize(
+    ("value", "where"),
+    [({"a": [1.0, math.nan]}, "['a'][1]"), ([{"b": math.inf}], "[0]['b']"), (-math.inf, "top")],
+)
+def test_json_output_is_always_json(value: object, where: str) -> None:
+    """``--json`` printed a bare ``NaN`` (not JSON) when a result held one."""
+    assert json.loads(json_files.dump_json({"x": [1.5, None, "s"]})) == {"x": [1.5, None, "s"]}
+    with pytest.raises(OSGError, match="non-finite number at") as raised:
+        json_files.dump_json(value)
+    assert where in str(raised.value)

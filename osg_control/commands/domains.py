@@ -3,10 +3,10 @@
 from __future__ import annotations
 
 import argparse
-import json
 
 from osg_control.domain.registry import domain_names, get_domain
 from osg_control.errors import DomainError
+from osg_control.json_files import dump_json
 
 
 def register(subparsers: argparse._SubParsersAction) -> None:
@@ -28,7 +28,7 @@ def run_domains(args: argparse.Namespace) -> int:
         except DomainError as err:
             broken.append({"name": name, "error": str(err)})
     if args.json:
-        print(json.dumps(summaries + broken, indent=2))
+        print(dump_json(summaries + broken))
         return 1 if broken else 0
     for entry in broken:
         print(f"{entry['name']}: BROKEN: {entry['error']}")

@@ -4,7 +4,6 @@
 from __future__ import annotations
 
 import argparse
-import json
 from collections.abc import Callable
 from pathlib import Path
 from typing import Any
@@ -22,7 +21,7 @@ from osg_control.evaluation.evaluate import format_task_table, task_table
 from osg_control.evaluation.resume import source_fingerprint
 from osg_control.execution.defaults import describe_models, models_fingerprint, models_in_use
 from osg_control.io_safety import check_output_dir
-from osg_control.json_files import JSONFormatError, parse_json
+from osg_control.json_files import JSONFormatError, dump_json, parse_json
 from osg_control.parallel import open_executor
 from osg_control.paths import cache_dir
 
@@ -212,7 +211,7 @@ def print_result(
 ) -> int:
     """Print an evaluation (JSON with ``--json``, else text), naming the models it used."""
     result["models"] = models_in_use(domain, args.models)
-    print(json.dumps(result, indent=2) if args.json else formatter(result))
+    print(dump_json(result) if args.json else formatter(result))
     if not args.json:
         print(describe_models(result["models"]))
     return 0

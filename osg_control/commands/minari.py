@@ -3,11 +3,11 @@
 from __future__ import annotations
 
 import argparse
-import json
 from pathlib import Path
 
 from osg_control.commands import domain_of
 from osg_control.data.datasets import dataset_summary
+from osg_control.json_files import dump_json
 
 
 def add_verbs(verbs: argparse._SubParsersAction) -> None:
@@ -72,7 +72,7 @@ def run_export(args: argparse.Namespace) -> int:
 
     target = export_minari(args.path, args.id, args.out, args.force, domain_of(args).env_id)
     if args.json:
-        print(json.dumps({"id": args.id, "path": str(target)}))
+        print(dump_json({"id": args.id, "path": str(target)}, indent=None))
     else:
         print(f"Minari data set {args.id} written to {target}")
     return 0
@@ -124,7 +124,7 @@ def run_import(args: argparse.Namespace) -> int:
             )
         summary = layouts[name].imports(domain, args.source, args.out)
         if args.json:
-            print(json.dumps(summary.to_json(), indent=2))
+            print(dump_json(summary.to_json()))
         else:
             print("\n".join(summary.lines()))
         return 0
@@ -136,7 +136,7 @@ def run_import(args: argparse.Namespace) -> int:
         import_minari(domain, args.source, args.skill, args.out, args.success or "rewards")
     )
     if args.json:
-        print(json.dumps(imported, indent=2))
+        print(dump_json(imported))
     else:
         print(
             f"{imported['path']}: skill {imported['skill']}, {imported['episodes']} episodes, "

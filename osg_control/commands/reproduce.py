@@ -12,7 +12,6 @@ plan costs); a domain's shipped defaults are a copy of it.
 from __future__ import annotations
 
 import argparse
-import json
 import shlex
 import sys
 from pathlib import Path
@@ -25,6 +24,7 @@ from osg_control.commands import (
     perception_of,
 )
 from osg_control.domain.base import Domain
+from osg_control.json_files import dump_json
 from osg_control.parallel.machine import machine_cpus
 from osg_control.pipeline.bundle import DEPLOYMENT_NOISE
 
@@ -106,12 +106,13 @@ def check_against_shipped(
     power = result.summary()
     if as_json:
         print(
-            json.dumps(
+            dump_json(
                 {
                     "compared": result.compared,
                     "mismatches": [m.__dict__ for m in result.mismatches],
                     "detectable_difference": {**power, "cells": result.detectable},
-                }
+                },
+                indent=None,
             )
         )
     else:
@@ -197,7 +198,7 @@ def run(args: argparse.Namespace) -> int:
     )
     done = reproduce(config, log=lambda text: print(text, flush=True))
     if args.json:
-        print(json.dumps(done.figures, indent=2))
+        print(dump_json(done.figures))
     else:
         for name, seconds in done.stage_seconds.items():
             print(f"{name:14s} {seconds:8.1f} s")

@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import argparse
-import json
 from pathlib import Path
 from typing import Any
 
@@ -25,6 +24,7 @@ from osg_control.execution.defaults import defaults_root, describe_models, model
 from osg_control.execution.executor import load_executor, task_env_config
 from osg_control.execution.goals import parse_goal
 from osg_control.io_safety import atomic_write, check_output_dir
+from osg_control.json_files import dump_json
 from osg_control.parallel import open_executor
 from osg_control.perception.spec import perception_spec
 
@@ -152,7 +152,7 @@ def run_task(args: argparse.Namespace) -> int:
             "episodes": results,
             "success_rate": successes / len(results),
         }
-        print(json.dumps(payload, indent=2))
+        print(dump_json(payload))
     else:
         print(f"success rate {successes}/{len(results)}")
     return 0 if successes == len(results) else 1
@@ -189,7 +189,7 @@ def run_eval_skills(args: argparse.Namespace) -> int:
             randomize=args.randomize_objects,
         )
     table["models"] = {"skills": str(models)}
-    print(json.dumps(table, indent=2) if args.json else format_skill_table(table))
+    print(dump_json(table) if args.json else format_skill_table(table))
     if not args.json:
         print(f"models: {args.models}")
     return 0
