@@ -14,6 +14,11 @@ ENV_ENTRY_POINT_GROUP = "osg_control.envs"
 MAX_EPISODE_STEPS = 200
 """``max_episode_steps`` of every id: ``EnvConfig.max_steps``, above every skill's own budget,
 which the env enforces itself when made with ``skill=``."""
+ENV_CHECKER = False
+"""Gymnasium's passive env checker is left off for these ids: when the first ``reset`` is
+refused (an ``EnvOptionError``), the checker (gymnasium 1.x) keeps no data of it and the
+next good reset's first ``step`` raises ``TypeError``. The envs' own tests check the API
+(``gymnasium.utils.env_checker.check_env``)."""
 
 
 def installed_envs() -> dict[str, str]:
@@ -27,4 +32,9 @@ def register_envs() -> None:
 
     for env_id, entry_point in installed_envs().items():
         if env_id not in registry:
-            register(env_id, entry_point=entry_point, max_episode_steps=MAX_EPISODE_STEPS)
+            register(
+                env_id,
+                entry_point=entry_point,
+                max_episode_steps=MAX_EPISODE_STEPS,
+                disable_env_checker=not ENV_CHECKER,
+            )

@@ -4,6 +4,11 @@ from __future__ import annotations
 
 import hashlib
 
+MAX_SEED = 2**32 - 1
+"""The largest seed a command or call takes: numpy's legacy and gymnasium's seeding take
+32-bit seeds, and the data sets store the seed as a 64-bit HDF5 attribute (a seed of 1e29
+ran every episode, then failed writing it)."""
+
 
 def skill_seed(seed: int, name: str) -> int:
     """Derive a skill's own seed from the run's seed and the skill's name.

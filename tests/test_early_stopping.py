@@ -134,3 +134,26 @@ def test_training_rounds_end_at_the_budget() -> None:
     stop = EarlyStop(EarlyStopping(check_every=4, patience=2), check)
     (outcome,), _ = train_early_stopped(trainer, replay, ["grab-cube"], 12, stop, _write_snapshot)
     assert (outcome.updates, outcome.trained_updates, trainer.steps) == (12, 12, 12)
+
+
+def test_held_out_snapshots_live_in_the_output_folder_one_round_at_a_time(tmp_path: Path) -> None:
+    """Every round's snapshot was kept in the system's temp folder until the end (17 MB after
+    25 s, left behind on SIGKILL, outside the free-space check)."""
+    from osg_control.pipeline.training_loop import SCRATCH_PREFIX
+
+    stale = tmp_path / f"{SCRATCH_PREFIX}killed"
+    (stale / "4").mkdir(parents=True)  # what a killed run left
+    trainer, replay = _batch([40])
+    seen: list[list[str]] = []
+    rates = ScriptedRates({"grab-cube": [0.1, 0.2, 0.3]}, 4)
+
+    def check(policy_dir: Path, names: Sequence[str]) -> Mapping[str, float]:
+        scratch = policy_dir.parent
+        assert scratch.parent == tmp_path and scratch.name.startswith(SCRATCH_PREFIX)
+        seen.append(sorted(p.name for p in scratch.iterdir()))
+        return rates(policy_dir, names)
+
+    stop = EarlyStop(EarlyStopping(check_every=4, patience=2), check)
+    train_early_stopped(trainer, replay, ["grab-cube"], 12, stop, _write_snapshot, tmp_path)
+    assert seen == [["4"], ["8"], ["12"]]  # each round's snapshot alone
+    assert not list(tmp_path.iterdir())  # the scratch and the stale one removed

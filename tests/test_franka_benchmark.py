@@ -39,7 +39,7 @@ def test_unknown_goal_set_and_task_are_named(capsys) -> None:
         run_benchmark(domain, goal_set="kitchen-partial", episodes=1)
     code = osg(["--domain", "franka-kitchen", "evaluate", "benchmark", "--tasks", "toaster"])
     err = capsys.readouterr().err
-    assert code == 1 and "unknown task(s) ['toaster']" in err and "'microwave'" in err
+    assert code == 2 and "unknown task(s) ['toaster']" in err and "'microwave'" in err  # usage
 
 
 @pytest.mark.slow
@@ -87,15 +87,34 @@ def test_no_env_step_after_the_episode_is_over_and_never_past_280(
         (["--perception", "robot"], "does not support perception 'robot'"),
         (["--perception", "sim", "--noise", "0.02"], "no --noise"),
         (["--perception", "x-ray"], "unknown perception 'x-ray'"),
+        (["--env-kwargs", '{"bogus": 1}'], "unknown env_kwargs key 'bogus'"),
+        (["--env-kwargs", '{"frame_skip": 0}'], "unknown env_kwargs key 'frame_skip'"),
+        (["--env-kwargs", '{"robot_noise_ratio": 1e300}'], "'robot_noise_ratio' must be a"),
+        (["--env-kwargs", '{"object_noise_ratio": -1}'], "'object_noise_ratio' must be a"),
+        (["--env-kwargs", '{"object_noise_ratio": "x"}'], "'object_noise_ratio' must be a"),
+        (["--env-kwargs", '{"object_noise_ratio": NaN}'], "NaN is not a JSON number"),
+        (["--env-kwargs", '{"object_noise_ratio": Infinity}'], "Infinity is not a JSON"),
+        (["--env-kwargs", '{"remove_task_when_completed": 1}'], "must be true or false"),
+        (["--env-kwargs", '{"tasks_to_complete": []}'], "env_kwargs may not set"),
+        (["--env-kwargs", '{"max_episode_steps": 5}'], "env_kwargs may not set"),
+        (["--tasks", "bogus"], "--tasks: benchmark"),
+        (["--set", "bogus"], "--set: benchmark: unknown goal set 'bogus'"),
+        (["--tasks", "kettle", "--set", "kitchen-mixed"], "--tasks and --set exclude each other"),
     ],
 )
-def test_bad_benchmark_options_exit_2_with_nothing_run(extra, message, capsys) -> None:
+def test_bad_benchmark_options_exit_2_with_nothing_run(
+    extra, message, capsys, tmp_path, monkeypatch
+) -> None:
+    monkeypatch.setenv("OSG_CACHE_DIR", str(tmp_path))
+    monkeypatch.chdir(tmp_path)
     try:
         code = osg(["--domain", "franka-kitchen", "evaluate", "benchmark", *extra])
     except SystemExit as stop:  # argparse's own refusal of an option's value
         code = stop.code
     assert code == 2
-    assert message in capsys.readouterr().err
+    captured = capsys.readouterr()
+    assert message in captured.err and captured.out == ""
+    assert "internal error" not in captured.err and not any(tmp_path.iterdir())
 
 
 @pytest.mark.slow

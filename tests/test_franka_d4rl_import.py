@@ -207,9 +207,9 @@ def _corrupt(source: Path, change: str) -> None:
     """Damage episode 1 of the source in place."""
     with h5py.File(source / "main_data.hdf5", "a") as f:
         group = f["episode_1"]
-        if change == "nan":
+        if change in ("nan", "joint"):
             values = group["observations/observation"][()]
-            values[5, 3] = np.nan
+            values[5, 3] = np.nan if change == "nan" else 1e30
             group["observations/observation"][...] = values
         elif change == "shape":
             del group["actions"]
@@ -224,6 +224,7 @@ def _corrupt(source: Path, change: str) -> None:
     ("change", "message"),
     [
         ("nan", r"episode_1: field 'observations/observation' has a non-finite value at step 5"),
+        ("joint", r"episode_1: field 'observations/observation' at step 5, component 3: 1e\+30"),
         ("shape", r"episode_1: field 'actions' has shape \(40, 8\), expected \(N, 9\)"),
         ("missing", r"episode_1: missing field 'rewards'"),
         ("goal", r"episode_1: missing field 'observations/desired_goal/kettle'"),

@@ -143,3 +143,28 @@ def test_malformed_id_and_missing_source_are_named(source: Dataset, root: Path) 
         export_minari(source.path, "no version")
     with pytest.raises(DatasetError, match="no Minari data set at 'lab/none-v0'"):
         import_minari(KITCHEN, "lab/none-v0", SKILL, root / "x.h5")
+
+
+def test_an_export_of_another_skill_is_not_imported_as_this_one(
+    source: Dataset, root: Path, tmp_path: Path
+) -> None:
+    """The data set's own ``osg_skill`` names the skill it was recorded for."""
+    export_minari(source.path, DATASET_ID, env_id=KITCHEN.env_id)
+    out = tmp_path / "other.h5"
+    with pytest.raises(DatasetError, match=f"recorded for skill '{SKILL}'.*'move-door-to-home'"):
+        import_minari(KITCHEN, DATASET_ID, "move-door-to-home", out)
+    assert not out.exists()
+
+
+@pytest.mark.parametrize("inside", ["the folder", "its data file", "a file in it"])
+def test_an_import_never_writes_into_its_source(
+    inside: str, source: Dataset, root: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    folder = export_minari(source.path, DATASET_ID, env_id=KITCHEN.env_id)
+    before = {p: p.read_bytes() for p in folder.rglob("*") if p.is_file()}
+    main_file = next(p for p in before if p.suffix in (".hdf5", ".h5"))
+    out = {"the folder": folder, "its data file": main_file, "a file in it": folder / "x.h5"}
+    argv = ["datasets", "import", str(folder), "--skill", SKILL, "--out", str(out[inside])]
+    assert main(argv) == 2
+    assert "is inside the source data set" in capsys.readouterr().err
+    assert {p: p.read_bytes() for p in folder.rglob("*") if p.is_file()} == before

@@ -223,6 +223,9 @@ def test_import_checks_actions_against_the_domains_bounds(
         for name in f:
             del f[name]["infos"]  # the kitchen's world states do not fit another domain
         f["episode_1/actions"][2, 0] = np.float32(value)
+    metadata = json.loads((source / "data" / "metadata.json").read_text())
+    del metadata["osg_skill"]  # recorded elsewhere: imported as another skill on purpose
+    (source / "data" / "metadata.json").write_text(json.dumps(metadata))
     skill = dom.skills[0].name
     out = tmp_path / f"{skill}.h5"
     if accepted:
@@ -307,6 +310,15 @@ def test_a_file_without_checksums_still_loads(tmp_path):
     unstamped = load_dataset(path)
     for key, array in stamped.arrays.items():
         np.testing.assert_array_equal(unstamped.arrays[key], array)
+
+
+@pytest.mark.parametrize("field", ["observations", "rewards", "episode_successes"])
+def test_an_array_stripped_of_its_checksum_beside_checksummed_ones_is_refused(tmp_path, field):
+    path = write_synthetic_dataset(tmp_path / "grab-cube.h5")
+    with h5py.File(path, "a") as f:
+        del f[field].attrs[CHECKSUM_ATTR]
+    with pytest.raises(DatasetError, match=f"{field!r} lacks its sha256 content checksum"):
+        load_dataset(path)
 
 
 def _short_of(needed: int, by: int) -> Callable[[str], shutil._ntuple_diskusage]:

@@ -1,6 +1,7 @@
 """Resume merges only chunks that are what their names claim: a foreign file under a
 chunk's name (another skill, seed or range, another format, garbage) is discarded with a
-warning and recomputed, so the merged data set equals a clean collection."""
+warning and recomputed, so the merged data set equals a clean collection. So is a chunk
+whose array lost its checksum, was edited, or holds an impossible value."""
 
 from __future__ import annotations
 
@@ -14,7 +15,7 @@ import pytest
 
 from osg_control.data import collect
 from osg_control.data.collect import ChunkTask, _run_chunk, collect_skill, parts_dir
-from osg_control.data.datasets import write_episodes
+from osg_control.data.datasets import CHECKSUM_ATTR, content_sha256, write_episodes
 from osg_control.domain.registry import get_domain
 from osg_control.kitchen.skills import get_skill
 
@@ -63,11 +64,47 @@ def _garbage(_tmp: Path, target: Path) -> None:
     target.write_bytes(b"\x89HDF\r\n not really")
 
 
+def _genuine(target: Path) -> None:
+    """The chunk an interrupted run would have kept at ``target`` (episodes 2-3)."""
+    task = ChunkTask(KITCHEN.name, SKILL, 0, CHUNK, 2 * CHUNK, target)
+    write_episodes(
+        target, _run_chunk(task), {**collect._attrs(KITCHEN, SKILL, 0), **collect._identity(task)}
+    )
+
+
+def _checksum_stripped(_tmp: Path, target: Path) -> None:
+    _genuine(target)
+    with h5py.File(target, "a") as f:
+        del f["rewards"].attrs[CHECKSUM_ATTR]
+
+
+def _reward_flipped(_tmp: Path, target: Path) -> None:
+    _genuine(target)
+    with h5py.File(target, "a") as f:
+        f["rewards"][0] = 1.0 - f["rewards"][0]
+
+
+def _impossible_reward_resealed(_tmp: Path, target: Path) -> None:
+    _genuine(target)
+    with h5py.File(target, "a") as f:
+        f["rewards"][0] = 7.0
+        f["rewards"].attrs[CHECKSUM_ATTR] = content_sha256(f["rewards"][()])
+
+
 @pytest.mark.parametrize(
-    "plant",
-    [_foreign_other_skill, _foreign_other_seed, _foreign_other_range, _foreign_format, _garbage],
+    ("plant", "reason"),
+    [
+        (_foreign_other_skill, "another spec"),
+        (_foreign_other_seed, "seed 7"),
+        (_foreign_other_range, "chunk_start"),
+        (_foreign_format, "format version 99"),
+        (_garbage, "not a readable HDF5"),
+        (_checksum_stripped, "'rewards' lacks its sha256 content checksum"),
+        (_reward_flipped, "'rewards' does not match its sha256"),
+        (_impossible_reward_resealed, "rewards"),
+    ],
 )
-def test_foreign_chunk_is_discarded_and_recomputed(plant, clean, tmp_path, caplog):
+def test_foreign_chunk_is_discarded_and_recomputed(plant, reason, clean, tmp_path, caplog):
     out = tmp_path / "data"
     target = _chunk_path(out, CHUNK)
     target.parent.mkdir(parents=True)
@@ -76,7 +113,7 @@ def test_foreign_chunk_is_discarded_and_recomputed(plant, clean, tmp_path, caplo
         merged = collect_skill(
             KITCHEN, SKILL, EPISODES, 0, out, progress=False, chunk_episodes=CHUNK
         )
-    assert str(target) in caplog.text and "discarded" in caplog.text
+    assert f"{target}: discarded" in caplog.text and reason in caplog.text
     for key, value in clean.items():
         np.testing.assert_array_equal(merged.arrays[key], value, err_msg=key)
 

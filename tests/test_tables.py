@@ -14,7 +14,12 @@ from osg_control.data.collect import LocalExecutor
 from osg_control.domain.registry import get_domain
 from osg_control.evaluation import evaluate
 from osg_control.evaluation.evaluate import reach_table, task_table
-from osg_control.evaluation.resume import CHUNK_JOBS, resumable_map, source_fingerprint
+from osg_control.evaluation.resume import (
+    CHUNK_JOBS,
+    chunk_sha256,
+    resumable_map,
+    source_fingerprint,
+)
 from osg_control.evaluation.skill_table import skill_table
 
 KITCHEN = get_domain("kitchen")
@@ -69,6 +74,10 @@ def test_task_table_cells_seeds_and_averages(monkeypatch) -> None:
     assert set(rates.ravel().tolist()) <= {0.0, 1.0}  # one episode per cell
 
 
+def _any(job: object, result: object) -> None:
+    """A check that accepts every stored result (these tests are about the chunk files)."""
+
+
 def _square(x: int) -> int:
     return x * x
 
@@ -84,7 +93,7 @@ def test_resumable_map_keeps_finished_chunks_and_resumes(tmp_path: Path) -> None
         return x * x
 
     with pytest.raises(KeyboardInterrupt):
-        resumable_map(LocalExecutor(1), interrupted, jobs, tmp_path)
+        resumable_map(LocalExecutor(1), interrupted, jobs, tmp_path, _any)
     assert len(list(tmp_path.glob("chunk-*.json"))) == 2  # the two finished chunks
 
     calls.clear()
@@ -93,7 +102,7 @@ def test_resumable_map_keeps_finished_chunks_and_resumes(tmp_path: Path) -> None
         calls.append(x)
         return x * x
 
-    assert resumable_map(LocalExecutor(1), counting, jobs, tmp_path) == [x * x for x in jobs]
+    assert resumable_map(LocalExecutor(1), counting, jobs, tmp_path, _any) == [x * x for x in jobs]
     assert calls == jobs[2 * CHUNK_JOBS :]  # only the unfinished episodes ran again
     assert not list(tmp_path.glob("chunk-*.json"))  # cleaned up when complete
 
@@ -113,18 +122,19 @@ def test_the_cache_folder_changes_with_the_code(tmp_path: Path) -> None:
 
 def test_resumable_map_discards_foreign_chunks(tmp_path: Path, caplog) -> None:
     jobs = list(range(CHUNK_JOBS))
-    resumable_map(LocalExecutor(1), _square, jobs, None)
+    resumable_map(LocalExecutor(1), _square, jobs, None, _any)
     with pytest.raises(KeyboardInterrupt):
-        resumable_map(LocalExecutor(1), _interrupt_last, jobs + [999], tmp_path)
+        resumable_map(LocalExecutor(1), _interrupt_last, jobs + [999], tmp_path, _any)
     (chunk,) = tmp_path.glob("chunk-*.json")
     stored = json.loads(chunk.read_text())
     stored["results"] = [-1] * len(stored["results"])
     stored["keys"][0] = "something else"
+    stored["sha256"] = chunk_sha256(stored["keys"], stored["results"])  # a valid foreign file
     chunk.write_text(json.dumps(stored))
     with caplog.at_level(logging.WARNING):
-        results = resumable_map(LocalExecutor(1), _square, jobs + [999], tmp_path)
+        results = resumable_map(LocalExecutor(1), _square, jobs + [999], tmp_path, _any)
     assert results == [x * x for x in [*jobs, 999]]
-    assert "discarded" in caplog.text
+    assert "discarded, its jobs are not this chunk's" in caplog.text
 
 
 def _interrupt_last(x: int) -> int:

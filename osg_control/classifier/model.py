@@ -32,7 +32,12 @@ from osg_control.domain.base import Domain
 from osg_control.errors import CheckpointError
 from osg_control.io_safety import atomic_write
 from osg_control.json_files import read_json_object
-from osg_control.learning.checkpoints import check_finite, sha256_file
+from osg_control.learning.checkpoints import (
+    check_finite,
+    check_values_sha256,
+    sha256_file,
+    values_sha256,
+)
 
 WEIGHTS_FILE = "classifier.safetensors"
 SIDECAR_FILE = "classifier.json"
@@ -41,6 +46,8 @@ CHECKPOINT_VERSION = 2
 """2: the inputs are the state and its motion input (version 1 read the state alone)."""
 INPUT_DIM = OBS_DIM + MOTION_FEATURES
 _STRUCTURAL_KEYS = ("format", "format_version", "classes", "normalisation", "weights_sha256")
+_CHECKSUM_KEYS = ("normalisation_sha256",)
+"""Sidecar keys checked on load and not kept in ``info``."""
 
 
 def _as_input_batch(
@@ -223,6 +230,7 @@ class StateClassifier:
             "weights_sha256": sha256_file(weights_path),
             "package_version": __version__,
         }
+        sidecar["normalisation_sha256"] = values_sha256(sidecar["normalisation"])
         sidecar_path = directory / SIDECAR_FILE
         text = json.dumps(sidecar, indent=2, sort_keys=True) + "\n"
         atomic_write(sidecar_path, lambda tmp: tmp.write_text(text, encoding="utf-8"))
@@ -250,8 +258,10 @@ class StateClassifier:
         sidecar_path = directory / SIDECAR_FILE
         weights_path = directory / WEIGHTS_FILE
         for path in (sidecar_path, weights_path):
-            if not path.is_file():
+            if not path.exists():
                 raise CheckpointError(f"{path}: classifier checkpoint file not found")
+            if not path.is_file():
+                raise CheckpointError(f"{path}: classifier checkpoint is not a regular file")
         sidecar = read_json_object(sidecar_path, "classifier sidecar", CheckpointError)
         if sidecar.get("format") != CHECKPOINT_FORMAT:
             raise CheckpointError(f"{sidecar_path}: not a {CHECKPOINT_FORMAT} sidecar")
@@ -268,6 +278,13 @@ class StateClassifier:
             raise CheckpointError(
                 f"{sidecar_path}: checkpoint classes {sidecar['classes']} do not match the "
                 f"current movement skills {expected}; retrain with `osg classifier train`"
+            )
+        if "normalisation_sha256" in sidecar:  # written since it exists
+            check_values_sha256(
+                sidecar_path,
+                sidecar["normalisation"],
+                sidecar["normalisation_sha256"],
+                "normalisation mean and std",
             )
         if sha256_file(weights_path) != sidecar["weights_sha256"]:
             raise CheckpointError(
@@ -288,7 +305,11 @@ class StateClassifier:
                 layers=layers,
                 mean=np.asarray(sidecar["normalisation"]["mean"], dtype=np.float32),
                 std=np.asarray(sidecar["normalisation"]["std"], dtype=np.float32),
-                info={k: v for k, v in sidecar.items() if k not in _STRUCTURAL_KEYS},
+                info={
+                    k: v
+                    for k, v in sidecar.items()
+                    if k not in _STRUCTURAL_KEYS and k not in _CHECKSUM_KEYS
+                },
             )
         except (KeyError, TypeError, ValueError) as err:
             raise CheckpointError(

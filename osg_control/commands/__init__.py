@@ -98,7 +98,7 @@ def perception_of(
     """
     from osg_control.perception.spec import check_supported, perception_spec
 
-    name = args.perception or domain.perceptions[0]
+    name = domain.perceptions[0] if args.perception is None else args.perception
     noise = getattr(args, "noise", None)
     if isinstance(noise, list):
         noise = None  # a list of Table I columns, checked level by level by the verb

@@ -3,6 +3,9 @@ any work starts, with a ``UsageError`` naming the option (exit code 2).
 
 The checks are keyed by the argument's destination name, so every verb that takes e.g.
 ``--episodes`` gets the same rule; ``cli.main`` calls ``check_args`` once after parsing.
+Every numeric option has both bounds (``CHECKS``; docs/reliability.md lists them): a value
+past what the libraries underneath take (torch threads, HDF5's 64-bit seed attribute,
+Fast Downward's time limit) is refused here rather than crashing hours into a run.
 """
 
 from __future__ import annotations
@@ -13,6 +16,10 @@ from collections.abc import Callable
 from typing import TYPE_CHECKING, Any
 
 from osg_control.errors import UsageError
+from osg_control.execution import MAX_REPLANS
+from osg_control.perception.spec import MAX_NOISE
+from osg_control.planning.task import MAX_STATES, MAX_TIME_S
+from osg_control.seeding import MAX_SEED
 
 if TYPE_CHECKING:
     from osg_control.domain.base import Domain
@@ -22,13 +29,22 @@ def _option(dest: str) -> str:
     return "--" + dest.replace("_", "-")
 
 
-def _at_least(minimum: int) -> Callable[[str, Any], None]:
+def _whole(low: int, high: int) -> Callable[[str, Any], None]:
+    """A whole-number option in [low, high]."""
+
     def check(dest: str, value: Any) -> None:
         for item in value if isinstance(value, list) else [value]:
-            if item < minimum:
-                raise UsageError(f"{_option(dest)} must be >= {minimum}, got {item}")
+            if item < low:
+                raise UsageError(f"{_option(dest)} must be >= {low}, got {item}")
+            if item > high:
+                raise UsageError(f"{_option(dest)} must be <= {high:,}, got {_shown(item)}")
 
     return check
+
+
+def _shown(value: Any) -> str:
+    text = str(value)
+    return text if len(text) <= 30 else f"{text[:12]}...({len(text)} digits)"
 
 
 def _finite_range(
@@ -40,9 +56,9 @@ def _finite_range(
             below = item < high if high_open else item <= high
             if not (math.isfinite(item) and above and below):
                 left = "(" if low_open else "["
-                right = ")" if high_open or not math.isfinite(high) else "]"
+                right = ")" if high_open else "]"
                 raise UsageError(
-                    f"{_option(dest)} must lie in {left}{low}, {high}{right}, got {item}"
+                    f"{_option(dest)} must lie in {left}{low:g}, {high:g}{right}, got {item}"
                 )
 
     return check
@@ -74,25 +90,36 @@ def _video(dest: str, value: Any) -> None:
         ) from err
 
 
+MAX_COUNT = 10**9
+"""The most episodes, training steps or checks a command takes (a billion episodes already
+run in flat memory; more would not finish)."""
+MAX_PARALLEL = 1024
+"""The most worker processes or torch threads (torch segfaults at 100,000 threads)."""
 CHECKS: dict[str, Callable[[str, Any], None]] = {
     "goal": _goal,
-    "episodes": _at_least(1),
-    "steps": _at_least(1),
-    "epochs": _at_least(1),
-    "batch_size": _at_least(1),
-    "threads": _at_least(1),
-    "workers": _at_least(1),
-    "seed": _at_least(0),
-    "replans": _at_least(0),
-    "max_replans": _at_least(0),
-    "max_states": _at_least(1),
-    "noise": _finite_range(0.0, 1.0),
-    "time_limit": _finite_range(0.0, math.inf, low_open=True),
+    "episodes": _whole(1, MAX_COUNT),
+    "steps": _whole(1, MAX_COUNT),
+    "check_every": _whole(1, MAX_COUNT),
+    "check_episodes": _whole(1, MAX_COUNT),
+    "patience": _whole(1, MAX_COUNT),
+    "epochs": _whole(1, 10**6),
+    "batch_size": _whole(1, 2**20),
+    "threads": _whole(1, MAX_PARALLEL),
+    "workers": _whole(1, MAX_PARALLEL),
+    "seed": _whole(0, MAX_SEED),
+    "replans": _whole(0, MAX_REPLANS),
+    "max_replans": _whole(0, MAX_REPLANS),
+    "max_states": _whole(1, MAX_STATES),
+    "noise": _finite_range(0.0, MAX_NOISE),
+    "object_noise": _finite_range(0.0, MAX_NOISE),
+    "time_limit": _finite_range(0.0, MAX_TIME_S, low_open=True),
     "filter": _finite_range(0.0, 1.0, low_open=True),
     "validation_fraction": _finite_range(0.0, 1.0, high_open=True),
     "video": _video,
 }
-"""Argument destination -> its check (run only when the argument is present and not None)."""
+"""Argument destination -> its check (run only when the argument is present and not None).
+Every numeric option of every verb has an entry with both bounds
+(``tests/test_reliability_bounds.py`` walks the parser to hold that)."""
 
 
 def _domain_values(args: argparse.Namespace) -> None:
@@ -124,6 +151,11 @@ def _domain_values(args: argparse.Namespace) -> None:
                 f"{_option(dest)}: unknown facts {unknown} in domain {domain.name!r}; its facts: "
                 f"{', '.join(domain.facts)}"
             )
+    if getattr(args, "randomize_objects", False) and not domain.objects:
+        raise UsageError(
+            f"--randomize-objects: domain {domain.name!r} has no objects with a placement "
+            "region to randomize"
+        )
     _models(args, domain)
 
 

@@ -7,7 +7,6 @@ sets ``func``; a new verb (e.g. the simulation test ``reach``) is one more such 
 from __future__ import annotations
 
 import argparse
-import json
 import sys
 from collections.abc import Callable
 from pathlib import Path
@@ -26,6 +25,7 @@ from osg_control.commands import (
 from osg_control.domain.base import Domain
 from osg_control.execution.defaults import defaults_root, describe_models, models_in_use
 from osg_control.io_safety import check_output_dir
+from osg_control.json_files import dump_json
 from osg_control.paths import cache_dir
 
 Verbs: TypeAlias = "argparse._SubParsersAction[argparse.ArgumentParser]"
@@ -58,7 +58,7 @@ def _add_data_argument(parser: argparse.ArgumentParser) -> None:
 
 
 def _emit(args: argparse.Namespace, payload: dict[str, Any], text: str) -> None:
-    print(json.dumps(payload, indent=2) if args.json else text)
+    print(dump_json(payload) if args.json else text)
 
 
 def run_train(args: argparse.Namespace) -> int:

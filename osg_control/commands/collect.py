@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import argparse
-import json
 import time
 from pathlib import Path
 
@@ -16,6 +15,7 @@ from osg_control.data.datasets import (
 )
 from osg_control.errors import DatasetError
 from osg_control.io_safety import check_output_dir
+from osg_control.json_files import dump_json
 from osg_control.parallel import open_executor
 from osg_control.paths import cache_dir
 from osg_control.pipeline.collect import collection_bytes
@@ -64,7 +64,7 @@ def run_collect(args: argparse.Namespace) -> int:
             summary["seconds"] = round(time.perf_counter() - started, 2)
             rows.append(summary)
     if args.json:
-        print(json.dumps(rows, indent=2))
+        print(dump_json(rows))
     else:
         print(f"{'skill':26s} {'episodes':>8s} {'steps':>7s} {'success':>8s} {'seconds':>8s}")
         for row in rows:
@@ -88,7 +88,7 @@ def run_info(args: argparse.Namespace) -> int:
             rows.append({"path": str(path), "error": str(err)})
             status = 1
     if args.json:
-        print(json.dumps(rows, indent=2))
+        print(dump_json(rows))
         return status
     for row in rows:
         if "error" in row:

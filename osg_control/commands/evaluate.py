@@ -4,7 +4,6 @@
 from __future__ import annotations
 
 import argparse
-import json
 from collections.abc import Callable
 from pathlib import Path
 from typing import Any
@@ -22,6 +21,7 @@ from osg_control.evaluation.evaluate import format_task_table, task_table
 from osg_control.evaluation.resume import source_fingerprint
 from osg_control.execution.defaults import describe_models, models_fingerprint, models_in_use
 from osg_control.io_safety import check_output_dir
+from osg_control.json_files import JSONFormatError, dump_json, parse_json
 from osg_control.parallel import open_executor
 from osg_control.paths import cache_dir
 
@@ -111,7 +111,7 @@ def run_benchmark_command(args: argparse.Namespace) -> int:
     from osg_control.evaluation.benchmark import benchmark_of, format_benchmark, run_benchmark
 
     domain = domain_of(args)
-    benchmark_of(domain)
+    _check_benchmark_options(benchmark_of(domain), args)
     perception = perception_of(args, domain)
     resume_dir = evaluation_cache(domain, "benchmark", args.models)
     with open_executor(args.backend, args.workers, args.address) as executor:
@@ -136,12 +136,34 @@ def run_benchmark_command(args: argparse.Namespace) -> int:
     return print_result(domain, args, summary, format_benchmark)
 
 
+def _check_benchmark_options(bench: Any, args: argparse.Namespace) -> None:
+    """``--set``, ``--tasks`` and ``--env-kwargs`` against the benchmark, before any work.
+
+    Raises:
+        UsageError: both ``--set`` and ``--tasks``, an unknown goal set or task, or an env
+            option the env does not take (or out of its range); each named.
+    """
+    from osg_control.errors import DomainError, UsageError
+
+    if args.tasks and args.goal_set is not None:
+        raise UsageError("--tasks and --set exclude each other: give the goal set or its tasks")
+    for option, check in (
+        ("--tasks", lambda: args.tasks and bench.check_tasks(tuple(args.tasks))),
+        ("--set", lambda: args.goal_set is not None and bench.tasks_of(args.goal_set)),
+        ("--env-kwargs", lambda: bench.check_options(args.env_kwargs)),
+    ):
+        try:
+            check()
+        except DomainError as err:
+            raise UsageError(f"{option}: {err}") from None
+
+
 def _json_object(text: str) -> dict[str, Any]:
     """``--env-kwargs``: a JSON object, else a usage error naming the option."""
     try:
-        value = json.loads(text)
-    except json.JSONDecodeError as err:
-        raise argparse.ArgumentTypeError(f"not JSON ({err})") from None
+        value = parse_json(text)
+    except JSONFormatError as err:
+        raise argparse.ArgumentTypeError(str(err)) from None
     if not isinstance(value, dict):
         raise argparse.ArgumentTypeError(f"must be a JSON object, got {text!r}")
     return value
@@ -189,7 +211,7 @@ def print_result(
 ) -> int:
     """Print an evaluation (JSON with ``--json``, else text), naming the models it used."""
     result["models"] = models_in_use(domain, args.models)
-    print(json.dumps(result, indent=2) if args.json else formatter(result))
+    print(dump_json(result) if args.json else formatter(result))
     if not args.json:
         print(describe_models(result["models"]))
     return 0

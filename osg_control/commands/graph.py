@@ -3,14 +3,13 @@
 from __future__ import annotations
 
 import argparse
-import json
 from pathlib import Path
 from typing import TypeAlias
 
 from osg_control.commands import domain_of
 from osg_control.data.datasets import load_dataset
 from osg_control.errors import DatasetError
-from osg_control.json_files import read_json_object
+from osg_control.json_files import dump_json, is_json_number, read_json_object
 from osg_control.planning.graph import (
     SkillGraph,
     graph_from_specs,
@@ -26,8 +25,12 @@ def _read_rates(path: Path | None) -> dict[str, float] | None:
     if path is None:
         return None
     rates = read_json_object(path, "success rates", DatasetError)
-    if not all(isinstance(v, int | float) for v in rates.values()):
-        raise DatasetError(f"{path}: expected a JSON object of skill name -> success rate")
+    bad = {k: v for k, v in rates.items() if not (is_json_number(v) and 0 <= v <= 1)}
+    if bad:
+        raise DatasetError(
+            f"{path}: expected a JSON object of skill name -> success rate in [0, 1]; "
+            f"not rates: {bad}"
+        )
     return {str(k): float(v) for k, v in rates.items()}
 
 
@@ -79,7 +82,7 @@ def run_graph(args: argparse.Namespace) -> int:
         save_graph(graph, args.out)
     if args.png:
         draw_graph(graph, args.png, args.projection)
-    print(json.dumps(graph.to_dict(), indent=2) if args.json else format_graph(graph))
+    print(dump_json(graph.to_dict()) if args.json else format_graph(graph))
     return 0
 
 

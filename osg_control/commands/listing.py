@@ -4,11 +4,11 @@ described, one that cannot be loaded listed with its error (exit 1) and the othe
 from __future__ import annotations
 
 import argparse
-import json
 from collections.abc import Callable, Iterable
 from typing import Any
 
 from osg_control.errors import OSGError
+from osg_control.json_files import dump_json
 
 
 def print_registered(
@@ -29,7 +29,7 @@ def print_registered(
         except OSGError as err:
             broken.append({"name": name, "error": str(err)})
     if as_json:
-        print(json.dumps(summaries + broken, indent=2))
+        print(dump_json(summaries + broken))
         return 1 if broken else 0
     for entry in broken:
         print(f"{entry['name']}: BROKEN: {entry['error']}")

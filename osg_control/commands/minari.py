@@ -4,12 +4,12 @@
 from __future__ import annotations
 
 import argparse
-import json
 from pathlib import Path
 from typing import Any
 
 from osg_control.commands import domain_of
 from osg_control.data.datasets import dataset_summary
+from osg_control.json_files import dump_json
 
 
 def add_verbs(verbs: argparse._SubParsersAction) -> None:
@@ -98,7 +98,7 @@ def run_export(args: argparse.Namespace) -> int:
 
     target = export_minari(args.path, args.id, args.out, args.force, domain_of(args).env_id)
     if args.json:
-        print(json.dumps({"id": args.id, "path": str(target)}))
+        print(dump_json({"id": args.id, "path": str(target)}, indent=None))
     else:
         print(f"Minari data set {args.id} written to {target}")
     return 0
@@ -113,10 +113,31 @@ def run_lerobot(args: argparse.Namespace) -> int:
     target = export_lerobot(args.path, out, domain, args.force)
     fps = domain.control_hz
     if args.json:
-        print(json.dumps({"path": str(target), "fps": fps}))
+        print(dump_json({"path": str(target), "fps": fps}))
     else:
         print(f"LeRobot v3.0 data set written to {target} ({fps:g} frames per second)")
     return 0
+
+
+def _refuse_out_in_source(source: str, out: Path) -> None:
+    """Refuse an ``--out`` that is the source data set or lies inside it (the import
+    would overwrite what it reads).
+
+    Raises:
+        UsageError: naming both paths.
+    """
+    from osg_control.data.minari_import import minari_root
+    from osg_control.errors import UsageError
+
+    target = Path(out).expanduser().resolve()
+    for candidate in (Path(source).expanduser(), minari_root() / str(source)):
+        if candidate.exists():
+            place = candidate.resolve()
+            if target == place or place in target.parents:
+                raise UsageError(
+                    f"--out {out} is inside the source data set {source}: the import would "
+                    "overwrite what it reads; write it elsewhere"
+                )
 
 
 def run_import(args: argparse.Namespace) -> int:
@@ -125,6 +146,7 @@ def run_import(args: argparse.Namespace) -> int:
     from osg_control.errors import UsageError
 
     domain = domain_of(args)
+    _refuse_out_in_source(args.source, args.out)
     layouts = {layout.name: layout for layout in domain.dataset_layouts}
     name = args.layout
     if name == "auto":
@@ -146,7 +168,7 @@ def run_import(args: argparse.Namespace) -> int:
             )
         summary = layouts[name].imports(domain, args.source, args.out)
         if args.json:
-            print(json.dumps(summary.to_json(), indent=2))
+            print(dump_json(summary.to_json()))
         else:
             print("\n".join(summary.lines()))
         return 0
@@ -176,7 +198,7 @@ def _import_lerobot(args: argparse.Namespace) -> int:
 def _print_import(imported: dict[str, Any], as_json: bool) -> int:
     """Print an imported data set's summary."""
     if as_json:
-        print(json.dumps(imported, indent=2))
+        print(dump_json(imported))
     else:
         print(
             f"{imported['path']}: skill {imported['skill']}, {imported['episodes']} episodes, "

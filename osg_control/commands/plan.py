@@ -3,13 +3,13 @@
 from __future__ import annotations
 
 import argparse
-import json
 import sys
 from pathlib import Path
 from typing import TYPE_CHECKING, TypeAlias
 
 from osg_control.commands import domain_of
 from osg_control.errors import PDDLError, PlanningError, UsageError
+from osg_control.json_files import dump_json
 
 if TYPE_CHECKING:
     from osg_control.planning.task import PlanResult
@@ -82,7 +82,7 @@ def run_plan(args: argparse.Namespace) -> int:
     except PDDLError as err:
         print(f"osg: error: {err}", file=sys.stderr)
         return PDDL_ERROR_EXIT
-    print(json.dumps(result.to_dict(), indent=2) if args.json else format_plan(result))
+    print(dump_json(result.to_dict()) if args.json else format_plan(result))
     return EXIT_STATUS[result.status]
 
 

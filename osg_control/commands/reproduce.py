@@ -12,7 +12,6 @@ plan costs); a domain's shipped defaults are a copy of it.
 from __future__ import annotations
 
 import argparse
-import json
 import shlex
 import sys
 from pathlib import Path
@@ -25,6 +24,7 @@ from osg_control.commands import (
     perception_of,
 )
 from osg_control.domain.base import Domain
+from osg_control.json_files import dump_json
 from osg_control.parallel.machine import machine_cpus
 from osg_control.pipeline.bundle import DEPLOYMENT_NOISE
 
@@ -102,14 +102,36 @@ def check_against_shipped(
     from osg_control.execution.defaults import defaults_root
 
     shipped = defaults_root(domain) / FIGURES
-    compared, mismatches = compare(read_figures(shipped), figures, str(shipped), str(source))
+    result = compare(read_figures(shipped), figures, str(shipped), str(source))
+    power = result.summary()
     if as_json:
-        print(json.dumps({"compared": compared, "mismatches": [m.__dict__ for m in mismatches]}))
+        print(
+            dump_json(
+                {
+                    "compared": result.compared,
+                    "mismatches": [m.__dict__ for m in result.mismatches],
+                    "detectable_difference": {**power, "cells": result.detectable},
+                },
+                indent=None,
+            )
+        )
     else:
-        print(f"check: {compared} cells compared, {len(mismatches)} outside the intervals")
-        for m in mismatches:
+        print(
+            f"check: {result.compared} cells compared, {len(result.mismatches)} outside the "
+            "intervals"
+        )
+        print(
+            f"  smallest difference it could detect, per cell: {_rate(power['smallest'])} to "
+            f"{_rate(power['largest'])} (median {_rate(power['median'])}; least power: "
+            f"{power['largest_at']})"
+        )
+        for m in result.mismatches:
             print(f"  {m.where}: shipped {m.shipped:.3f}, reproduced {m.reproduced:.3f}")
-    return 1 if mismatches else 0
+    return 1 if result.mismatches else 0
+
+
+def _rate(value: float | None) -> str:
+    return "none" if value is None else f"{value:.3f}"
 
 
 def manifest_command(domain: str, args: argparse.Namespace) -> str:
@@ -140,6 +162,13 @@ def run(args: argparse.Namespace) -> int:
         raise UsageError(
             f"--workers and --threads must be >= 1, got {args.workers} and {args.threads}"
         )
+    if args.check and args.quick:
+        from osg_control.errors import UsageError
+
+        raise UsageError(
+            "--check cannot be used with --quick: a quick run's cells have too few episodes "
+            "to find a difference from the shipped figures (see evaluation/check.py)"
+        )
     if args.compare is not None:
         from osg_control.evaluation.check import figures_file, read_figures
 
@@ -169,7 +198,7 @@ def run(args: argparse.Namespace) -> int:
     )
     done = reproduce(config, log=lambda text: print(text, flush=True))
     if args.json:
-        print(json.dumps(done.figures, indent=2))
+        print(dump_json(done.figures))
     else:
         for name, seconds in done.stage_seconds.items():
             print(f"{name:14s} {seconds:8.1f} s")

@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import argparse
-import json
 from collections.abc import Callable
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
@@ -19,12 +18,14 @@ from osg_control.commands import (
     perception_of,
 )
 from osg_control.domain.base import Domain
-from osg_control.domain.frames import sample_placements
+from osg_control.domain.frames import offsets_of, sample_placements
 from osg_control.errors import UsageError
 from osg_control.evaluation.skill_table import format_skill_table, skill_table
 from osg_control.execution.defaults import defaults_root, describe_models, models_in_use
 from osg_control.execution.executor import load_executor, task_env_config
+from osg_control.execution.goals import parse_goal
 from osg_control.io_safety import atomic_write, check_output_dir
+from osg_control.json_files import dump_json
 from osg_control.parallel import open_executor
 from osg_control.perception.spec import perception_spec
 
@@ -123,7 +124,10 @@ def run_task(args: argparse.Namespace) -> int:
     """Run ``--episodes`` executions of the goal and report each (exit 1 if any failed)."""
     domain = domain_of(args)
     perception = perception_of(args, domain)
-    goal = args.goal.split()
+    try:
+        goal = parse_goal(args.goal, domain)
+    except ValueError as err:
+        raise UsageError(f"--goal: {err}") from None
     facts = domain.start_world if args.facts is None else tuple(args.facts.split())
     if args.video:
         check_output_dir(args.video.parent, "video folder")
@@ -154,8 +158,10 @@ def run_task(args: argparse.Namespace) -> int:
         if recorder is not None:
             recorder.begin_episode(env)
             executor.on_event = recorder.on_event
-        result = executor.execute(goal, env, obs)
-        results.append({**result.to_dict(), "scored_success": set(goal) <= env.facts()})
+        result = executor.execute(goal.atoms(), env, obs)
+        truth = offsets_of(domain.objects, domain.world_fields, env.world_state())
+        scored = goal.holds(domain, env.facts(), env.true_state(), truth)  # the truth scores
+        results.append({**result.to_dict(), "scored_success": scored})
         if not args.json:
             status = "success" if result.success else f"FAILED ({result.failure})"
             entry = f"entry {result.entry_skill}, " if result.entry_skill else ""
@@ -177,7 +183,7 @@ def run_task(args: argparse.Namespace) -> int:
             "episodes": results,
             "success_rate": successes / len(results),
         }
-        print(json.dumps(payload, indent=2))
+        print(dump_json(payload))
     else:
         print(f"success rate {successes}/{len(results)}")
     return 0 if successes == len(results) else 1
@@ -247,7 +253,7 @@ def run_eval_skills(args: argparse.Namespace) -> int:
             randomize=args.randomize_objects,
         )
     table["models"] = {"skills": str(models)}
-    print(json.dumps(table, indent=2) if args.json else format_skill_table(table))
+    print(dump_json(table) if args.json else format_skill_table(table))
     if not args.json:
         print(f"models: {args.models}")
     return 0

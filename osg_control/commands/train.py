@@ -8,7 +8,6 @@ there.
 from __future__ import annotations
 
 import argparse
-import json
 from pathlib import Path
 
 from osg_control.commands import (
@@ -18,6 +17,7 @@ from osg_control.commands import (
     perception_of,
 )
 from osg_control.domain.base import Domain
+from osg_control.json_files import dump_json
 from osg_control.learning.early_stopping import CHECK_EPISODES, EarlyStopping
 from osg_control.parallel.machine import machine_cpus
 from osg_control.paths import cache_dir
@@ -144,7 +144,7 @@ def early_stop_of(args: argparse.Namespace, domain: Domain, data_dir: Path) -> E
 
 def print_summary(trained: TrainedSkills, as_json: bool) -> None:
     """Print the run's summary as JSON or as one line per skill plus a total."""
-    print(json.dumps(trained.to_dict(), indent=2) if as_json else format_training(trained))
+    print(dump_json(trained.to_dict()) if as_json else format_training(trained))
 
 
 def run(args: argparse.Namespace) -> int:

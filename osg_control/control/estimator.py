@@ -26,6 +26,8 @@ from collections.abc import Callable
 
 import numpy as np
 
+from osg_control.json_files import is_json_number
+
 DEFAULT_GAIN = 0.2
 """Blend of each new reading: about the steady-state Kalman gain for the motion model's
 residual against 2 cm reading noise (0.2 for 4.5 mm, 0.24 for 5.5 mm; see the module
@@ -37,6 +39,10 @@ default data sets (seed 0, 300 episodes each), with the speed-limited servo
 (``control.servo``; before it, on every step: 0.875 and 0.24). The default of a defaults
 folder that records none: each domain's pipeline fits its own on its data and ships it in
 the manifest (``motion_model``), which the executor then uses."""
+MOTION_BOUND = 2.0
+"""The largest magnitude of a motion model's coefficient: a step moves the TCP by about the
+commanded displacement (``k_now + k_prev`` near 1); a manifest of ``[1e300, 1e300]`` made
+every estimate non-finite."""
 PRECISION_COMMAND = 0.01
 """The motion model is fitted on steps that command less than 1 cm: the approaches and
 grasps, where the filtered estimate decides where to close. Longer commands are slowed by
@@ -74,6 +80,24 @@ def fit_motion_model(
     return float(k_now), float(k_prev)
 
 
+def check_motion_model(motion: object) -> tuple[float, float]:
+    """``motion`` as ``(k_now, k_prev)``.
+
+    Raises:
+        ValueError: not two finite numbers within ``MOTION_BOUND``, naming the value.
+    """
+    if not (
+        isinstance(motion, list | tuple)
+        and len(motion) == 2
+        and all(is_json_number(k) and abs(k) <= MOTION_BOUND for k in motion)
+    ):
+        raise ValueError(
+            f"a motion model must be two finite numbers within +-{MOTION_BOUND:g} "
+            f"(k_now, k_prev), got {motion!r}"
+        )
+    return float(motion[0]), float(motion[1])
+
+
 class TcpFilter:
     """Recursive TCP position estimate; ``reset`` at the start of every episode."""
 
@@ -85,10 +109,12 @@ class TcpFilter:
         motion: ``(k_now, k_prev)``, see ``MOTION_MODEL``.
 
         Raises:
-            ValueError: a gain outside (0, 1].
+            ValueError: a gain outside (0, 1] (NaN, a bool or a string included), or a
+                motion model that is not two finite numbers within ``MOTION_BOUND``.
         """
-        if not 0.0 < gain <= 1.0:
-            raise ValueError(f"filter gain must be in (0, 1], got {gain}")
+        if not (is_json_number(gain) and 0.0 < gain <= 1.0):
+            raise ValueError(f"filter gain must be a number in (0, 1], got {gain!r}")
+        check_motion_model(motion)
         self.gain = gain
         self.motion = motion
         self._estimate: np.ndarray | None = None

@@ -23,14 +23,15 @@ Per-episode arrays (``E`` episodes): ``episode_starts`` (offset of the first ste
 ``episode_lengths``, ``episode_successes``. Attributes: ``skill`` (the spec as JSON),
 ``seed``, ``package_version``, ``format_version``, ``world_fields`` (comma-separated),
 ``domain``. Each of the arrays carries a ``sha256`` attribute, the hash of its bytes,
-checked on load (a flipped bit is a ``DatasetError``; files without it load unchecked).
+checked on load (a flipped bit is a ``DatasetError``); a file stores it on every array or
+on none (files written before the checksums load unchecked; an array stripped of its
+checksum beside checksummed siblings is a ``DatasetError``).
 """
 
 from __future__ import annotations
 
 import hashlib
 import io
-import json
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
@@ -47,6 +48,7 @@ from osg_control.data.validation import (
 )
 from osg_control.errors import DatasetError
 from osg_control.io_safety import atomic_write
+from osg_control.json_files import parse_json
 
 FORMAT_VERSION = 1
 OBS_DIM = 10
@@ -58,7 +60,7 @@ WORLD_WIDTH = -1
 """Stands for the domain's world-state width in ``STEP_FIELDS`` (fixed per file)."""
 CHECKSUM_ATTR = "sha256"
 """Attribute of every HDF5 data set of a data set file: the sha256 of the array's bytes,
-written at save and verified at load (files without it, from before, load unchecked)."""
+written at save and verified at load (files without any, from before, load unchecked)."""
 STEP_FIELDS: dict[str, tuple[tuple[int, ...], Any]] = {
     "observations": ((OBS_DIM,), np.float32),
     "next_observations": ((OBS_DIM,), np.float32),
@@ -143,7 +145,7 @@ class Dataset:
     @property
     def skill_name(self) -> str:
         """The name of the skill recorded."""
-        return str(json.loads(self.attrs["skill"])["name"])
+        return str(parse_json(self.attrs["skill"])["name"])
 
     def episode(self, index: int) -> Episode:
         """Slice out one episode."""
@@ -251,17 +253,24 @@ def hdf5_bytes(fill: Callable[[h5py.File], object], **options: Any) -> bytes:
     return buffer.getvalue()
 
 
-def _read_field(f: h5py.File, key: str, path: Path) -> np.ndarray:
-    """Read data set ``key``, checking its content sha256 where the file stores one.
+def _read_field(f: h5py.File, key: str, path: Path, checked: bool) -> np.ndarray:
+    """Read data set ``key``, checking its content sha256; ``checked``: whether the file
+    stores checksums (then every field must carry one).
 
     Raises:
-        DatasetError: the field is missing, or its bytes differ from the checksum written
-            with them (the file is corrupt); names the file and the field.
+        DatasetError: the field is missing, lacks its checksum in a checksummed file, or
+            its bytes differ from the checksum written with them (the file is corrupt);
+            names the file and the field.
     """
     if key not in f:
         raise DatasetError(f"{path}: missing field {key!r}")
     array = np.asarray(f[key][()])
     stored = f[key].attrs.get(CHECKSUM_ATTR)
+    if stored is None and checked:
+        raise DatasetError(
+            f"{path}: field {key!r} lacks its sha256 content checksum while other fields "
+            "carry theirs: the file was altered (re-collect or re-import it)"
+        )
     if stored is not None and stored != content_sha256(array):
         raise DatasetError(
             f"{path}: field {key!r} does not match its sha256 content checksum: the file is "
@@ -283,21 +292,27 @@ def _world_width(attrs: Mapping[str, Any], path: Path) -> int:
     return len(fields.split(","))
 
 
-def load_dataset(path: str | Path) -> Dataset:
-    """Read and validate a data set file.
+def load_dataset(path: str | Path, require_checksums: bool = False) -> Dataset:
+    """Read and validate a data set file. A file stores a checksum on every array or on
+    none (written before the checksums); ``require_checksums``: refuse the latter too
+    (a resumed collection chunk, always written by this version).
 
     Raises:
         DatasetError: naming the file and what is wrong (missing, not HDF5, missing field,
-            wrong shape or dtype, non-finite values, an inconsistent episode index; see
-            ``osg_control.data.validation``).
+            a missing or wrong checksum, wrong shape or dtype, non-finite values, an
+            inconsistent episode index; see ``osg_control.data.validation``).
     """
     path = Path(path)
     if not path.is_file():
         raise DatasetError(f"{path}: data set file not found")
     try:
         with h5py.File(path, "r") as f:
-            arrays = {key: _read_field(f, key, path) for key in STEP_FIELDS}
-            per_episode = {key: _read_field(f, key, path) for key in PER_EPISODE_KINDS}
+            keys = [*STEP_FIELDS, *PER_EPISODE_KINDS]
+            checked = require_checksums or any(
+                CHECKSUM_ATTR in f[key].attrs for key in keys if key in f
+            )
+            arrays = {key: _read_field(f, key, path, checked) for key in STEP_FIELDS}
+            per_episode = {key: _read_field(f, key, path, checked) for key in PER_EPISODE_KINDS}
             attrs = dict(f.attrs)
             fields = _field_spec(_world_width(f.attrs, path))
     except DatasetError:

@@ -20,7 +20,6 @@ episode. A refused import leaves the ``out`` file as it was.
 
 from __future__ import annotations
 
-import json
 from pathlib import Path
 from typing import Any
 
@@ -37,11 +36,12 @@ from osg_control.data.datasets import (
     write_episodes,
 )
 from osg_control.data.minari_export import DATA_DIR, MAIN_FILE, METADATA_FILE, minari_root
-from osg_control.data.validation import check_step_fields
+from osg_control.data.validation import check_step_fields, check_within
 from osg_control.domain.base import Domain
 from osg_control.domain.spec import SkillSpec
 from osg_control.environment.arm_env import success_holds
 from osg_control.errors import DatasetError
+from osg_control.json_files import JSONFormatError, load_json, parse_json
 
 SUCCESS_SOURCES = ("rewards", "predicate")
 
@@ -67,8 +67,8 @@ def _read_metadata(data_dir: Path) -> dict[str, Any]:
     """
     path = data_dir / METADATA_FILE
     try:
-        metadata = json.loads(path.read_text())
-    except (OSError, UnicodeDecodeError, ValueError) as err:
+        metadata = load_json(path)
+    except (OSError, JSONFormatError) as err:
         raise DatasetError(f"{path}: not a readable JSON file ({err})") from err
     if not isinstance(metadata, dict):
         raise DatasetError(f"{path}: must hold a JSON object, got {type(metadata).__name__}")
@@ -78,7 +78,7 @@ def _read_metadata(data_dir: Path) -> dict[str, Any]:
 def _space_shape(metadata: dict[str, Any], key: str, path: Path) -> tuple[int, ...]:
     """The shape of the Box space ``metadata[key]`` (a JSON string, as Minari writes it)."""
     try:
-        space = json.loads(metadata[key])
+        space = parse_json(metadata[key], constants=True)
         if not isinstance(space, dict):
             raise ValueError("not a JSON object")
         kind, shape = space.get("type"), space.get("shape")
@@ -97,6 +97,27 @@ def _seed(metadata: dict[str, Any], path: Path) -> int:
     if type(seed) is not int or seed < 0:
         raise DatasetError(f"{path}: field 'osg_seed' must be a non-negative integer, got {seed!r}")
     return seed
+
+
+def _check_recorded_skill(metadata: dict[str, Any], skill: SkillSpec, path: Path) -> None:
+    """Refuse importing as ``skill`` a data set this package exported for another skill
+    (its ``osg_skill`` metadata): the episodes were recorded for that skill's start and goal.
+
+    Raises:
+        DatasetError: naming both skills, or an unreadable ``osg_skill``.
+    """
+    if "osg_skill" not in metadata:
+        return
+    try:
+        recorded = parse_json(metadata["osg_skill"])
+        name = recorded["name"] if isinstance(recorded, dict) else None
+    except (TypeError, KeyError, JSONFormatError) as err:
+        raise DatasetError(f"{path}: field 'osg_skill' is no skill spec ({err})") from err
+    if name != skill.name:
+        raise DatasetError(
+            f"{path}: the data set was recorded for skill {name!r} (osg_skill), but it is "
+            f"imported as skill {skill.name!r}"
+        )
 
 
 def check_layout(metadata: dict[str, Any], skill: SkillSpec, path: Path) -> None:
@@ -145,14 +166,8 @@ def check_actions(actions: np.ndarray, bounds: tuple[float, ...], where: str) ->
         DatasetError: naming ``where``, the step, the component and the bound.
     """
     limit = np.asarray(bounds, dtype=np.float32)
-    outside = np.argwhere(np.abs(actions.astype(np.float32)) > limit)
-    if len(outside):
-        step, component = (int(i) for i in outside[0])
-        raise DatasetError(
-            f"{where}: field 'actions' at step {step}, component {component}: "
-            f"{float(actions[step, component])!r} is outside the domain's action bounds "
-            f"[-{float(limit[component]):g}, {float(limit[component]):g}]"
-        )
+    values = actions.astype(np.float32)
+    check_within(values, -limit, limit, where, "actions", "the domain's action bounds")
 
 
 def _episode(domain: Domain, group: h5py.Group, skill: SkillSpec, how: str, where: str) -> Episode:
@@ -223,6 +238,7 @@ def import_minari(
     data_dir = resolve(source)
     metadata = _read_metadata(data_dir)
     check_layout(metadata, skill, data_dir / METADATA_FILE)
+    _check_recorded_skill(metadata, skill, data_dir / METADATA_FILE)
     seed = _seed(metadata, data_dir / METADATA_FILE)
     main = data_dir / MAIN_FILE
     try:

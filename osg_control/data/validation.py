@@ -9,7 +9,6 @@ training and before an existing file is replaced.
 
 from __future__ import annotations
 
-import json
 from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
@@ -17,6 +16,7 @@ from typing import Any
 import numpy as np
 
 from osg_control.errors import DatasetError
+from osg_control.json_files import parse_json
 
 PER_EPISODE_KINDS = {
     "episode_starts": ("iu", "integer"),
@@ -130,7 +130,7 @@ def check_attrs(path: Path, attrs: Mapping[str, Any]) -> None:
         if key not in attrs:
             raise DatasetError(f"{path}: missing attribute {key!r}")
     try:
-        skill = json.loads(attrs["skill"])
+        skill = parse_json(attrs["skill"])
         if not isinstance(skill, dict) or not isinstance(skill.get("name"), str):
             raise ValueError("no skill name")
     except (TypeError, ValueError) as err:
@@ -138,3 +138,24 @@ def check_attrs(path: Path, attrs: Mapping[str, Any]) -> None:
     seed = attrs["seed"]
     if isinstance(seed, bool) or not isinstance(seed, int | np.integer) or int(seed) < 0:
         raise DatasetError(f"{path}: attribute 'seed' must be a non-negative integer, got {seed!r}")
+
+
+def check_within(
+    values: np.ndarray, low: Any, high: Any, where: str, field: str, what: str
+) -> None:
+    """Refuse the first entry of a (T, n) array outside ``[low, high]`` (per column).
+
+    Raises:
+        DatasetError: ``<where>: field '<field>' at step t, component c: v is outside
+        <what> [low, high]``.
+    """
+    low = np.broadcast_to(np.asarray(low, dtype=float), values.shape[1:])
+    high = np.broadcast_to(np.asarray(high, dtype=float), values.shape[1:])
+    outside = np.argwhere((values < low) | (values > high))
+    if len(outside):
+        step, column = (int(i) for i in outside[0])
+        raise DatasetError(
+            f"{where}: field {field!r} at step {step}, component {column}: "
+            f"{float(values[step, column])!r} is outside {what} "
+            f"[{float(low[column]):g}, {float(high[column]):g}]"
+        )

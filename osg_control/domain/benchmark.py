@@ -37,6 +37,9 @@ class Benchmark:
             task done is worth ``points / len(tasks)`` (D4RL's kitchen: 100, 25 per task).
         published: method -> goal set -> its published score, shown beside ours.
         published_note: where those figures come from and how their protocol differs.
+        check_env_kwargs: refuses env options (``--env-kwargs``) the env does not take or
+            values out of their range (``DomainError`` naming the key); None: the env
+            takes none.
     """
 
     name: str
@@ -48,6 +51,19 @@ class Benchmark:
     points: float = 100.0
     published: Mapping[str, Mapping[str, float]] = field(default_factory=dict)
     published_note: str = ""
+    check_env_kwargs: Callable[[Mapping[str, Any]], None] | None = None
+
+    def check_options(self, env_kwargs: Mapping[str, Any] | None) -> None:
+        """Refuse env options the env does not take (see ``check_env_kwargs``).
+
+        Raises:
+            DomainError: naming the key and its range.
+        """
+        if not env_kwargs:
+            return
+        if self.check_env_kwargs is None:
+            raise DomainError(f"benchmark {self.name!r}: its env takes no env options")
+        self.check_env_kwargs(env_kwargs)
 
     def tasks_of(self, goal_set: str) -> tuple[str, ...]:
         """The env tasks of a goal set.

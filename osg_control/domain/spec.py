@@ -21,6 +21,7 @@ from typing import Any, Literal
 import numpy as np
 
 from osg_control.errors import SkillSpecError
+from osg_control.json_files import parse_json
 
 TOP_DOWN_QUAT = (0.0, 1.0, 0.0, 0.0)
 """The default TCP orientation: a half turn about x (z down, y flipped)."""
@@ -215,7 +216,7 @@ def skill_from_json(text: str | Mapping[str, Any]) -> SkillSpec:
         SkillSpecError: a missing or malformed field, named.
     """
     try:
-        data = dict(json.loads(text) if isinstance(text, str) else text)
+        data = dict(parse_json(text) if isinstance(text, str) else text)
     except (TypeError, ValueError) as err:
         raise SkillSpecError(f"skill spec is not JSON: {err}") from err
     name = data.get("name", "<unnamed>")

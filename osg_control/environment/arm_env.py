@@ -60,11 +60,14 @@ from osg_control.environment.config import (
 )
 from osg_control.environment.options import (
     GRIPPER_STATES,
+    check_env_arguments,
     check_facts_hold,
     check_names,
     check_start_options,
     choice_option,
     facts_option,
+    node_option,
+    reset_options,
 )
 from osg_control.environment.poses import quat_rotation, sample_start_pose
 from osg_control.environment.scene_hooks import SceneHooks
@@ -121,6 +124,7 @@ class ArmEnv(SceneHooks, gym.Env):
         *,
         robot: RobotDescription,
     ) -> None:
+        check_env_arguments(type(self).__name__, skill, config, EnvConfig)
         self.config = config or EnvConfig()
         self.robot = robot
         self.metadata = {**self.metadata, "render_fps": int(robot.control_hz)}
@@ -213,6 +217,10 @@ class ArmEnv(SceneHooks, gym.Env):
             self.data.site_xmat[self._tcp].reshape(3, 3).copy(),
         )
 
+    def true_state(self) -> np.ndarray:
+        """Truth (scoring): the 10-D state of the simulator (the ``sim`` percept's state)."""
+        return self.sensors.true_state(self.data, self._gripper_cmd)
+
     def world_state(self) -> np.ndarray:
         """The scene's true state beyond the robot: for scoring and labels, never for
         deciding (``percept().world`` is what the robot perceives)."""
@@ -289,11 +297,11 @@ class ArmEnv(SceneHooks, gym.Env):
                 open ``gripper`` while ``holding``); nothing is simulated.
             SimulationError: no collision-free start, or the physics diverged placing it.
         """
-        super().reset(seed=seed)
-        options = dict(options or {})
+        options = reset_options(options)
         check_names(options, RESET_OPTIONS, "reset option")
-        node_name = options.get("node") or (self.skill.start if self.skill else self.home)
-        node = self.nodes[choice_option("node", node_name, self.nodes)]
+        node = self.nodes[
+            node_option(options, self.skill.start if self.skill else self.home, self.nodes)
+        ]
         gripper = choice_option("gripper", options.get("gripper", node.gripper), GRIPPER_STATES)
         holding = options.get("holding", self.skill.holding if self.skill else None)
         choice_option("holding", holding, (None, *self.holdable))
@@ -319,6 +327,7 @@ class ArmEnv(SceneHooks, gym.Env):
         asked = options.get("facts")
         default_facts = self.skill.start_facts if self.skill else frozenset()
         facts = default_facts if asked is None else facts_option(asked, self.world_facts)
+        super().reset(seed=seed)  # after the checks: a refused reset changes nothing
         orientation = quat_rotation(node.orientation)
         for _attempt in range(50):
             pos, rot = sample_start_pose(self.np_random, centre, radius, angle, orientation)

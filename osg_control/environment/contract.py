@@ -57,6 +57,14 @@ class SkillEnv(Protocol):
         """Truth (scoring): the facts that hold in the simulator."""
         ...
 
+    def true_state(self) -> np.ndarray:
+        """Truth (scoring): the simulator's 10-D state (TCP, gripper)."""
+        ...
+
+    def world_state(self) -> np.ndarray:
+        """Truth (scoring): the domain's world-state vector."""
+        ...
+
     def skill_success(self, skill: SkillSpec | None = None) -> bool:
         """Truth (scoring): a skill's success predicate on the simulator's state."""
         ...

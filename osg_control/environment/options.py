@@ -21,15 +21,73 @@ from osg_control.errors import EnvOptionError, lookup
 
 
 def finite_option(name: str, value: Any, shape: tuple[int, ...] = ()) -> np.ndarray:
-    """``value`` as a finite float array of ``shape``, else ``EnvOptionError`` naming it."""
-    message = f"reset option {name} must be finite of shape {shape}, got {value!r}"
+    """``value`` as a finite float array of ``shape``, else ``EnvOptionError`` naming it.
+    Numbers only: ``True`` (which numpy reads as 1) and numeric strings are refused."""
+    message = f"reset option {name} must be finite numbers of shape {shape}, got {value!r}"
     try:
+        raw = np.asarray(value)
         array = np.asarray(value, dtype=float)
     except (TypeError, ValueError):
         raise EnvOptionError(message) from None
-    if array.shape != shape or not np.all(np.isfinite(array)):
+    if raw.dtype.kind not in "iuf" or array.shape != shape or not np.all(np.isfinite(array)):
         raise EnvOptionError(message)
     return array
+
+
+def check_env_arguments(owner: str, skill: Any, config: Any, config_type: type) -> None:
+    """Refuse an env constructor's ``skill`` that is not a skill spec (or None) and a
+    ``config`` that is not a ``config_type`` (or None), naming the argument.
+
+    Raises:
+        EnvOptionError: ``owner(skill=5)``, ``owner(config="x")``.
+    """
+    from osg_control.domain.spec import SkillSpec
+
+    if skill is not None and not isinstance(skill, SkillSpec):
+        raise EnvOptionError(f"{owner}: skill must be a skill name or a SkillSpec, got {skill!r}")
+    if config is not None and not isinstance(config, config_type):
+        raise EnvOptionError(f"{owner}: config must be a {config_type.__name__}, got {config!r}")
+
+
+def reset_options(options: Any) -> dict[str, Any]:
+    """The ``options`` of a reset as a dict (None: none).
+
+    Raises:
+        EnvOptionError: anything but a mapping of option names (``"node"``, ``5``).
+    """
+    if options is None:
+        return {}
+    if not isinstance(options, Mapping):
+        raise EnvOptionError(
+            f"reset options must be a dict of option name -> value, got {options!r}"
+        )
+    return dict(options)
+
+
+def node_option(options: Mapping[str, Any], default: str, nodes: Iterable[str]) -> str:
+    """The ``node`` reset option (absent or None: ``default``); an empty name is refused
+    like any other unknown node, never read as the default.
+
+    Raises:
+        EnvOptionError: not one of ``nodes``.
+    """
+    name = options.get("node")
+    return str(choice_option("node", default if name is None else name, tuple(nodes)))
+
+
+def check_reach(position: np.ndarray, shoulder: Any, reach: float) -> None:
+    """Refuse a ``position`` start farther than ``reach`` from the arm's ``shoulder``: the
+    arm would stop short and the episode start from a pose nobody asked for.
+
+    Raises:
+        EnvOptionError: naming the position, the distance and the reach.
+    """
+    distance = float(np.linalg.norm(position - np.asarray(shoulder, dtype=float)))
+    if distance > reach:
+        raise EnvOptionError(
+            f"reset option position {position.tolist()} is {distance:.3f} m from the arm's "
+            f"shoulder, out of its reach ({reach} m)"
+        )
 
 
 GRIPPER_STATES = ("open", "closed")
@@ -78,9 +136,18 @@ def facts_option(value: Any, known: Iterable[str]) -> frozenset[str]:
     Raises:
         EnvOptionError: not a collection of names, or a fact the domain does not have.
     """
+    if isinstance(value, Mapping):
+        raise EnvOptionError(
+            f"reset option facts must be a collection of the facts that hold (a set or list "
+            f"of names), got a dict {value!r}: a fact mapped to False would be taken as "
+            "holding"
+        )
     if isinstance(value, str) or not isinstance(value, Iterable):
         raise EnvOptionError(f"reset option facts must be a collection of facts, got {value!r}")
-    facts = frozenset(value)
+    items = list(value)
+    if not all(isinstance(item, str) for item in items):
+        raise EnvOptionError(f"reset option facts must hold fact names (strings), got {value!r}")
+    facts = frozenset(items)
     known = tuple(known)
     if known:
         check_names(sorted(facts, key=str), known, "fact")

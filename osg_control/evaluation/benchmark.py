@@ -35,7 +35,7 @@ from osg_control.domain.registry import get_domain
 from osg_control.errors import DomainError, UsageError
 from osg_control.evaluation.check import wilson_interval
 from osg_control.evaluation.evaluate import cached_executor, episode_rng
-from osg_control.evaluation.resume import resumable_map
+from osg_control.evaluation.resume import resumable_map, stored_count
 from osg_control.parallel import LocalExecutor, TaskExecutor
 from osg_control.perception.spec import PERCEPTIONS, PerceptionSpec, check_supported
 
@@ -139,6 +139,26 @@ def run_benchmark_episode(episode: BenchmarkEpisode) -> dict[str, Any]:
     return {"completed": completed, "steps": int(env.steps), "failure": result.failure}
 
 
+def check_benchmark_result(episode: BenchmarkEpisode, result: Any) -> None:
+    """Whether ``result`` can be ``run_benchmark_episode(episode)``'s (a resumed chunk's):
+    exactly its three keys, ``completed`` sorted distinct names of the episode's tasks,
+    ``steps`` a whole number, ``failure`` null or text.
+
+    Raises:
+        ValueError: naming the key and the value that cannot be.
+    """
+    if not isinstance(result, dict) or set(result) != {"completed", "steps", "failure"}:
+        raise ValueError(f"expected completed, steps and failure, got {result!r}")
+    done = result["completed"]
+    if not isinstance(done, list) or not all(isinstance(t, str) for t in done):
+        raise ValueError(f"completed must be a list of task names, got {done!r}")
+    if done != sorted(set(done)) or not set(done) <= set(episode.tasks):
+        raise ValueError(f"completed must be distinct tasks of {list(episode.tasks)}, got {done}")
+    stored_count(result["steps"], "steps")
+    if not (result["failure"] is None or isinstance(result["failure"], str)):
+        raise ValueError(f"failure must be null or text, got {result['failure']!r}")
+
+
 def score_interval(fractions: np.ndarray, points: float, z: float = Z95) -> tuple[float, float]:
     """The Wilson interval of the mean completed fraction, in points (see module doc)."""
     low, high = wilson_interval(float(np.mean(fractions)), len(fractions), z)
@@ -206,7 +226,11 @@ def run_benchmark(
         for i in range(episodes)
     ]
     results = resumable_map(
-        executor or LocalExecutor(workers), run_benchmark_episode, jobs, resume_dir
+        executor or LocalExecutor(workers),
+        run_benchmark_episode,
+        jobs,
+        resume_dir,
+        check_benchmark_result,
     )
     done = np.array([[t in r["completed"] for t in chosen] for r in results], dtype=float)
     fractions = done.mean(axis=1)

@@ -11,6 +11,13 @@ Both sides are validated before anything is compared: a rate must be a finite nu
 [0, 1], a trial count a positive integer, every table, row and axis of the expected shape,
 and every cell of the shipped figures must be in the reproduction. A comparison that cannot
 be made is a ``DatasetError`` naming the file and the cell or key, never a pass.
+
+A comparison must also have the power to find a difference: at one trial a Wilson interval
+covers almost all of [0, 1], so nothing could ever be outside it. Every compared cell needs
+at least ``MIN_TRIALS`` trials on both sides, and the reproduction at least the shipped
+cell's own count; otherwise the comparison is refused, naming the cells. Each compared cell
+reports the smallest difference from the shipped rate that would have been found
+(``detectable_difference``), so a pass says how close the agreement was checked.
 """
 
 from __future__ import annotations
@@ -30,6 +37,11 @@ Z = 2.576
 """Two-sided 99 % normal quantile: with several hundred cells, 95 % intervals would flag a
 few agreeing cells by chance on every run."""
 CONFIDENCE = 0.99
+MAX_TRIALS = 10**9
+"""The most trials a cell may count (a 401-digit count overflowed the interval)."""
+MIN_TRIALS = 30
+"""The fewest trials a compared cell may have, on either side: at 30 trials a rate of 0.5
+is told from one of 0.9 (their 99 % intervals are disjoint); at 1 or 2 nothing is."""
 
 
 @dataclass(frozen=True)
@@ -52,14 +64,75 @@ class Mismatch:
     reproduced_interval: tuple[float, float]
 
 
+@dataclass(frozen=True)
+class Comparison:
+    """The outcome of a comparison: how many cells, which disagree, and per cell the
+    smallest difference from the shipped rate the comparison would have found (None: none
+    in either direction)."""
+
+    compared: int
+    mismatches: list[Mismatch]
+    detectable: dict[str, float | None]
+
+    def least_power(self) -> tuple[str, float | None]:
+        """The cell whose detectable difference is the largest, with it (None counts as
+        larger than any number)."""
+        return max(
+            self.detectable.items(), key=lambda item: math.inf if item[1] is None else item[1]
+        )
+
+    def summary(self) -> dict[str, Any]:
+        """The detectable differences over all cells (smallest, median, largest, and the
+        cell of the largest), for the text and ``--json`` reports."""
+        values = sorted(d for d in self.detectable.values() if d is not None)
+        where, worst = self.least_power()
+        return {
+            "smallest": values[0] if values else None,
+            "median": values[len(values) // 2] if values else None,
+            "largest": worst,
+            "largest_at": where,
+        }
+
+
 def wilson_interval(rate: float, trials: int, z: float = Z) -> tuple[float, float]:
-    """The Wilson score interval of a success rate observed over ``trials`` trials."""
+    """The Wilson score interval of a success rate observed over ``trials`` trials.
+
+    Raises:
+        ValueError: a rate outside [0, 1] or a trial count above ``MAX_TRIALS``.
+    """
+    if not 0.0 <= rate <= 1.0 or trials > MAX_TRIALS:
+        raise ValueError(
+            f"a Wilson interval needs a rate in [0, 1] and at most {MAX_TRIALS:,} trials, "
+            f"got {rate!r} over {_shown(trials)}"
+        )
     if trials <= 0:
         return 0.0, 1.0
     denominator = 1 + z * z / trials
     centre = (rate + z * z / (2 * trials)) / denominator
     half = z * math.sqrt(rate * (1 - rate) / trials + z * z / (4 * trials * trials)) / denominator
     return max(0.0, centre - half), min(1.0, centre + half)
+
+
+def detectable_difference(rate: float, shipped_trials: int, trials: int) -> float | None:
+    """The smallest difference from a shipped ``rate`` (over ``shipped_trials``) that a
+    reproduced rate over ``trials`` trials must have for their intervals to be disjoint:
+    up or down, whichever is smaller; None when no rate in [0, 1] is disjoint either way.
+    Found by bisection (an interval's bounds grow with its rate)."""
+    low, high = wilson_interval(rate, shipped_trials)
+    found = []
+    if wilson_interval(1.0, trials)[0] > high:
+        found.append(_bisect(lambda r: wilson_interval(r, trials)[0] > high, rate, 1.0) - rate)
+    if wilson_interval(0.0, trials)[1] < low:
+        found.append(rate - _bisect(lambda r: wilson_interval(r, trials)[1] >= low, 0.0, rate))
+    return min(found) if found else None
+
+
+def _bisect(outside: Any, below: float, above: float) -> float:
+    """The boundary in [below, above] where ``outside`` turns from false to true."""
+    for _ in range(60):
+        middle = (below + above) / 2
+        below, above = (below, middle) if outside(middle) else (middle, above)
+    return above
 
 
 class _Fields:
@@ -121,8 +194,10 @@ class _Fields:
     def trials(self, table: dict[str, Any], key: str, where: str) -> int:
         """A table's trial count ``table[key]``: a positive integer."""
         value = self.field(table, key, where)
-        if isinstance(value, bool) or not isinstance(value, int) or value <= 0:
-            raise self.fail(where, f"{key!r} must be a positive integer, got {_shown(value)}")
+        if isinstance(value, bool) or not isinstance(value, int) or not 0 < value <= MAX_TRIALS:
+            raise self.fail(
+                where, f"{key!r} must be a positive integer <= {MAX_TRIALS:,}, got {_shown(value)}"
+            )
         return value
 
     def cell(self, where: str, value: Any, trials: int) -> Cell:
@@ -212,18 +287,47 @@ def _cells_by_place(figures: Any, source: str) -> dict[str, Cell]:
     return found
 
 
+def _listed(names: list[str]) -> str:
+    return ", ".join(names[:5]) + (f" and {len(names) - 5} more" if len(names) > 5 else "")
+
+
+def _check_power(
+    reference: dict[str, Cell], found: dict[str, Cell], shipped_source: str, source: str
+) -> None:
+    """Refuse a comparison with too few trials to find a difference (see the module)."""
+    thin = [f"{w} ({c.trials})" for w, c in reference.items() if c.trials < MIN_TRIALS]
+    if thin:
+        raise DatasetError(
+            f"{shipped_source}: {len(thin)} cells have fewer than {MIN_TRIALS} trials, too few "
+            f"to compare against: {_listed(thin)}"
+        )
+    short = [
+        f"{where} ({cell.trials} < {max(MIN_TRIALS, reference[where].trials)})"
+        for where, cell in found.items()
+        if where in reference and cell.trials < max(MIN_TRIALS, reference[where].trials)
+    ]
+    if short:
+        raise DatasetError(
+            f"{source}: {len(short)} cells have fewer trials than the shipped cell's (and at "
+            f"least {MIN_TRIALS}): a comparison without the power to find a difference cannot "
+            f"pass: {_listed(short)}"
+        )
+
+
 def compare(
     shipped: Any,
     reproduced: Any,
     shipped_source: str = "shipped figures",
     reproduced_source: str = "reproduction",
-) -> tuple[int, list[Mismatch]]:
-    """Compare every cell of the shipped figures with the reproduction's; returns (cells
-    compared, mismatches). Cells only the reproduction has are not compared.
+) -> Comparison:
+    """Compare every cell of the shipped figures with the reproduction's. Cells only the
+    reproduction has are not compared.
 
     Raises:
         DatasetError: either side is malformed (see ``cells``), the reproduction lacks cells
-            the shipped figures have, or the two share no cell; named after the sources.
+            the shipped figures have, the two share no cell, or a compared cell has too few
+            trials (fewer than ``MIN_TRIALS`` on either side, or the reproduction fewer than
+            the shipped cell); named after the sources and the cells.
     """
     reference = _cells_by_place(shipped, shipped_source)
     found = _cells_by_place(reproduced, reproduced_source)
@@ -235,20 +339,20 @@ def compare(
         )
     missing = [where for where in reference if where not in found]
     if missing:
-        listed = ", ".join(missing[:5]) + (
-            f" and {len(missing) - 5} more" if len(missing) > 5 else ""
-        )
         raise DatasetError(
             f"{reproduced_source}: lacks {len(missing)} of the {len(reference)} cells of the "
-            f"shipped figures ({shipped_source}): {listed}"
+            f"shipped figures ({shipped_source}): {_listed(missing)}"
         )
+    _check_power(reference, found, shipped_source, reproduced_source)
     mismatches = []
+    detectable: dict[str, float | None] = {}
     for where in shared:
         ref, cell = reference[where], found[where]
         a, b = wilson_interval(ref.rate, ref.trials), wilson_interval(cell.rate, cell.trials)
         if a[1] < b[0] or b[1] < a[0]:
             mismatches.append(Mismatch(where, ref.rate, cell.rate, a, b))
-    return len(shared), mismatches
+        detectable[where] = detectable_difference(ref.rate, ref.trials, cell.trials)
+    return Comparison(len(shared), mismatches, detectable)
 
 
 def figures_file(path: Path) -> Path:

@@ -26,7 +26,7 @@ from osg_control.domain.frames import sample_placements
 from osg_control.domain.registry import get_domain
 from osg_control.domain.spec import nearest_start
 from osg_control.environment.arm_env import ArmEnv
-from osg_control.evaluation.resume import resumable_results
+from osg_control.evaluation.resume import resumable_results, stored_count, stored_flag
 from osg_control.execution.executor import task_env_config
 from osg_control.parallel import LocalExecutor, TaskExecutor
 from osg_control.parallel.lazy import grid
@@ -249,6 +249,28 @@ def run_task_episode(episode: TaskEpisode) -> list[list[float]]:
     return [ends.get(budget, final) for budget in episode.budgets]
 
 
+def check_task_result(episode: TaskEpisode, result: Any) -> None:
+    """Whether ``result`` can be ``run_task_episode(episode)``'s (a resumed chunk's): one
+    [success, skills run] pair per budget, success 0 or 1, skills run a whole number that
+    never falls as the budget grows (an executor with more replans runs at least the skills
+    of one with fewer).
+
+    Raises:
+        ValueError: naming the budget and the value that cannot be.
+    """
+    if not isinstance(result, list) or len(result) != len(episode.budgets):
+        raise ValueError(f"expected {len(episode.budgets)} budgets' results, got {result!r}")
+    counts = {}
+    for budget, pair in zip(episode.budgets, result, strict=True):
+        if not isinstance(pair, list) or len(pair) != 2:
+            raise ValueError(f"replans={budget}: expected [success, skills run], got {pair!r}")
+        stored_flag(pair[0], f"replans={budget} success")
+        counts[budget] = stored_count(pair[1], f"replans={budget} skills run")
+    ordered = [counts[b] for b in sorted(counts)]
+    if ordered != sorted(ordered):
+        raise ValueError(f"skills run fall as the budget grows: {counts}")
+
+
 def task_table(
     domain: Domain,
     models: str | None = None,
@@ -293,7 +315,9 @@ def task_table(
         )
 
     executor = executor or LocalExecutor(workers)
-    results = resumable_results(executor, run_task_episode, grid(cells, episodes, job), resume_dir)
+    results = resumable_results(
+        executor, run_task_episode, grid(cells, episodes, job), resume_dir, check_task_result
+    )
     means = cell_means(results, len(cells), episodes, "tasks", progress)  # (cells, budgets, 2)
     shape = (len(tasks), len(regions), len(budgets))
     rates = means[:, :, 0].reshape(shape).transpose(2, 0, 1)

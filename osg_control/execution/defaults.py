@@ -10,7 +10,6 @@ reproduce`` writes a directory of the same layout.
 from __future__ import annotations
 
 import hashlib
-import math
 from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
@@ -18,10 +17,9 @@ from typing import Any
 
 from osg_control.classifier.data import movement_classes
 from osg_control.classifier.model import StateClassifier
-from osg_control.control.estimator import MOTION_MODEL
+from osg_control.control.estimator import MOTION_MODEL, check_motion_model
 from osg_control.domain.base import Domain
 from osg_control.errors import CheckpointError
-from osg_control.json_files import is_json_number
 from osg_control.learning.checkpoints import check_action_scale, checkpoint_paths, require_skills
 from osg_control.learning.policy import SkillPolicy
 from osg_control.planning.costs import MANIFEST, read_manifest, success_rates
@@ -103,18 +101,17 @@ def manifest_motion_model(manifest: dict[str, Any], path: Path) -> tuple[float, 
     """A manifest's TCP filter motion model (None when it records none).
 
     Raises:
-        CheckpointError: not two finite numbers; names the file.
+        CheckpointError: not two finite numbers within ``MOTION_BOUND``; names the file.
     """
     value = manifest.get(MOTION_KEY)
     if value is None:
         return None
-    if (
-        not isinstance(value, list)
-        or len(value) != 2
-        or not all(is_json_number(v) and math.isfinite(v) for v in value)
-    ):
-        raise CheckpointError(f"{path}: {MOTION_KEY!r} must be two finite numbers, got {value!r}")
-    return float(value[0]), float(value[1])
+    if not isinstance(value, list):
+        raise CheckpointError(f"{path}: {MOTION_KEY!r} must be a list, got {value!r}")
+    try:
+        return check_motion_model(value)
+    except ValueError as err:
+        raise CheckpointError(f"{path}: {MOTION_KEY!r}: {err}") from None
 
 
 def load_skill_policies(

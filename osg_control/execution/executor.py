@@ -31,7 +31,12 @@ import numpy as np
 
 from osg_control.classifier.motion import MotionMemory
 from osg_control.control.divergence import is_divergence
-from osg_control.control.estimator import MOTION_MODEL, TcpTracker
+from osg_control.control.estimator import (
+    MOTION_MODEL,
+    TcpFilter,
+    TcpTracker,
+    check_motion_model,
+)
 from osg_control.domain.base import Domain
 from osg_control.domain.frames import (
     Offsets,
@@ -44,7 +49,9 @@ from osg_control.environment.arm_env import GRIPPER_OPEN_CMD, EnvConfig
 from osg_control.environment.contract import SkillEnv
 from osg_control.environment.success import success_holds
 from osg_control.errors import SimulationError
+from osg_control.execution import MAX_REPLANS
 from osg_control.execution.entry import EntryChoice
+from osg_control.execution.goals import parse_goal
 from osg_control.execution.locate import node_at
 from osg_control.execution.objects import ObjectTracker
 from osg_control.execution.results import (
@@ -128,6 +135,18 @@ class Executor:
         missing = sorted(set(domain.skills_by_name) - set(policies))
         if missing:
             raise ValueError(f"domain {domain.name!r}: no policy for skills {missing}")
+        if not (
+            isinstance(max_replans, int | np.integer)
+            and not isinstance(max_replans, bool)
+            and 0 <= max_replans <= MAX_REPLANS
+        ):
+            raise ValueError(
+                f"Executor max_replans must be a whole number in [0, {MAX_REPLANS}], "
+                f"got {max_replans!r}"
+            )
+        if filter_gain is not None:
+            TcpFilter(filter_gain, motion_model)  # refuses a bad gain or motion model
+        motion_model = check_motion_model(motion_model)
         self.domain = domain
         self.skills = domain.skills_by_name
         self._plans = PlanMemo(domain, graph_domain(domain, graph))
@@ -270,7 +289,9 @@ class Executor:
         sequence has ended, before anything else moves: where an executor with
         ``max_replans = attempt`` would have stopped (Tables IV/V score every budget from
         one run this way)."""
-        goal = sorted(set(goal))
+        target = parse_goal(goal, self.domain)
+        goal = target.atoms()
+        _check_observation(obs, env)
         started = time.perf_counter()
         self.motion = MotionMemory()  # the arm is taken to be at rest
         facts = env.percept().facts
@@ -280,9 +301,13 @@ class Executor:
         )
         objects = ObjectTracker(self.domain)
         objects.update(env.percept())
+
+        def reached(facts_now: Iterable[str], obs_now: np.ndarray) -> bool:
+            return target.holds(self.domain, facts_now, obs_now, objects.offsets())
+
         planning_time = 0.0
         for attempt in range(self.max_replans + 1):
-            if set(goal) <= facts:
+            if reached(facts, obs):
                 result.success = True
                 break
             if self.domain.hand_empty in facts and obs[7] != GRIPPER_OPEN_CMD:
@@ -290,7 +315,7 @@ class Executor:
                 self.motion.still(GRIPPER_OPEN_STEPS)
                 if result.failure:
                     if not is_divergence(result.failure):  # the env's episode is over
-                        result.success = set(goal) <= env.percept().facts
+                        result.success = reached(env.percept().facts, env.observe())
                     break
             t0 = time.perf_counter()
             seen = obs if tracker is None else tracker.read(obs)
@@ -309,17 +334,16 @@ class Executor:
             if after_attempt is not None:
                 after_attempt(attempt, result)
             if not failed:
-                result.success = set(goal) <= facts
+                result.success = reached(facts, obs)
                 if not result.success:
-                    result.failure = (
-                        f"plan finished but goal facts {sorted(set(goal) - facts)} missing"
-                    )
+                    missing = target.missing(self.domain, facts, obs, objects.offsets())
+                    result.failure = f"plan finished but goal facts {missing} missing"
                 break
             result.failure = failed
             if is_divergence(failed):
                 break  # the world was reset: never replan
             if TIME_LIMIT in failed or EPISODE_ENDED in failed:
-                result.success = set(goal) <= facts  # the env's episode is over: no replan
+                result.success = reached(facts, obs)  # the env's episode is over: no replan
                 break
             if attempt < self.max_replans:
                 result.replans += 1
@@ -404,6 +428,24 @@ def _episode_end(terminated: bool, truncated: bool) -> str | None:
     if truncated:
         return TIME_LIMIT
     return EPISODE_ENDED if terminated else None
+
+
+def _check_observation(obs: Any, env: SkillEnv) -> None:
+    """Refuse an observation that is not the env's: wrong shape or non-finite.
+
+    Raises:
+        ValueError: naming the shape expected and the one given.
+    """
+    space = getattr(env, "observation_space", None)
+    expected = getattr(space, "shape", None)
+    array = np.asarray(obs)
+    if array.dtype.kind not in "iuf" or (expected is not None and array.shape != expected):
+        raise ValueError(
+            f"execute: obs must be the env's observation of shape {expected}, got shape "
+            f"{array.shape} ({array.dtype})"
+        )
+    if not np.all(np.isfinite(array)):
+        raise ValueError("execute: obs has non-finite values")
 
 
 def load_executor(domain: Domain, directory: str | Path | None = None, **kwargs: Any) -> Executor:

@@ -21,6 +21,11 @@ ARM_JOINTS = tuple(f"robot:panda0_joint{i}" for i in range(1, 8))
 FINGER_JOINTS = ("robot:panda0_finger_joint1", "robot:panda0_finger_joint2")
 TCP_SITE = "end_effector"
 ROBOT_ROOT = "panda0_link0"
+SHOULDER = (0.0, 0.0, 2.133)
+"""The arm's shoulder (``panda0_link2``, joint 2) in the env's frame: the base stands at
+(0, 0, 1.8), the shoulder 0.333 m above it."""
+REACH = 0.855
+"""The arm's reach [m] from its shoulder: no TCP target farther away can be reached."""
 ACTION_SCALE = 2.0
 """The env's joint speed [rad/s] for an action of 1 (``FrankaRobot.act_rng``)."""
 MODEL_FILE = "envs/assets/kitchen_franka/kitchen_assets/kitchen_env_model.xml"

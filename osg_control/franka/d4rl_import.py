@@ -52,11 +52,13 @@ import numpy as np
 
 from osg_control.control.rotations import quat_to_matrix, rotation_error
 from osg_control.data.datasets import Episode, dataset_bytes, write_episodes
+from osg_control.data.validation import check_within
 from osg_control.domain.base import Domain
 from osg_control.domain.spec import SkillSpec
 from osg_control.environment.actions import scale_into
 from osg_control.environment.success import GRIPPER_CLOSED_CMD, GRIPPER_OPEN_CMD
 from osg_control.errors import DatasetError, UsageError
+from osg_control.franka.arm import env_joint_limits
 from osg_control.franka.d4rl_source import KitchenEpisode, completions, read_source
 from osg_control.franka.domain import SUBTASK_CHAINS, TASK_FACTS
 from osg_control.franka.perception import FrankaSensors
@@ -193,6 +195,29 @@ def _write_all(out: Path, files: dict[str, tuple[list[Episode], dict[str, Any]]]
         shutil.rmtree(staging, ignore_errors=True)
 
 
+JOINT_SLACK = 0.05
+"""How far [rad] an observed arm joint may lie past the env's limit: the env's own
+observation noise (``robot_noise_ratio``) and its position servo's overshoot, with
+margin. A value beyond (1e30 rad) is no pose the arm can take."""
+
+
+def check_joint_limits(episode: KitchenEpisode, lower: np.ndarray, upper: np.ndarray) -> None:
+    """Refuse an episode whose observed arm joints (the observation's first 7 values) lie
+    past the arm's limits by more than ``JOINT_SLACK``.
+
+    Raises:
+        DatasetError: naming the episode, the step, the joint, its value and its range.
+    """
+    check_within(
+        episode.observations[:, : len(lower)],
+        lower - JOINT_SLACK,
+        upper + JOINT_SLACK,
+        episode.name,
+        "observations/observation",
+        "the arm's joint limits [rad] (no pose the arm can take)",
+    )
+
+
 def import_d4rl(domain: Domain, source: str | Path, out: str | Path) -> D4RLImport:
     """Convert a D4RL kitchen-layout Minari data set (folder or id) into one data set file
     per skill in the folder ``out``; returns the summary.
@@ -216,6 +241,9 @@ def import_d4rl(domain: Domain, source: str | Path, out: str | Path) -> D4RLImpo
     per_skill: dict[str, list[Episode]] = {}
     counts: dict[str, Counter[str]] = {k: Counter() for k in ("skip", "start", "same", "from")}
     adapter = make_franka_env()
+    lower, upper = env_joint_limits(adapter.kitchen)
+    for episode in source_episodes:  # all checked before anything is converted or written
+        check_joint_limits(episode, lower, upper)
     try:
         for episode in source_episodes:
             events, at_start = completions(episode)

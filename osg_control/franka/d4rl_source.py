@@ -39,6 +39,7 @@ from osg_control.data.minari_import import _read_metadata, _space_shape, resolve
 from osg_control.data.validation import check_step_fields
 from osg_control.errors import DatasetError
 from osg_control.franka.perception import OBJECT_QPOS
+from osg_control.json_files import parse_json
 
 OBSERVATION = "observations/observation"
 FLAGS = "infos/step_task_completions"
@@ -71,7 +72,7 @@ class KitchenEpisode:
 def _observation_space(metadata: dict[str, Any]) -> dict[str, Any] | None:
     """The serialised observation space's subspaces if it is a Dict space, else None."""
     try:
-        space = json.loads(metadata["observation_space"])
+        space = parse_json(metadata["observation_space"], constants=True)
     except (KeyError, TypeError, ValueError):
         return None
     if not isinstance(space, dict) or space.get("type") != "Dict":

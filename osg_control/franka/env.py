@@ -42,7 +42,7 @@ import numpy as np
 from osg_control.control.divergence import DivergenceWatch, non_finite_state
 from osg_control.domain.spec import Node, SkillSpec
 from osg_control.environment.actions import checked_action
-from osg_control.environment.options import check_facts_hold
+from osg_control.environment.options import check_env_arguments, check_facts_hold
 from osg_control.environment.poses import quat_rotation, sample_start_pose
 from osg_control.environment.success import GRIPPER_CLOSED_CMD, GRIPPER_OPEN_CMD, success_holds
 from osg_control.errors import DomainError
@@ -125,6 +125,7 @@ class FrankaKitchenAdapter(gym.Env):
         setups: Mapping[str, tuple[SkillSpec, ...]] | None = None,
         world_facts: tuple[str, ...] = (),
     ) -> None:
+        check_env_arguments(type(self).__name__, skill, config, FrankaConfig)
         self.env = env
         self.world_facts = world_facts
         self.setups = dict(setups or {})

@@ -3,13 +3,13 @@ with its perception, and the D4RL benchmark's protocol (``BENCHMARK``)."""
 
 from __future__ import annotations
 
-import json
 from collections.abc import Mapping
 from dataclasses import replace
 from typing import Any
 
 from osg_control.domain.benchmark import Benchmark
 from osg_control.domain.spec import SkillSpec
+from osg_control.environment.options import Bounds
 from osg_control.errors import DomainError
 from osg_control.franka.arm import FrankaConfig
 from osg_control.franka.domain import (
@@ -22,6 +22,7 @@ from osg_control.franka.domain import (
     world_of,
 )
 from osg_control.franka.perception import PERCEPTIONS
+from osg_control.json_files import parse_json
 from osg_control.perception.spec import PerceptionSpec, check_supported
 
 STEP_LIMIT = 280
@@ -67,6 +68,47 @@ def franka_config(config: Any = None, perception: PerceptionSpec | None = None) 
     return config
 
 
+ENV_OPTIONS: dict[str, Bounds | type[bool]] = {
+    "robot_noise_ratio": Bounds(0.0, 1.0),
+    "object_noise_ratio": Bounds(0.0, 1.0),
+    "terminate_on_tasks_completed": bool,
+    "remove_task_when_completed": bool,
+}
+"""The FrankaKitchen-v1 options ``env_kwargs`` may set, with their ranges: the noise ratios
+scale the env's own observation noise (1e300 or NaN made every observation non-finite).
+``frame_skip`` is not among them: the library asserts its control period against its
+render rate, so only its default (40) runs (0 or 20 crash inside the library)."""
+
+
+def check_env_kwargs(env_kwargs: Mapping[str, Any]) -> None:
+    """Refuse an env option FrankaKitchen-v1 does not take here, or a value out of range.
+
+    Raises:
+        DomainError: naming the key (the options set from the other arguments, and the
+            known ones, listed) and the value's range.
+    """
+    clash = sorted(set(env_kwargs) & set(OWN_KWARGS))
+    if clash:
+        raise DomainError(
+            f"franka-kitchen: env_kwargs may not set {clash} (given as the task list, the "
+            f"render mode and the step limit)"
+        )
+    for key, value in env_kwargs.items():
+        rule = ENV_OPTIONS.get(key)
+        if rule is None:
+            raise DomainError(
+                f"franka-kitchen: unknown env_kwargs key {key!r}; the known ones: "
+                f"{', '.join(ENV_OPTIONS)}"
+            )
+        if rule is bool:
+            if not isinstance(value, bool):
+                raise DomainError(f"franka-kitchen: env_kwargs {key!r} must be true or false")
+        elif isinstance(rule, Bounds) and not rule.admits(value):
+            raise DomainError(
+                f"franka-kitchen: env_kwargs {key!r} must be {rule.describe()}, got {value!r}"
+            )
+
+
 def make_franka_env(
     skill: SkillSpec | str | None = None,
     config: Any = None,
@@ -87,7 +129,8 @@ def make_franka_env(
 
     Raises:
         DomainError: an unknown task, a caller's env lacking one, or ``env_kwargs`` that
-            set what the other arguments set.
+            set what the other arguments set, are unknown or out of range
+            (``check_env_kwargs``).
         UsageError: an unsupported perception.
     """
     from osg_control.franka.compat import prepare
@@ -100,12 +143,7 @@ def make_franka_env(
         raise DomainError(
             f"franka-kitchen: unknown task(s) {unknown}; the library's tasks: {sorted(TASK_FACTS)}"
         )
-    clash = sorted(set(env_kwargs or {}) & set(OWN_KWARGS))
-    if clash:
-        raise DomainError(
-            f"franka-kitchen: env_kwargs may not set {clash} (given as the task list, the "
-            f"render mode and the step limit)"
-        )
+    check_env_kwargs(env_kwargs or {})
     if env is None:
         import gymnasium
 
@@ -161,7 +199,7 @@ def make_benchmark_env(
     if noise:
         spec = PerceptionSpec(spec.name, tcp_noise=noise)
     if isinstance(env_kwargs, str):
-        env_kwargs = json.loads(env_kwargs) if env_kwargs else None
+        env_kwargs = parse_json(env_kwargs) if env_kwargs else None
     return make_franka_env(
         config=FrankaConfig(perception=spec),
         tasks=list(tasks),
@@ -178,6 +216,7 @@ BENCHMARK = Benchmark(
     task_facts={task: pair[0] for task, pair in TASK_FACTS.items()},
     step_limit=STEP_LIMIT,
     make_env=make_benchmark_env,
+    check_env_kwargs=check_env_kwargs,
     published={
         "BC": {"kitchen-complete": 65.0, "kitchen-mixed": 51.5},
         "CQL": {"kitchen-complete": 43.8, "kitchen-mixed": 51.0},

@@ -21,12 +21,16 @@ from osg_control.environment.options import (
     GRIPPER_STATES,
     Bounds,
     check_names,
+    check_reach,
     check_start_options,
     choice_option,
     facts_option,
+    node_option,
+    reset_options,
 )
 from osg_control.environment.success import GRIPPER_CLOSED_CMD, GRIPPER_OPEN_CMD, effects_hold
 from osg_control.errors import EnvOptionError, SimulationError
+from osg_control.franka.arm import REACH, SHOULDER
 
 RESET_OPTIONS = ("node", "position", "radius", "angle", "max_steps", "gripper", "facts")
 """The options ``FrankaKitchenAdapter.reset`` knows; any other name is refused."""
@@ -60,18 +64,24 @@ def start_options(adapter: Any, options: dict[str, Any] | None) -> Start:
         EnvOptionError: an unknown option name (the known ones listed), a value out of its
             domain, or a ``gripper`` the start does not have.
     """
-    options = dict(options or {})
+    options = reset_options(options)
     check_names(options, RESET_OPTIONS, "reset option")
     skill = adapter.skill
-    node_name = options.get("node") or (skill.start if skill else None)
+    node_name = options.get("node")
+    if node_name is not None:
+        node_option(options, adapter.home, adapter.nodes)  # refuses "" and unknown names
+    else:
+        node_name = skill.start if skill else None
     if node_name is None and "position" in options:
         node_name = adapter.home
-    node = adapter.nodes[choice_option("node", node_name or adapter.home, adapter.nodes)]
+    node = adapter.nodes[node_name or adapter.home]
     centre, radius, angle = check_start_options(
         options.get("position", node.position),
         options.get("radius", 0.0),
         options.get("angle", 0.0),
     )
+    if "position" in options:
+        check_reach(centre, SHOULDER, REACH)
     max_steps = options.get("max_steps", 40)
     if not DRIVE_STEPS.admits(max_steps):
         raise EnvOptionError(

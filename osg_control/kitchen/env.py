@@ -72,7 +72,7 @@ class KitchenEnv(ArmEnv):
             lookup(SKILLS_BY_NAME, skill, "skill", SkillSpecError)
             if isinstance(skill, str)
             else skill
-        )
+        )  # anything else is checked (named) by ArmEnv
         if not isinstance(robot, RobotDescription):
             robot = get_robot(robot or DEFAULT_ROBOT)
         super().__init__(NODES, "home", spec, config or EnvConfig(), render_mode, robot=robot)

@@ -13,6 +13,7 @@ import numpy as np
 
 from osg_control.environment.options import finite_option
 from osg_control.errors import EnvOptionError
+from osg_control.kitchen.skills import SHOULDER, WORKSPACE_RADIUS
 from osg_control.kitchen.world import CABINET_INTERIOR_HIGH, CABINET_INTERIOR_LOW, CUBE_HALF_SIZE
 
 DOOR_TRAVEL = 0.45
@@ -34,9 +35,6 @@ COUNTER_OBSTACLES = {
 """Footprints (x, y) [m] on the counter's top that the cube would cut into."""
 REST_TOLERANCE = 0.005
 """How far [m] above its surface a cube position may lie (it settles in the start's 0.1 s)."""
-SHOULDER = np.array([0.0, 0.0, 0.333])
-REACH = 0.855
-"""The Panda's reach [m] from its shoulder (joint 2)."""
 
 
 def check_world_options(world: dict[str, Any], holding: str | None) -> None:
@@ -67,8 +65,10 @@ def check_cube_position(pos: np.ndarray) -> None:
         EnvOptionError: naming the option, the value and the rule broken.
     """
     where = f"reset option world.cube_pos {pos.tolist()}"
-    if np.linalg.norm(pos - SHOULDER) > REACH:
-        raise EnvOptionError(f"{where} is out of the arm's reach ({REACH} m from its shoulder)")
+    if np.linalg.norm(pos - SHOULDER) > WORKSPACE_RADIUS:
+        raise EnvOptionError(
+            f"{where} is out of the arm's reach ({WORKSPACE_RADIUS} m from its shoulder)"
+        )
     surface = _resting_surface(pos)
     if surface is None:
         raise EnvOptionError(

@@ -35,9 +35,15 @@ from osg_control.data.datasets import ACTION_DIM, OBS_DIM
 from osg_control.domain.spec import SkillSpec, skill_from_json
 from osg_control.errors import CheckpointError, SkillSpecError
 from osg_control.io_safety import atomic_write
-from osg_control.json_files import read_json_object
+from osg_control.json_files import parse_json, read_json_object
 
-FORMAT_VERSION = 1
+FORMAT_VERSION = 2
+"""2: the sidecar carries ``normalisation_sha256`` (version 1, without it, still loads)."""
+READABLE_VERSIONS = (1, 2)
+NORMALISATION_KEYS = ("obs_mean", "obs_std", "action_scale")
+"""The sidecar's normalisation fields, covered by its ``normalisation_sha256``: the weights'
+hash does not cover them, and an edited mean or scale loaded and silently ruined the
+skill."""
 OBS_CLIP = 10.0
 """Normalised observations are clipped to this many std: a state far outside a skill's data
 (e.g. a gripper command never seen in it) stays a bounded input."""
@@ -122,6 +128,25 @@ def sha256_file(path: str | Path) -> str:
     return digest.hexdigest()
 
 
+def values_sha256(values: Any) -> str:
+    """The sha256 of JSON values as canonical text (sorted keys): the checksum a sidecar
+    stores over the fields its weights' hash does not cover."""
+    return hashlib.sha256(json.dumps(values, sort_keys=True).encode()).hexdigest()
+
+
+def check_values_sha256(path: Path, values: Any, stored: Any, what: str) -> None:
+    """Refuse sidecar values whose checksum is not the one written with them.
+
+    Raises:
+        CheckpointError: naming the file and ``what``.
+    """
+    if stored != values_sha256(values):
+        raise CheckpointError(
+            f"{path}: {what} do not match the sidecar's normalisation_sha256 (edited or "
+            "corrupt); retrain or restore the checkpoint"
+        )
+
+
 def check_finite(path: Path, tensors: dict[str, np.ndarray]) -> None:
     """Refuse weights with a NaN or infinity.
 
@@ -167,6 +192,7 @@ def save_checkpoint(directory: str | Path, checkpoint: Checkpoint) -> tuple[Path
         "weights_sha256": hashlib.sha256(weights).hexdigest(),
         "package_version": checkpoint.package_version,
     }
+    sidecar["normalisation_sha256"] = values_sha256({k: sidecar[k] for k in NORMALISATION_KEYS})
     atomic_write(weights_path, lambda tmp: tmp.write_bytes(weights))
     sidecar_text = json.dumps(sidecar, indent=2) + "\n"
     atomic_write(sidecar_path, lambda tmp: tmp.write_text(sidecar_text))
@@ -196,10 +222,19 @@ def _read_sidecar(path: Path, name: str) -> dict[str, Any]:
     missing = [key for key in _SIDECAR_KEYS if key not in sidecar]
     if missing:
         raise CheckpointError(f"{path}: checkpoint sidecar lacks {', '.join(missing)}")
-    if sidecar["format_version"] != FORMAT_VERSION:
+    if sidecar["format_version"] not in READABLE_VERSIONS:
         raise CheckpointError(
             f"{path}: checkpoint format {sidecar['format_version']}, this version reads "
-            f"{FORMAT_VERSION}"
+            f"{', '.join(map(str, READABLE_VERSIONS))}"
+        )
+    if sidecar["format_version"] >= 2:
+        if "normalisation_sha256" not in sidecar:
+            raise CheckpointError(f"{path}: checkpoint sidecar lacks normalisation_sha256")
+        check_values_sha256(
+            path,
+            {k: sidecar[k] for k in NORMALISATION_KEYS},
+            sidecar["normalisation_sha256"],
+            ", ".join(NORMALISATION_KEYS),
         )
     for key, kind in _SIDECAR_TYPES.items():
         value = sidecar[key]
@@ -220,7 +255,7 @@ def _read_sidecar(path: Path, name: str) -> dict[str, Any]:
 def _weights_skill(data: bytes) -> str | None:
     """The skill a safetensors file was saved for (its ``skill`` metadata), if recorded."""
     size = int.from_bytes(data[:8], "little")
-    header = json.loads(data[8 : 8 + size])  # valid: the file has loaded
+    header = parse_json(data[8 : 8 + size])  # valid: the file has loaded
     metadata = header.get("__metadata__") or {}
     return metadata.get("skill")
 

@@ -20,6 +20,7 @@ from dataclasses import asdict, dataclass
 from typing import Any
 
 from osg_control.errors import UsageError
+from osg_control.json_files import is_json_number
 
 ENCODER_NOISE = 5e-4
 """Joint encoder noise [rad], per joint: about 0.4 mm at the kitchen arm's TCP per joint (its
@@ -30,6 +31,10 @@ OBJECT_NOISE = 0.01
 """Default object position noise [m] of the ``robot`` perception's pose estimator."""
 OBJECT_ANGLE_NOISE = 0.05
 """Object orientation noise [rad] (about 3 degrees) of the ``robot`` pose estimator."""
+MAX_NOISE = 1.0
+"""The largest noise level [m, or rad for angles] a perception takes: a metre of position
+noise already places every object anywhere in the scene; 1e300 made the observations
+non-finite."""
 PERCEPTIONS: dict[str, str] = {
     "paper": "noise on the perceived TCP position, objects exact (the paper's protocol)",
     "robot": "joint encoders, TCP by forward kinematics, noisy object pose estimator",
@@ -75,8 +80,11 @@ class PerceptionSpec:
             value = getattr(self, field_name)
             if isinstance(value, bool) or not isinstance(value, (int, float)):
                 raise UsageError(f"perception {field_name} must be a number, got {value!r}")
-            if not math.isfinite(value) or value < 0:
-                raise UsageError(f"perception {field_name} must be finite and >= 0, got {value!r}")
+            if not (math.isfinite(value) and 0 <= value <= MAX_NOISE):
+                raise UsageError(
+                    f"perception {field_name} must be finite and in [0, {MAX_NOISE:g}], "
+                    f"got {value!r}"
+                )
 
     @property
     def exact(self) -> bool:
@@ -108,16 +116,21 @@ def perception_spec(
             ``OBJECT_NOISE``).
 
     Raises:
-        UsageError: an unknown name (the known ones listed), a negative or non-finite
-            noise, or a noise the perception has no sensor for.
+        UsageError: an unknown name (the known ones listed), a noise that is not a
+            finite number in [0, ``MAX_NOISE``], or a noise the perception has no sensor for.
     """
     if name not in PERCEPTIONS:
         raise UsageError(
             f"unknown perception {name!r}; known perceptions: {', '.join(PERCEPTIONS)}"
         )
     for label, value in (("--noise", noise), ("--object-noise", object_noise)):
-        if value is not None and (not math.isfinite(value) or value < 0):
-            raise UsageError(f"{label} must be finite and >= 0, got {value!r}")
+        if value is not None and not (
+            is_json_number(value) and math.isfinite(value) and 0 <= value <= MAX_NOISE
+        ):
+            raise UsageError(
+                f"{label} must be finite and in [0, {MAX_NOISE:g}] (>= 0 and at most "
+                f"{MAX_NOISE:g}), got {value!r}"
+            )
     if name == "robot":
         if noise:
             raise UsageError(

@@ -8,6 +8,7 @@ from typing import Any
 
 from osg_control.domain.base import Domain
 from osg_control.domain.spec import SkillSpec
+from osg_control.json_files import JSONFormatError, load_json
 from osg_control.learning.checkpoints import sha256_file
 
 
@@ -44,9 +45,9 @@ def _trained(
     early_stopping: dict[str, Any] | None,
 ) -> bool:
     try:
-        meta = json.loads((skills / f"{skill.name}.json").read_text())
+        meta = load_json(skills / f"{skill.name}.json")
         dataset_sha256 = sha256_file(data / f"{skill.name}.h5")
-    except (OSError, ValueError):
+    except (OSError, JSONFormatError):
         return False
     expected = {
         "seed": seed,

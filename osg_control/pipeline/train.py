@@ -239,7 +239,10 @@ def train_skills(
     if threads:
         torch.set_num_threads(threads)
     config = TD3BCConfig()
-    out = check_output_dir(out_dir, "checkpoint folder", checkpoint_bytes(config, len(names)))
+    snapshots = 1 if early_stop is None else 2  # early stopping keeps one round's snapshot
+    out = check_output_dir(
+        out_dir, "checkpoint folder", snapshots * checkpoint_bytes(config, len(names))
+    )
     bounds = np.asarray(domain.action_bounds, dtype=np.float32)
     inputs = [load_skill_input(Path(data_dir), n, config, bounds) for n in names]
     seeds = [skill_seed(seed, name) for name in names]
@@ -259,7 +262,7 @@ def train_skills(
                     )
 
         outcomes, check_seconds = train_early_stopped(
-            trainer, replay, names, steps, early_stop, snapshot
+            trainer, replay, names, steps, early_stop, snapshot, scratch_in=out
         )
     seconds = time.perf_counter() - start
     return TrainedSkills(

@@ -3,6 +3,7 @@ with held-out checks after which skills leave the batch (``learning.early_stoppi
 
 from __future__ import annotations
 
+import shutil
 import tempfile
 import time
 from collections.abc import Callable, Mapping, Sequence
@@ -127,6 +128,10 @@ def train_fixed(
     ]
 
 
+SCRATCH_PREFIX = ".osg-held-out-"
+"""The name prefix of early stopping's scratch folder of held-out snapshots."""
+
+
 def train_early_stopped(
     trainer: TD3BC,
     replay: BatchedReplay,
@@ -134,10 +139,16 @@ def train_early_stopped(
     steps: int,
     stop: EarlyStop,
     snapshot: Snapshot,
+    scratch_in: Path | None = None,
 ) -> tuple[list[SkillOutcome], float]:
     """Train in rounds of ``check_every`` updates up to ``steps``; after each, check the
     skills still in the batch on held-out episodes (their current weights written to a
     scratch folder by ``snapshot``) and drop those the rule stops.
+
+    The scratch folder (``SCRATCH_PREFIX``) lies in ``scratch_in`` (the checkpoint folder,
+    whose free space was checked; None: the system's temporary folder) and holds one
+    round's snapshot at a time: each is removed after its check, and scratch folders a
+    killed run left there are removed at the start.
 
     Returns:
         Each skill's outcome (its best checked weights), in ``names`` order, and the
@@ -147,7 +158,10 @@ def train_early_stopped(
     progress = {name: SkillProgress() for name in active}
     kept: dict[str, SkillOutcome] = {}
     check_seconds, done = 0.0, 0
-    with tempfile.TemporaryDirectory(prefix="osg-held-out-") as scratch:
+    if scratch_in is not None:
+        for stale in Path(scratch_in).glob(f"{SCRATCH_PREFIX}*"):
+            shutil.rmtree(stale, ignore_errors=True)  # left by a killed run
+    with tempfile.TemporaryDirectory(prefix=SCRATCH_PREFIX, dir=scratch_in) as scratch:
         while active:
             chunk = min(stop.rule.check_every, steps - done)
             logs = train_with_progress(trainer, replay, chunk, active, done, steps)
@@ -157,6 +171,7 @@ def train_early_stopped(
             current = {name: trainer.actor_layers(k) for k, name in enumerate(active)}
             snapshot(folder, current, done)
             rates = stop.check(folder, active)
+            shutil.rmtree(folder, ignore_errors=True)  # one round's snapshot at a time
             check_seconds += time.perf_counter() - started
             for k, name in enumerate(active):
                 if progress[name].record(done, float(rates[name])):

@@ -8,15 +8,17 @@ exported PDDL and in the executor. Reading them needs no model (no torch).
 
 from __future__ import annotations
 
+import logging
 import math
 from pathlib import Path
 from typing import Any
 
 from osg_control.domain.base import Domain
 from osg_control.errors import CheckpointError
-from osg_control.json_files import read_json_object
+from osg_control.json_files import is_json_number, read_json_object
 from osg_control.planning.graph import SkillGraph, graph_from_specs
 
+LOGGER = logging.getLogger(__name__)
 MANIFEST = "manifest.json"
 RATES_KEY = "success_rates"
 """The manifest's map of skill name -> measured success rate (the plan costs)."""
@@ -28,6 +30,12 @@ def measured_graph(domain: Domain, directory: str | Path | None = None) -> Skill
     root = Path(directory) if directory is not None else domain.defaults_dir
     if root is None:
         return graph_from_specs(domain)
+    if not (root / MANIFEST).exists():
+        LOGGER.warning(
+            "%s: no %s: planning at uniform skill costs (no measured success rates)",
+            root,
+            MANIFEST,
+        )
     rates = success_rates(read_manifest(root), root / MANIFEST, domain)
     return graph_from_specs(domain, success_rates=rates)
 
@@ -54,7 +62,7 @@ def success_rates(manifest: dict[str, Any], path: Path, domain: Domain) -> dict[
     for name, rate in rates.items():
         if name not in domain.skills_by_name:
             raise CheckpointError(f"{path}: {RATES_KEY!r} names unknown skill {name!r}")
-        if not isinstance(rate, int | float) or not math.isfinite(rate) or not 0 <= rate <= 1:
+        if not is_json_number(rate) or not math.isfinite(rate) or not 0 <= rate <= 1:
             raise CheckpointError(f"{path}: {RATES_KEY!r}[{name!r}] = {rate!r} is not in [0, 1]")
         checked[name] = float(rate)
     return checked

@@ -109,17 +109,41 @@ class PlanStep:
     cost: int
 
 
+MAX_TIME_S = 1e6
+"""The longest search time limit [s] (about 11.6 days): Fast Downward overflowed at 1e308."""
+MAX_STATES = 2**31 - 1
+"""The most states a search may keep (a 32-bit count)."""
+
+
 @dataclass(frozen=True)
 class SearchLimits:
     """Bounds on a search; reaching one gives the answer "unknown", never "no plan".
 
     Attributes:
-        time_s: wall-clock seconds, or None for no bound.
-        max_states: states kept in memory (the built-in search), or None for no bound.
+        time_s: wall-clock seconds in [0, ``MAX_TIME_S``] (0: answer "unknown" at once),
+            or None for no bound.
+        max_states: states kept in memory (the built-in search) in [1, ``MAX_STATES``], or
+            None for no bound.
+
+    Raises:
+        ValueError: a bound outside its range (NaN, inf, a bool or a string included).
     """
 
     time_s: float | None = None
     max_states: int | None = None
+
+    def __post_init__(self) -> None:
+        time_s, states = self.time_s, self.max_states
+        if time_s is not None and not (
+            isinstance(time_s, int | float)
+            and not isinstance(time_s, bool)
+            and 0 <= time_s <= MAX_TIME_S
+        ):
+            raise ValueError(f"time limit must be in [0, {MAX_TIME_S:g}] s, got {time_s!r}")
+        if states is not None and not (
+            isinstance(states, int) and not isinstance(states, bool) and 1 <= states <= MAX_STATES
+        ):
+            raise ValueError(f"max_states must be in [1, {MAX_STATES}], got {states!r}")
 
 
 NO_LIMITS = SearchLimits()
