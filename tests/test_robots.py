@@ -57,7 +57,7 @@ def test_a_six_joint_arm_runs_kitchen_episodes(skill: str) -> None:
     env = KitchenEnv(skill=spec, robot=TOY)
     obs, info = env.reset(seed=3)
     assert info["arm_q"].shape == (6,) and env.percept().joints.shape == (6,)
-    policy = ScriptedPolicy(spec, np.random.default_rng(3))
+    policy = ScriptedPolicy(spec, np.random.default_rng(3), bounds=env.action_bounds)
     policy.reset()
     for _ in range(spec.max_steps or 100):
         obs, reward, terminated, truncated, info = env.step(policy(obs))

@@ -86,6 +86,23 @@ def add_randomize_argument(parser: argparse.ArgumentParser) -> None:
     )
 
 
+def randomize_of(args: argparse.Namespace, domain: Domain) -> bool:
+    """Whether ``--randomize-objects`` was given, for a domain that has objects to place.
+
+    Raises:
+        UsageError: it was given for a domain with no object in a placement region (exit
+            2, nothing run): there is nothing to place.
+    """
+    from osg_control.errors import UsageError
+
+    if args.randomize_objects and not domain.objects:
+        raise UsageError(
+            f"--randomize-objects: domain {domain.name!r} has no object with a placement "
+            "region (its Domain.objects is empty), so there is nothing to place"
+        )
+    return bool(args.randomize_objects)
+
+
 def perception_of(
     args: argparse.Namespace, domain: Domain, default_noise: float = 0.0
 ) -> PerceptionSpec:

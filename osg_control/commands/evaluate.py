@@ -16,6 +16,7 @@ from osg_control.commands import (
     add_randomize_argument,
     domain_of,
     perception_of,
+    randomize_of,
 )
 from osg_control.domain.base import Domain
 from osg_control.evaluation.evaluate import format_task_table, task_table
@@ -151,6 +152,7 @@ def run_tasks(args: argparse.Namespace) -> int:
     """Print Tables IV and V."""
     domain = domain_of(args)
     perception = perception_of(args, domain, default_noise=0.02)
+    randomize = randomize_of(args, domain)
     resume_dir = evaluation_cache(domain, "tasks", args.models)
     with open_executor(args.backend, args.workers, args.address) as executor:
         table = task_table(
@@ -167,7 +169,7 @@ def run_tasks(args: argparse.Namespace) -> int:
             resume_dir=resume_dir,
             progress=not args.json,
             perception=perception,
-            randomize=args.randomize_objects,
+            randomize=randomize,
         )
     return print_result(domain, args, table, format_task_table)
 

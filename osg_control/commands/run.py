@@ -17,6 +17,7 @@ from osg_control.commands import (
     add_randomize_argument,
     domain_of,
     perception_of,
+    randomize_of,
 )
 from osg_control.domain.base import Domain
 from osg_control.domain.frames import sample_placements
@@ -123,6 +124,7 @@ def run_task(args: argparse.Namespace) -> int:
     """Run ``--episodes`` executions of the goal and report each (exit 1 if any failed)."""
     domain = domain_of(args)
     perception = perception_of(args, domain)
+    randomize = randomize_of(args, domain)
     goal = args.goal.split()
     facts = domain.start_world if args.facts is None else tuple(args.facts.split())
     if args.video:
@@ -144,7 +146,7 @@ def run_task(args: argparse.Namespace) -> int:
     for episode in range(args.episodes):
         options = _start_options(domain, args.start, rng)
         options["facts"] = facts
-        if args.randomize_objects:
+        if randomize:
             world = env.placement_world(sample_placements(domain, rng), None)
             if world:
                 options["world"] = world
@@ -227,6 +229,7 @@ def run_eval_skills(args: argparse.Namespace) -> int:
     """Print Table I."""
     domain = domain_of(args)
     perception = perception_of(args, domain)
+    randomize = randomize_of(args, domain)
     noise = args.noise or ([0.0, 0.01, 0.02] if perception.name == "paper" else [0.0])
     for level in noise:
         perception_spec(perception.name, level, args.object_noise)  # refuse a bad level
@@ -244,7 +247,7 @@ def run_eval_skills(args: argparse.Namespace) -> int:
             executor=executor,
             progress=not args.json,
             perception=perception,
-            randomize=args.randomize_objects,
+            randomize=randomize,
         )
     table["models"] = {"skills": str(models)}
     print(json.dumps(table, indent=2) if args.json else format_skill_table(table))

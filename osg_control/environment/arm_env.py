@@ -7,7 +7,7 @@ the latched gripper command (+1 open, -1 closed), the gripper actuator's force m
 [N] and the distance between the fingers [m].
 
 Action (7-D): ``[dx, dy, dz, da, db, dg, g]`` — a relative TCP command (position [m],
-rotation vector [rad], base frame), each clipped to ``ACTION_BOUNDS``, and a gripper
+rotation vector [rad], base frame), each clipped to ``action_bounds``, and a gripper
 command: ``g < -0.5`` closes, ``g > 0.5`` opens, otherwise the gripper holds.
 
 The arm is a ``RobotDescription`` (``control.description``): its joints, limits, drives,
@@ -45,19 +45,15 @@ from osg_control.control.ik import (
 from osg_control.control.robot_model import GRIPPER_ACTUATOR, HOME_KEY
 from osg_control.control.servo import uncap_drive
 from osg_control.domain.frames import offsets_of
-from osg_control.domain.spec import Node, SkillSpec
-from osg_control.environment.actions import checked_action
-from osg_control.environment.config import (
-    ACTION_BOUNDS,
+from osg_control.domain.spaces import (
+    ACTION_DIM,
     OBS_DIM,
-    OBS_HIGH,
-    OBS_LOW,
-    RESET_OPTIONS,
-    SIMULATED_PERCEPTIONS,
-    EnvConfig,
-    as_slice,
+    PAPER_ACTION_BOUNDS,
     observation_bounds,
 )
+from osg_control.domain.spec import Node, SkillSpec
+from osg_control.environment.actions import checked_action
+from osg_control.environment.config import RESET_OPTIONS, EnvConfig, as_slice
 from osg_control.environment.options import (
     GRIPPER_STATES,
     check_facts_hold,
@@ -74,16 +70,13 @@ from osg_control.environment.success import GRIPPER_CLOSED_CMD, GRIPPER_OPEN_CMD
 from osg_control.errors import EnvOptionError, SimulationError
 from osg_control.perception.percept import Percept
 from osg_control.perception.sensors import noisy_world, sensor_slices
+from osg_control.perception.spec import SIMULATED_PERCEPTIONS
 
 _LOG = logging.getLogger(__name__)
 
 __all__ = [
-    "ACTION_BOUNDS",
     "GRIPPER_CLOSED_CMD",
     "GRIPPER_OPEN_CMD",
-    "OBS_DIM",
-    "OBS_HIGH",
-    "OBS_LOW",
     "ArmEnv",
     "EnvConfig",
     "success_holds",
@@ -105,11 +98,15 @@ class ArmEnv(SceneHooks, gym.Env):
         config: noise, step budget, IK and random-start options.
         render_mode: ``"rgb_array"`` for ``render``.
         robot: the arm (``control.description``; a domain's env gives its default).
+        action_bounds: the per-step bound of each action component (its domain's
+            ``action_bounds``; default the paper's).
     """
 
     metadata = {"render_modes": ["rgb_array"]}
     camera = "overview"
     """The model camera ``render`` uses."""
+    perceptions = SIMULATED_PERCEPTIONS
+    """The perceptions it simulates."""
 
     def __init__(
         self,
@@ -120,14 +117,15 @@ class ArmEnv(SceneHooks, gym.Env):
         render_mode: str | None = None,
         *,
         robot: RobotDescription,
+        action_bounds: tuple[float, ...] = PAPER_ACTION_BOUNDS,
     ) -> None:
         self.config = config or EnvConfig()
         self.robot = robot
         self.metadata = {**self.metadata, "render_fps": int(robot.control_hz)}
-        if self.config.perception.name not in SIMULATED_PERCEPTIONS:
+        if self.config.perception.name not in self.perceptions:
             raise EnvOptionError(
                 f"EnvConfig.perception: {type(self).__name__} simulates the perceptions "
-                f"{', '.join(SIMULATED_PERCEPTIONS)}, not {self.config.perception.name!r}"
+                f"{', '.join(self.perceptions)}, not {self.config.perception.name!r}"
             )
         self.nodes = nodes
         self.home = home
@@ -170,7 +168,11 @@ class ArmEnv(SceneHooks, gym.Env):
         }
         """The robot's bodies: those under its base (attached to the scene's world)."""
         self.observation_space = gym.spaces.Box(*observation_bounds(robot), (OBS_DIM,), np.float64)
-        self.action_space = gym.spaces.Box(-ACTION_BOUNDS, ACTION_BOUNDS, (7,), np.float64)
+        self.action_bounds = np.array(action_bounds, dtype=float)
+        """The per-step bound of each action component; steps clip to them."""
+        self.action_space = gym.spaces.Box(
+            -self.action_bounds, self.action_bounds, (ACTION_DIM,), np.float64
+        )
         self._gripper_cmd = GRIPPER_OPEN_CMD
         self._steps = 0
         self._succeeded = False
@@ -396,12 +398,12 @@ class ArmEnv(SceneHooks, gym.Env):
 
     # ----------------------------------------------------------------- step
     def check_action(self, action: np.ndarray) -> np.ndarray:
-        """Validate an action (shape (7,), finite) and clip it to ``ACTION_BOUNDS``.
+        """Validate an action (shape (7,), finite) and clip it to ``action_bounds``.
 
         Raises:
             ValueError: wrong shape or NaN/inf; nothing reaches the actuators.
         """
-        return checked_action(action, ACTION_BOUNDS)
+        return checked_action(action, self.action_bounds)
 
     def step(self, action: np.ndarray) -> tuple[np.ndarray, float, bool, bool, dict[str, Any]]:
         """Apply one 50 ms control step (see module docstring).

@@ -22,10 +22,10 @@ import numpy as np
 from tqdm import tqdm
 
 from osg_control.domain.base import Domain
+from osg_control.domain.contract import SkillEnv
 from osg_control.domain.frames import sample_placements
 from osg_control.domain.registry import get_domain
 from osg_control.domain.spec import nearest_start
-from osg_control.environment.arm_env import ArmEnv
 from osg_control.evaluation.resume import resumable_results
 from osg_control.execution.executor import task_env_config
 from osg_control.parallel import LocalExecutor, TaskExecutor
@@ -73,7 +73,7 @@ def cached_executor(
 
 
 @cache
-def _plain_env(domain: str, perception: PerceptionSpec) -> ArmEnv:
+def _plain_env(domain: str, perception: PerceptionSpec) -> SkillEnv:
     return get_domain(domain).make_env(config=task_env_config(perception))
 
 
@@ -93,7 +93,7 @@ class StartEpisode:
     randomize: bool = False
 
 
-def _reset_in_region(env: ArmEnv, task: StartEpisode, facts: Sequence[str]) -> np.ndarray:
+def _reset_in_region(env: SkillEnv, task: StartEpisode, facts: Sequence[str]) -> np.ndarray:
     """A start in the episode's region; with ``randomize`` the objects placed at random in
     their regions (drawn after the reset seed: the fixed-placement starts are unchanged)."""
     rng = episode_rng(task.seed, task.name, task.cell, task.index)

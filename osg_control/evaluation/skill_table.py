@@ -19,9 +19,10 @@ import numpy as np
 from osg_control.control.estimator import MOTION_MODEL, FilteredPolicy
 from osg_control.data.collect import placed_start_options, run_scripted_episode
 from osg_control.domain.base import Domain
+from osg_control.domain.contract import SkillEnv
 from osg_control.domain.frames import in_skill_frame, sample_placements, skill_offset
 from osg_control.domain.registry import get_domain
-from osg_control.environment.arm_env import ArmEnv, EnvConfig
+from osg_control.environment.config import EnvConfig
 from osg_control.evaluation.evaluate import at_noise, cell_means, episode_rng
 from osg_control.execution.objects import ObjectTracker
 from osg_control.learning.checkpoints import require_skills
@@ -39,7 +40,7 @@ def _policy(domain: str, directory: str, skill: str) -> Any:
 
 
 @cache
-def _env(domain: str, skill: str, perception: PerceptionSpec) -> ArmEnv:
+def _env(domain: str, skill: str, perception: PerceptionSpec) -> SkillEnv:
     found = get_domain(domain)
     return found.make_env(skill=found.skill(skill), config=EnvConfig(perception=perception))
 

@@ -33,6 +33,7 @@ from osg_control.classifier.motion import MotionMemory
 from osg_control.control.divergence import is_divergence
 from osg_control.control.estimator import MOTION_MODEL, TcpTracker
 from osg_control.domain.base import Domain
+from osg_control.domain.contract import SkillEnv
 from osg_control.domain.frames import (
     Offsets,
     in_skill_frame,
@@ -41,7 +42,6 @@ from osg_control.domain.frames import (
 )
 from osg_control.domain.spec import SkillSpec
 from osg_control.environment.arm_env import GRIPPER_OPEN_CMD, EnvConfig
-from osg_control.environment.contract import SkillEnv
 from osg_control.environment.success import success_holds
 from osg_control.errors import SimulationError
 from osg_control.execution.entry import EntryChoice
