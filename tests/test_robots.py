@@ -87,7 +87,7 @@ def test_the_joint_reset_says_a_six_joint_arm_has_no_null_space(
     env = KitchenEnv(skill="move-home-to-cube", robot=TOY)
     env.reset(seed=0)
     before = env.arm_q
-    with caplog.at_level(logging.INFO, logger="osg_control.environment.arm_env"):
+    with caplog.at_level(logging.INFO, logger="osg_control.environment.joint_reset"):
         assert env.joint_reset() == 0
         assert env.joint_reset() == 0
     said = [r.getMessage() for r in caplog.records if "no null space" in r.getMessage()]

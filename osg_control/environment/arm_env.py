@@ -27,7 +27,6 @@ catalogue or scene object.
 
 from __future__ import annotations
 
-import logging
 from functools import partial
 from typing import Any
 
@@ -39,7 +38,6 @@ from osg_control.control.description import RobotDescription
 from osg_control.control.divergence import DivergenceWatch, non_finite_state
 from osg_control.control.ik import (
     DiffIKController,
-    joint_reset_controller,
     solve_ik,
 )
 from osg_control.control.robot_model import GRIPPER_ACTUATOR, HOME_KEY
@@ -54,6 +52,7 @@ from osg_control.domain.spaces import (
 from osg_control.domain.spec import Node, SkillSpec
 from osg_control.environment.actions import checked_action
 from osg_control.environment.config import RESET_OPTIONS, EnvConfig, as_slice
+from osg_control.environment.joint_reset import JointReset
 from osg_control.environment.options import (
     GRIPPER_STATES,
     check_facts_hold,
@@ -71,8 +70,6 @@ from osg_control.errors import EnvOptionError, SimulationError
 from osg_control.perception.percept import Percept
 from osg_control.perception.sensors import noisy_world, sensor_slices
 from osg_control.perception.spec import SIMULATED_PERCEPTIONS
-
-_LOG = logging.getLogger(__name__)
 
 __all__ = [
     "GRIPPER_CLOSED_CMD",
@@ -134,8 +131,7 @@ class ArmEnv(SceneHooks, gym.Env):
         self.model = self.build_model()
         self.data = mujoco.MjData(self.model)
         self.ik = DiffIKController(robot, self.config.ik)
-        self._reset_ik: DiffIKController | None = None
-        self._said_no_null_space = False
+        self._joint_reset = JointReset(robot, self.config.ik)
         self.n_substeps = robot.substeps(self.model.opt.timestep)
         joints = robot.arm.names
         self._arm_qpos = as_slice([self.model.joint(j).qposadr[0] for j in joints])
@@ -509,17 +505,9 @@ class ArmEnv(SceneHooks, gym.Env):
 
     # ----------------------------------------------------------------- joint reset
     def joint_reset(self, max_steps: int = 40, tolerance: float = 0.05) -> int:
-        """Drive the joints toward the home posture while the TCP holds its pose.
-
-        Null-space motion: the TCP pose is an equality constraint of the IK QP and the
-        posture task pulls toward ``IKConfig.posture`` (the robot's home by default). An arm
-        without a null space (six joints or fewer, ``RobotDescription.redundant``) cannot
-        move with its TCP held: the reset logs so once and returns 0. Runs until every
-        joint is within
-        ``tolerance`` [rad] of the posture or the posture error stops shrinking. Decided
-        from the encoders alone, as a robot's controller would: the joints are read (with
-        the perception's encoder noise) every step, the TCP is held where forward
-        kinematics of the joints read at its start puts it.
+        """Drive the joints toward the home posture (``IKConfig.posture``) while the TCP
+        holds its pose (``joint_reset.JointReset``: null-space motion from the encoders,
+        with the perception's encoder noise; an arm without a null space takes no step).
 
         Returns:
             The number of control steps used.
@@ -527,42 +515,13 @@ class ArmEnv(SceneHooks, gym.Env):
         Raises:
             SimulationError: the physics diverged (or the joint state is non-finite).
         """
+        encoders = partial(self.sensors.encoders, self.data, self.config.perception, self.np_random)
         try:
-            return self._drive_to_posture(max_steps, tolerance)
+            return self._joint_reset.run(
+                self.data, encoders, self.ik.posture, self._simulate, max_steps, tolerance
+            )
         finally:
             self._perceive()
-
-    def _drive_to_posture(self, max_steps: int, tolerance: float) -> int:
-        """``joint_reset``'s loop (the percept is refreshed after it, whatever happens)."""
-        if not self.robot.redundant:
-            if not self._said_no_null_space:
-                _LOG.info(
-                    "joint reset skipped: robot %r has %d joints, no null space under its TCP task",
-                    self.robot.name,
-                    self.robot.n_joints,
-                )
-                self._said_no_null_space = True
-            return 0
-        if self._reset_ik is None:
-            self._reset_ik = joint_reset_controller(self.robot, self.config.ik)
-        encoders = partial(self.sensors.encoders, self.data, self.config.perception, self.np_random)
-        joints = encoders()
-        held: tuple[np.ndarray, np.ndarray] | None = None  # the TCP pose to hold
-        posture = self.ik.posture
-        previous = np.inf
-        for step in range(max_steps):
-            error = float(np.abs(joints - posture).max())
-            if error < tolerance or error > previous - 1e-4:
-                return step
-            previous = error
-            diverged = non_finite_state(self.data, ("qpos",))
-            if diverged is None:
-                held = held or self._reset_ik.tcp_pose(joints)
-                diverged = self._simulate(self._reset_ik.reset_step(joints, *held))
-            if diverged is not None:
-                raise SimulationError(f"{diverged} during joint reset")
-            joints = encoders()
-        return max_steps
 
     # ----------------------------------------------------------------- render
     def render(self) -> np.ndarray | None:  # type: ignore[override]
