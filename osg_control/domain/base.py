@@ -187,7 +187,9 @@ class Domain:
     def __post_init__(self) -> None:
         object.__setattr__(self, "skills_by_name", {s.name: s for s in self.skills})
         validate_domain(self)
-        factory = getattr(self.make_env, "factory", self.make_env)  # replace() re-wraps
+        factory = self.make_env  # replace() passes the checked one: re-wrapped, not nested
+        if isinstance(factory, CheckedEnvFactory):
+            factory = factory.factory
         checked = CheckedEnvFactory(
             factory, self.name, tuple(self.action_bounds), tuple(self.perceptions)
         )
@@ -209,6 +211,8 @@ class Domain:
             )
         if robot == self.robot:
             return self
+        checked = self.make_env
+        own_factory = checked.factory if isinstance(checked, CheckedEnvFactory) else checked
         defaults = None
         if self.defaults_dir is not None:
             defaults = self.defaults_dir.with_name(f"{self.defaults_dir.name}-{robot}")
@@ -216,7 +220,7 @@ class Domain:
             self,
             robot=robot,
             robot_is_default=False,
-            make_env=partial(getattr(self.make_env, "factory", self.make_env), robot=robot),
+            make_env=partial(own_factory, robot=robot),
             defaults_dir=defaults if defaults is not None and defaults.is_dir() else None,
         )
 
