@@ -6,7 +6,8 @@ from pathlib import Path
 
 import numpy as np
 
-from osg_control.data.datasets import ACTION_DIM, OBS_DIM, Episode, write_episodes
+from osg_control.data.datasets import Episode, write_episodes
+from osg_control.domain.spaces import ACTION_DIM, OBS_DIM
 from osg_control.kitchen.skills import get_skill
 from osg_control.kitchen.world import WORLD_FIELDS
 

@@ -35,8 +35,9 @@ from osg_control.classifier.model import (
 )
 from osg_control.classifier.train import PAPER_CONFIG, TrainConfig, train_classifier
 from osg_control.cli import main
-from osg_control.data.datasets import ACTION_DIM, OBS_DIM, Episode, write_episodes
+from osg_control.data.datasets import Episode, write_episodes
 from osg_control.domain.registry import get_domain
+from osg_control.domain.spaces import ACTION_DIM, OBS_DIM
 from osg_control.errors import CheckpointError, DatasetError
 from osg_control.execution.defaults import load_defaults
 from osg_control.kitchen.skills import (

@@ -15,7 +15,9 @@ from gymnasium.utils.env_checker import check_env
 
 from osg_control.control.ik import IKConfig, joint_reset_controller
 from osg_control.control.rotations import rotation_error
-from osg_control.environment.arm_env import ACTION_BOUNDS, OBS_DIM, EnvConfig
+from osg_control.domain.spaces import OBS_DIM
+from osg_control.environment.arm_env import EnvConfig
+from osg_control.kitchen.domain import kitchen_domain
 from osg_control.kitchen.env import KitchenEnv
 from osg_control.kitchen.skills import NODES, TOP_DOWN_QUAT
 from osg_control.kitchen.world import CUBE_HALF_SIZE, world_facts, world_state_from_array
@@ -65,7 +67,7 @@ def test_spaces(env: KitchenEnv) -> None:
     assert obs.shape == (OBS_DIM,) and obs.dtype == env.observation_space.dtype
     assert env.observation_space.contains(obs)
     assert isinstance(env.action_space, gym.spaces.Box)
-    np.testing.assert_array_equal(env.action_space.high, ACTION_BOUNDS)
+    np.testing.assert_array_equal(env.action_space.high, kitchen_domain().action_bounds)
 
 
 # ------------------------------------------------------------------ physics sanity

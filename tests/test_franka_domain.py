@@ -56,7 +56,9 @@ def _run_noise_free(env, chain: list, obs: np.ndarray) -> tuple[dict, int]:
     step's info and the steps taken."""
     steps = 0
     for skill in chain:
-        policy = ScriptedPolicy(skill, np.random.default_rng(0), NOISE_FREE, env.action_bounds)
+        policy = ScriptedPolicy(
+            skill, np.random.default_rng(0), NOISE_FREE, bounds=env.action_bounds
+        )
         policy.reset()
         while not (policy.done or env.skill_success(skill)):
             obs, _reward, _terminated, truncated, info = env.step(policy(obs))
@@ -149,7 +151,7 @@ def test_noise_free_hinge_movement_reaches_its_end_node(skill: str) -> None:
     spec = franka_domain().skill(skill)
     obs, _info = env.reset(seed=0, options={"node": spec.start})
     assert np.linalg.norm(obs[:3] - env.nodes[spec.start].position) < 0.02
-    policy = ScriptedPolicy(spec, np.random.default_rng(0), NOISE_FREE, env.action_bounds)
+    policy = ScriptedPolicy(spec, np.random.default_rng(0), NOISE_FREE, bounds=env.action_bounds)
     policy.reset()
     while not policy.done:
         obs, *_ = env.step(policy(obs))

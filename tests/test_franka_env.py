@@ -13,7 +13,8 @@ from osg_control.errors import DomainError  # noqa: E402
 from osg_control.franka.arm import env_joint_limits, scale_to_action  # noqa: E402
 from osg_control.franka.compat import prepare  # noqa: E402
 from osg_control.franka.domain import make_franka_env  # noqa: E402
-from osg_control.franka.env import ACTION_BOUNDS, FrankaKitchenAdapter  # noqa: E402
+from osg_control.franka.env import FrankaKitchenAdapter  # noqa: E402
+from osg_control.franka.poses import ACTION_BOUNDS  # noqa: E402
 
 
 @pytest.fixture()
@@ -144,7 +145,10 @@ def test_reward_is_the_skills_own_and_completions_are_the_envs() -> None:
     env = make_franka_env(skill="push-light", tasks=["light switch", "microwave"], step_limit=50)
     obs, _ = env.reset(seed=0)
     policy = ScriptedPolicy(
-        env.skill, np.random.default_rng(0), ScriptParams(threshold_std=0, noise_std=0)
+        env.skill,
+        np.random.default_rng(0),
+        ScriptParams(threshold_std=0, noise_std=0),
+        bounds=env.action_bounds,
     )
     policy.reset()
     rewards, env_rewards = [], []

@@ -175,7 +175,7 @@ TRUTH_ATTRIBUTES = (
     "model",
     "scene",
 )
-"""The env's truth accessors (``environment.contract``) and the simulator itself."""
+"""The env's truth accessors (``domain.contract``) and the simulator itself."""
 TRUTH_KEYS = ("world", "world_facts")
 """The step info's truth entries."""
 
@@ -221,3 +221,27 @@ def test_deciding_layers_read_no_simulator_state(module: str, path: Path) -> Non
 def test_the_truth_check_finds_a_truth_read() -> None:
     source = "def f(env, info):\n    env.facts()\n    return info['world']\n"
     assert sorted(_truth_reads(ast.parse(source))) == ["line 2: env.facts", "line 3: ['world']"]
+
+
+ARM_ENV_MODULE = "osg_control.environment.arm_env"
+"""Where ``ArmEnv`` lives: the core types against ``domain.contract.SkillEnv`` instead."""
+
+
+def test_the_core_types_against_the_contract_never_arm_env() -> None:
+    """No core module outside ``environment/`` imports ``ArmEnv``: collection, evaluation
+    and execution take any env that implements ``SkillEnv`` (FrankaKitchen's adapter, a
+    user's own)."""
+    offending = [
+        f"{module} imports {name}"
+        for module, path in _core()
+        if _layer(module) != "environment"
+        for name in _imports(ast.parse(path.read_text()))
+        if name in (f"{ARM_ENV_MODULE}.ArmEnv", "osg_control.environment.ArmEnv")
+    ]
+    assert not offending, offending
+
+
+def test_the_arm_env_check_finds_an_import_of_it() -> None:
+    """The check above sees an ``ArmEnv`` import where it is (the check can fail)."""
+    tree = ast.parse(f"from {ARM_ENV_MODULE} import ArmEnv, EnvConfig\n")
+    assert f"{ARM_ENV_MODULE}.ArmEnv" in _imports(tree)

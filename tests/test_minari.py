@@ -64,7 +64,7 @@ def test_minari_reads_every_array_of_an_export_back(source: Dataset, root: Path)
 def test_import_restores_the_data_set(
     source: Dataset, root: Path, tmp_path: Path, success: str
 ) -> None:
-    export_minari(source.path, DATASET_ID, env_id=KITCHEN.env_id)
+    export_minari(source.path, DATASET_ID, KITCHEN)
     back = import_minari(KITCHEN, DATASET_ID, SKILL, tmp_path / "back" / f"{SKILL}.h5", success)
     assert back.skill_name == SKILL and back.success_rate == source.success_rate
     for key, value in source.arrays.items():
@@ -117,7 +117,7 @@ def test_mismatched_spaces_name_both_shapes(root: Path) -> None:
 
 
 def test_predicate_needs_world_states(source: Dataset, root: Path, tmp_path: Path) -> None:
-    target = export_minari(source.path, DATASET_ID, env_id=KITCHEN.env_id)
+    target = export_minari(source.path, DATASET_ID, KITCHEN)
     metadata = json.loads((target / "data" / "metadata.json").read_text())
     assert metadata["dataset_id"] == DATASET_ID and metadata["minari_version"] == "0.5.0"
     import h5py
@@ -129,18 +129,18 @@ def test_predicate_needs_world_states(source: Dataset, root: Path, tmp_path: Pat
 
 
 def test_export_refuses_an_existing_folder_without_force(source: Dataset, root: Path) -> None:
-    first = export_minari(source.path, DATASET_ID, env_id=KITCHEN.env_id)
+    first = export_minari(source.path, DATASET_ID, KITCHEN)
     (first / "data" / "marker").write_text("old")
     with pytest.raises(DatasetError, match="exists; pass --force"):
-        export_minari(source.path, DATASET_ID, env_id=KITCHEN.env_id)
+        export_minari(source.path, DATASET_ID, KITCHEN)
     assert (first / "data" / "marker").exists()
-    assert export_minari(source.path, DATASET_ID, force=True, env_id=KITCHEN.env_id) == first
+    assert export_minari(source.path, DATASET_ID, KITCHEN, force=True) == first
     assert not (first / "data" / "marker").exists()
 
 
 def test_malformed_id_and_missing_source_are_named(source: Dataset, root: Path) -> None:
     with pytest.raises(DatasetError, match="not NAMESPACE/NAME-vN"):
-        export_minari(source.path, "no version")
+        export_minari(source.path, "no version", KITCHEN)
     with pytest.raises(DatasetError, match="no Minari data set at 'lab/none-v0'"):
         import_minari(KITCHEN, "lab/none-v0", SKILL, root / "x.h5")
 
@@ -149,7 +149,7 @@ def test_an_export_of_another_skill_is_not_imported_as_this_one(
     source: Dataset, root: Path, tmp_path: Path
 ) -> None:
     """The data set's own ``osg_skill`` names the skill it was recorded for."""
-    export_minari(source.path, DATASET_ID, env_id=KITCHEN.env_id)
+    export_minari(source.path, DATASET_ID, KITCHEN)
     out = tmp_path / "other.h5"
     with pytest.raises(DatasetError, match=f"recorded for skill '{SKILL}'.*'move-door-to-home'"):
         import_minari(KITCHEN, DATASET_ID, "move-door-to-home", out)
@@ -160,7 +160,7 @@ def test_an_export_of_another_skill_is_not_imported_as_this_one(
 def test_an_import_never_writes_into_its_source(
     inside: str, source: Dataset, root: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
-    folder = export_minari(source.path, DATASET_ID, env_id=KITCHEN.env_id)
+    folder = export_minari(source.path, DATASET_ID, KITCHEN)
     before = {p: p.read_bytes() for p in folder.rglob("*") if p.is_file()}
     main_file = next(p for p in before if p.suffix in (".hdf5", ".h5"))
     out = {"the folder": folder, "its data file": main_file, "a file in it": folder / "x.h5"}

@@ -74,7 +74,7 @@ def test_ray_collection_has_the_same_bytes_as_the_local_pool(
 
 @pytest.mark.slow
 def test_ray_task_table_equals_the_local_one(ray_executor: RayExecutor) -> None:
-    args = (None, 1, 0, 2, 0.02, ["open-door"], [0])
+    args = (None, 1, 0, 2, ["open-door"], [0])
     local = task_table(KITCHEN, *args, executor=LocalExecutor(2))
     remote = task_table(KITCHEN, *args, executor=ray_executor)
     assert remote == local

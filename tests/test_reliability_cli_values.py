@@ -23,11 +23,11 @@ USAGE = [
     (["run", "--goal", "door-open", "--perception", ""], "unknown perception ''"),
     (
         ["--domain", "franka-kitchen", "run", "--goal", "kettle-moved", "--randomize-objects"],
-        "--randomize-objects: domain 'franka-kitchen' has no objects",
+        "--randomize-objects: domain 'franka-kitchen' has no object with a placement region",
     ),
     (
         ["--domain", "franka-kitchen", "evaluate", "tasks", "--randomize-objects"],
-        "--randomize-objects: domain 'franka-kitchen' has no objects",
+        "--randomize-objects: domain 'franka-kitchen' has no object with a placement region",
     ),
 ]
 

@@ -54,7 +54,7 @@ def minari_source(tmp_path_factory: pytest.TempPathFactory) -> Path:
     """A pristine Minari data set (two episodes of grab-cube); copy it before editing."""
     tmp = tmp_path_factory.mktemp("minari")
     data = chained_dataset(tmp / "grab-cube.h5")
-    return export_minari(data, "osg/grab-cube-v0", tmp / "root", env_id=KITCHEN.env_id)
+    return export_minari(data, "osg/grab-cube-v0", KITCHEN, tmp / "root")
 
 
 def _edit_h5(edit: Callable[[h5py.File], object]) -> Callable[[Path], None]:

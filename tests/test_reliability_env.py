@@ -13,7 +13,7 @@ import pytest
 
 from osg_control.control.servo import saturate_joint_speeds
 from osg_control.domain.registry import get_domain
-from osg_control.environment.arm_env import ACTION_BOUNDS, EnvConfig
+from osg_control.environment.arm_env import EnvConfig
 from osg_control.errors import EnvOptionError, SimulationError
 from osg_control.evaluation.joint_speeds import FULL_SPEED_STEPS
 from osg_control.execution.defaults import load_defaults
@@ -300,9 +300,9 @@ def test_a_control_step_in_one_call_is_the_substep_loop_bit_for_bit() -> None:
     rng = np.random.default_rng(1)
     saturated = 0
     for step in range(120):
-        action = rng.uniform(-1.0, 1.0, 7) * ACTION_BOUNDS
+        action = rng.uniform(-1.0, 1.0, 7) * fast.action_bounds
         if step % 40 < 20:
-            action[:3] = ACTION_BOUNDS[:3] * np.sign(action[:3])  # full speed
+            action[:3] = fast.action_bounds[:3] * np.sign(action[:3])  # full speed
         fast_info, loop_info = fast.step(action)[4], loop.step(action)[4]
         np.testing.assert_array_equal(fast.data.qpos, loop.data.qpos)
         np.testing.assert_array_equal(fast.data.qvel, loop.data.qvel)

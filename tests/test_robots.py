@@ -57,7 +57,7 @@ def test_a_six_joint_arm_runs_kitchen_episodes(skill: str) -> None:
     env = KitchenEnv(skill=spec, robot=TOY)
     obs, info = env.reset(seed=3)
     assert info["arm_q"].shape == (6,) and env.percept().joints.shape == (6,)
-    policy = ScriptedPolicy(spec, np.random.default_rng(3))
+    policy = ScriptedPolicy(spec, np.random.default_rng(3), bounds=env.action_bounds)
     policy.reset()
     for _ in range(spec.max_steps or 100):
         obs, reward, terminated, truncated, info = env.step(policy(obs))
@@ -87,7 +87,7 @@ def test_the_joint_reset_says_a_six_joint_arm_has_no_null_space(
     env = KitchenEnv(skill="move-home-to-cube", robot=TOY)
     env.reset(seed=0)
     before = env.arm_q
-    with caplog.at_level(logging.INFO, logger="osg_control.environment.arm_env"):
+    with caplog.at_level(logging.INFO, logger="osg_control.environment.joint_reset"):
         assert env.joint_reset() == 0
         assert env.joint_reset() == 0
     said = [r.getMessage() for r in caplog.records if "no null space" in r.getMessage()]

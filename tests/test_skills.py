@@ -11,6 +11,7 @@ import pytest
 from osg_control.data.scripted import ScriptedPolicy
 from osg_control.domain.spec import skill_from_json
 from osg_control.errors import SkillSpecError
+from osg_control.kitchen.domain import kitchen_domain
 from osg_control.kitchen.skills import (
     RELEASE_STEPS,
     SKILLS,
@@ -49,7 +50,7 @@ def test_waypoint_budget_below_one_is_refused() -> None:
 
 def test_release_waypoint_has_its_own_budget() -> None:
     skill = get_skill("release-cube")
-    policy = ScriptedPolicy(skill, np.random.default_rng(0))
+    policy = ScriptedPolicy(skill, np.random.default_rng(0), bounds=kitchen_domain().action_bounds)
     policy.reset()
     rest = skill.script.steps_per_waypoint
     assert skill.waypoints[0].steps == RELEASE_STEPS

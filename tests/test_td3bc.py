@@ -14,15 +14,18 @@ import torch
 from osg_control.cli import main
 from osg_control.data.datasets import Episode, load_dataset, write_episodes
 from osg_control.errors import DatasetError
+from osg_control.kitchen.domain import kitchen_domain
 from osg_control.kitchen.skills import get_skill
 from osg_control.kitchen.world import WORLD_FIELDS
 from osg_control.learning.checkpoints import Checkpoint, normalise_observations
 from osg_control.learning.policy import SkillPolicy, load_policies
-from osg_control.learning.replay import ACTION_SCALE, BatchedReplay, SkillData, prepare_skill_data
+from osg_control.learning.replay import BatchedReplay, SkillData, prepare_skill_data
 from osg_control.learning.td3bc import TD3BC, TD3BCConfig, bc_weights
 from osg_control.seeding import skill_seed
 
 WORLD = ",".join(WORLD_FIELDS)
+ACTION_SCALE = np.asarray(kitchen_domain().action_bounds, dtype=np.float32)
+"""The kitchen's action bounds: what its data are scaled by in training."""
 
 SKILL = "move-home-to-cube"
 OTHER_SKILL = "move-cube-to-home"
@@ -100,7 +103,7 @@ def one_thread() -> Iterator[None]:
 def toy_data(tmp_path: Path, skill: str = SKILL, seed: int = 0) -> SkillData:
     """A toy data set written, loaded and prepared for training."""
     path = write_toy_dataset(tmp_path / f"{skill}-{seed}.h5", skill, seed=seed)
-    return prepare_skill_data(load_dataset(path))
+    return prepare_skill_data(load_dataset(path), ACTION_SCALE)
 
 
 def train(
@@ -200,7 +203,7 @@ def test_data_set_without_success_is_refused(tmp_path: Path) -> None:
         path, failures, {"skill": get_skill(SKILL).to_json(), "seed": 0, "world_fields": WORLD}
     )
     with pytest.raises(DatasetError, match="no successful episode") as info:
-        prepare_skill_data(load_dataset(path))
+        prepare_skill_data(load_dataset(path), ACTION_SCALE)
     assert str(path) in str(info.value)
 
 
@@ -242,12 +245,6 @@ def test_train_command_refuses_data_recorded_for_another_skill(
     write_toy_dataset(tmp_path / f"{SKILL}.h5", skill=OTHER_SKILL)
     assert main(["train", "--skill", SKILL, "--data", str(tmp_path)]) == 1
     assert f"recorded for skill {OTHER_SKILL!r}" in capsys.readouterr().err
-
-
-def test_default_action_scale_is_the_env_bounds() -> None:
-    from osg_control.environment.arm_env import ACTION_BOUNDS
-
-    np.testing.assert_array_equal(ACTION_SCALE, ACTION_BOUNDS.astype(np.float32))
 
 
 def toy_checkpoint(trainer: TD3BC, data: SkillData, steps: int, seed: int) -> Checkpoint:

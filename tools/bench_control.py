@@ -36,7 +36,6 @@ import numpy as np
 
 from osg_control.control.ik import DiffIKController, IKConfig
 from osg_control.control.rotations import rotation_step
-from osg_control.environment.arm_env import ACTION_BOUNDS
 from osg_control.kitchen.env import KitchenEnv
 from osg_control.robots.panda import PANDA
 
@@ -113,7 +112,7 @@ def bench_env(steps: int, warmup: int, seed: int) -> dict[str, float]:
     env = KitchenEnv()
     env.reset(seed=seed)
     rng = np.random.default_rng(seed)
-    actions = rng.uniform(-0.5, 0.5, (steps + warmup, 7)) * ACTION_BOUNDS
+    actions = rng.uniform(-0.5, 0.5, (steps + warmup, 7)) * env.action_bounds
     actions[:, 6] = 0.0  # gripper: hold
     model, data = env.model, env.data
     env_ns: list[int] = []

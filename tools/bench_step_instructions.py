@@ -44,12 +44,11 @@ import sys, warnings
 import mujoco
 import numpy as np
 warnings.simplefilter("ignore")
-from osg_control.environment.arm_env import ACTION_BOUNDS
 from osg_control.kitchen.env import KitchenEnv
 mode, steps, warmup = sys.argv[1], int(sys.argv[2]), int(sys.argv[3])
 env = KitchenEnv()
 env.reset(seed=0)
-actions = np.random.default_rng(0).uniform(-0.5, 0.5, (steps + warmup, 7)) * ACTION_BOUNDS
+actions = np.random.default_rng(0).uniform(-0.5, 0.5, (steps + warmup, 7)) * env.action_bounds
 actions[:, 6] = 0.0
 for action in actions[:warmup]:
     env.step(action)

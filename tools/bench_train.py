@@ -28,14 +28,19 @@ from typing import Any
 import numpy as np
 import torch
 
-from osg_control.data.datasets import ACTION_DIM, OBS_DIM, Episode, write_episodes
+from osg_control.data.datasets import Episode, write_episodes
+from osg_control.domain.spaces import ACTION_DIM, OBS_DIM
+from osg_control.kitchen.domain import kitchen_domain
 from osg_control.kitchen.skills import NODES, SKILLS, SkillSpec
 from osg_control.kitchen.world import WORLD_FIELDS
-from osg_control.learning.replay import ACTION_SCALE, BatchedReplay
+from osg_control.learning.replay import BatchedReplay
 from osg_control.learning.td3bc import TD3BC, TD3BCConfig
 from osg_control.paths import cache_dir
 from osg_control.pipeline.train import load_skill_input
 from osg_control.seeding import skill_seed
+
+ACTION_SCALE = np.asarray(kitchen_domain().action_bounds, dtype=np.float32)
+"""The kitchen's action bounds (its data's training scale)."""
 
 D3RLPY_UPDATES_PER_S = 127.0
 """d3rlpy's TD3PlusBC on the 2-core development machine (batch 256, 256-unit networks)."""
@@ -116,7 +121,7 @@ def matmul_gflop_per_update(config: TD3BCConfig) -> float:
 def bench(names: list[str], data_dir: Path, args: argparse.Namespace) -> dict[str, Any]:
     """Time ``args.steps`` updates of the named skills batched (best of ``args.repeats``)."""
     config = TD3BCConfig()
-    inputs = [load_skill_input(data_dir, name, config) for name in names]
+    inputs = [load_skill_input(data_dir, name, config, ACTION_SCALE) for name in names]
     seeds = [skill_seed(0, name) for name in names]
     replay = BatchedReplay([i.data for i in inputs], config.batch_size, seeds, args.device)
     trainer = TD3BC(config, seeds, device=args.device)

@@ -27,8 +27,8 @@ from osg_control.classifier.data import (
 )
 from osg_control.classifier.metrics import EvaluationReport, evaluate_predictions
 from osg_control.classifier.motion import MOTION_FEATURES
-from osg_control.data.datasets import OBS_DIM
 from osg_control.domain.base import Domain
+from osg_control.domain.spaces import OBS_DIM
 from osg_control.errors import CheckpointError
 from osg_control.io_safety import atomic_write
 from osg_control.json_files import read_json_object

@@ -153,8 +153,8 @@ def _domain_values(args: argparse.Namespace) -> None:
             )
     if getattr(args, "randomize_objects", False) and not domain.objects:
         raise UsageError(
-            f"--randomize-objects: domain {domain.name!r} has no objects with a placement "
-            "region to randomize"
+            f"--randomize-objects: domain {domain.name!r} has no object with a placement "
+            "region (its Domain.objects is empty), so there is nothing to place"
         )
     _models(args, domain)
 

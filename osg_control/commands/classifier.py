@@ -218,7 +218,6 @@ def run_reach(args: argparse.Namespace) -> int:
             args.episodes,
             args.seed,
             args.workers,
-            perception.tcp_noise,
             executor,
             progress=not args.json,
             perception=perception,

@@ -181,7 +181,6 @@ def run_tasks(args: argparse.Namespace) -> int:
             args.episodes,
             args.seed,
             args.workers,
-            perception.tcp_noise,
             args.task,
             args.replans,
             args.filter,

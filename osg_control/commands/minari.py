@@ -96,7 +96,7 @@ def run_export(args: argparse.Namespace) -> int:
     """Export and print where the data set went."""
     from osg_control.data.minari_export import export_minari
 
-    target = export_minari(args.path, args.id, args.out, args.force, domain_of(args).env_id)
+    target = export_minari(args.path, args.id, domain_of(args), args.out, args.force)
     if args.json:
         print(dump_json({"id": args.id, "path": str(target)}, indent=None))
     else:

@@ -29,6 +29,7 @@ from osg_control.data.chunks import chunk_attrs, keep_chunk
 from osg_control.data.datasets import Dataset, Episode, load_dataset, write_episodes
 from osg_control.data.scripted import ScriptedPolicy
 from osg_control.domain.base import Domain
+from osg_control.domain.contract import SkillEnv
 from osg_control.domain.frames import (
     in_skill_frame,
     node_position,
@@ -40,7 +41,7 @@ from osg_control.domain.frames import (
 )
 from osg_control.domain.registry import get_domain
 from osg_control.domain.spec import SkillSpec
-from osg_control.environment.arm_env import ArmEnv, EnvConfig
+from osg_control.environment.config import EnvConfig
 from osg_control.parallel import LocalExecutor, TaskExecutor
 from osg_control.parallel.lazy import Jobs
 from osg_control.seeding import skill_seed
@@ -53,10 +54,10 @@ HOLD_STEPS = 10
 reached, and learned policies that missed the goal by a little under observation noise
 carried on past it (see docs/learning.md)."""
 
-_ENVS: dict[tuple[str, str], ArmEnv] = {}
+_ENVS: dict[tuple[str, str], SkillEnv] = {}
 
 
-def _env_for(domain: Domain, skill: SkillSpec) -> ArmEnv:
+def _env_for(domain: Domain, skill: SkillSpec) -> SkillEnv:
     """One env per skill per process, reused across episodes."""
     key = (domain.name, skill.to_json())
     if key not in _ENVS:
@@ -65,7 +66,7 @@ def _env_for(domain: Domain, skill: SkillSpec) -> ArmEnv:
 
 
 def placed_start_options(
-    domain: Domain, env: ArmEnv, skill: SkillSpec, placements: dict[str, np.ndarray]
+    domain: Domain, env: SkillEnv, skill: SkillSpec, placements: dict[str, np.ndarray]
 ) -> dict[str, Any]:
     """Reset options of a start with the domain's objects at ``placements``: the objects
     not held placed there (``env.placement_world``), the start node moved with its anchor."""
@@ -109,7 +110,7 @@ def run_scripted_episode(
     obs, info = env.reset(seed=reset_seed, options=options)
     offset = skill_offset(domain, skill, env.anchor_offsets)
     script = shifted_skill(skill, offset)
-    policy = ScriptedPolicy(script, rng, bounds=getattr(env, "action_bounds", None))
+    policy = ScriptedPolicy(script, rng, bounds=env.action_bounds)
     policy.reset()
     rows: dict[str, list[Any]] = {k: [] for k in ("obs", "next", "act", "rew", "term", "world")}
     hold_left: int | None = None  # steps still to record after the first success

@@ -46,13 +46,12 @@ from osg_control.data.validation import (
     check_episode_index,
     check_step_fields,
 )
+from osg_control.domain.spaces import ACTION_DIM, OBS_DIM
 from osg_control.errors import DatasetError
 from osg_control.io_safety import atomic_write
 from osg_control.json_files import parse_json
 
 FORMAT_VERSION = 1
-OBS_DIM = 10
-ACTION_DIM = 7
 UNKNOWN = "unknown"
 """``world_states`` attribute of a data set whose world states were not recorded (all NaN,
 e.g. imported from elsewhere): it trains a skill, but yields no effects for the graph."""

@@ -30,7 +30,7 @@ import numpy as np
 import pyarrow as pa
 import pyarrow.parquet as pq
 
-from osg_control.data.datasets import ACTION_DIM, OBS_DIM, Dataset, Episode
+from osg_control.data.datasets import Dataset, Episode
 from osg_control.data.lerobot_export import (
     CODEBASE_VERSION,
     FIELD_FEATURES,
@@ -41,6 +41,7 @@ from osg_control.data.lerobot_export import (
 from osg_control.data.minari_import import check_actions, write_import
 from osg_control.data.validation import check_step_fields
 from osg_control.domain.base import Domain
+from osg_control.domain.spaces import ACTION_DIM, OBS_DIM
 from osg_control.domain.spec import SkillSpec
 from osg_control.errors import DatasetError
 from osg_control.json_files import read_json_object

@@ -5,8 +5,10 @@ Layout (Minari's HDF5 storage, read by ``minari.load_dataset(ID)`` when
 
     ROOT/<namespace>/<name>-v<N>/data/
         metadata.json      dataset_id, totals, data_format "hdf5", the serialised
-                           observation/action spaces, env_spec (osg/Kitchen-v0 with the
-                           skill), minari_version, and the source's osg_* attributes
+                           observation/action spaces (the domain's: its action
+                           bounds, its robot's observation bounds), env_spec (e.g.
+                           osg/Kitchen-v0 with the skill), minari_version, and the
+                           source's osg_* attributes
         main_data.hdf5     episode_<i>/ (attrs id, total_steps)
                                observations (T+1, 10) float32: the T states, then the last
                                                                next state
@@ -32,6 +34,7 @@ import numpy as np
 
 from osg_control import __version__
 from osg_control.data.datasets import Dataset, hdf5_bytes, load_dataset
+from osg_control.domain.base import Domain
 from osg_control.errors import DatasetError
 from osg_control.io_safety import atomic_folder, refuse_package
 
@@ -84,18 +87,19 @@ def _env_spec(env_id: str | None, skill: str) -> str | None:
     return dataclasses.replace(gymnasium.spec(env_id), kwargs={"skill": skill}).to_json()
 
 
-def _metadata(data: Dataset, dataset_id: str, env_id: str | None) -> dict[str, Any]:
-    from osg_control.environment.arm_env import ACTION_BOUNDS, OBS_HIGH, OBS_LOW
-
+def _metadata(data: Dataset, dataset_id: str, domain: Domain) -> dict[str, Any]:
+    """Minari's metadata of ``data``: its spaces are the domain's (``action_bounds``, the
+    robot's ``observation_bounds``)."""
+    bounds = np.asarray(domain.action_bounds, dtype=float)
     return {
         "dataset_id": dataset_id,
         "total_episodes": data.num_episodes,
         "total_steps": data.num_steps,
         "data_format": "hdf5",
         "jpeg_encoding": False,
-        "observation_space": box_space(OBS_LOW, OBS_HIGH, "float32"),
-        "action_space": box_space(-ACTION_BOUNDS, ACTION_BOUNDS, "float32"),
-        "env_spec": _env_spec(env_id, data.skill_name),
+        "observation_space": box_space(*domain.observation_bounds(), "float32"),
+        "action_space": box_space(-bounds, bounds, "float32"),
+        "env_spec": _env_spec(domain.env_id, data.skill_name),
         "minari_version": MINARI_FORMAT_VERSION,
         "algorithm_name": str(data.attrs.get("collector", "osg-control")),
         "description": f"osg-control data set of skill {data.skill_name} ({data.path.name})",
@@ -140,15 +144,15 @@ def _episodes_bytes(data: Dataset) -> bytes:
 def export_minari(
     source: str | Path,
     dataset_id: str,
+    domain: Domain,
     root: Path | None = None,
     force: bool = False,
-    env_id: str | None = None,
 ) -> Path:
     """Write the data set file ``source`` as Minari data set ``dataset_id`` under ``root``.
 
     Args:
-        env_id: the Gymnasium id of the data's env (its domain's ``env_id``), recorded
-            as the data set's env spec.
+        domain: the data's domain: its spaces and its env's Gymnasium id (``env_id``,
+            recorded as the data set's env spec).
         root: the Minari data-sets folder (default: ``minari_root()``).
         force: replace an existing data set of that id.
 
@@ -166,7 +170,7 @@ def export_minari(
     if target.exists() and not force:
         raise DatasetError(f"{target} exists; pass --force to replace it")
     episodes = _episodes_bytes(data)
-    metadata = _metadata(data, dataset_id, env_id)
+    metadata = _metadata(data, dataset_id, domain)
     metadata["dataset_size"] = round(len(episodes) / 1e6, 1)
 
     def fill(staging: Path) -> None:

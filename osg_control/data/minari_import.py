@@ -27,8 +27,6 @@ import h5py
 import numpy as np
 
 from osg_control.data.datasets import (
-    ACTION_DIM,
-    OBS_DIM,
     UNKNOWN,
     Dataset,
     Episode,
@@ -38,6 +36,7 @@ from osg_control.data.datasets import (
 from osg_control.data.minari_export import DATA_DIR, MAIN_FILE, METADATA_FILE, minari_root
 from osg_control.data.validation import check_step_fields, check_within
 from osg_control.domain.base import Domain
+from osg_control.domain.spaces import ACTION_DIM, OBS_DIM
 from osg_control.domain.spec import SkillSpec
 from osg_control.environment.arm_env import success_holds
 from osg_control.errors import DatasetError

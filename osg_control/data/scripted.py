@@ -5,8 +5,8 @@ threshold ``~ N(mu_1, sigma_1^2)`` (or the waypoint's own ``reach``) from the wa
 with the error ``target - current`` (position [m] and orientation [rad], clipped by the
 env); else, if the gripper is not in the waypoint's state, switch it; else do nothing.
 Every action gets ``N(mu_2, sigma_2^2)`` noise on its motion components (orientation noise
-scaled by the bound ratio 0.1/0.02); the gripper component is left noise-free so that
-noise never toggles the gripper by itself.
+scaled by the ratio of the rotation and position bounds, 0.1/0.02 for the paper's); the
+gripper component is left noise-free so that noise never toggles the gripper by itself.
 """
 
 from __future__ import annotations
@@ -16,10 +16,9 @@ import numpy as np
 from osg_control.control.rotations import quat_to_matrix, rotation_error
 from osg_control.domain.spec import TOP_DOWN_QUAT, ScriptParams, SkillSpec
 from osg_control.environment.actions import scale_into
-from osg_control.environment.arm_env import ACTION_BOUNDS, GRIPPER_CLOSED_CMD, GRIPPER_OPEN_CMD
+from osg_control.environment.success import GRIPPER_CLOSED_CMD, GRIPPER_OPEN_CMD
 
 _TOP_DOWN_ROT = quat_to_matrix(np.array(TOP_DOWN_QUAT))
-_NOISE_SCALE = np.concatenate([np.ones(3), np.full(3, ACTION_BOUNDS[3] / ACTION_BOUNDS[0])])
 
 
 class ScriptedPolicy:
@@ -30,11 +29,15 @@ class ScriptedPolicy:
         skill: SkillSpec,
         rng: np.random.Generator,
         params: ScriptParams | None = None,
-        bounds: np.ndarray | None = None,
+        *,
+        bounds: np.ndarray,
     ) -> None:
         self.skill = skill
-        self.bounds = ACTION_BOUNDS if bounds is None else np.asarray(bounds, dtype=float)
-        """Per-step action bounds (default ``ArmEnv``'s; an env with its own passes them)."""
+        self.bounds = np.asarray(bounds, dtype=float)
+        """Per-step action bounds (the env's ``action_bounds``)."""
+        ratio = self.bounds[3] / self.bounds[0]
+        self._noise_scale = np.concatenate([np.ones(3), np.full(3, ratio)])
+        """The motion noise's scale: orientation noise scaled by the bound ratio."""
         self.params = params or skill.script
         self.rng = rng
         self.threshold = 0.0
@@ -76,6 +79,7 @@ class ScriptedPolicy:
             )
         elif obs[7] != wanted:
             action[6] = wanted
-        noise = self.rng.normal(self.params.noise_mean, self.params.noise_std, 6) * _NOISE_SCALE
+        noise = self.rng.normal(self.params.noise_mean, self.params.noise_std, 6)
+        noise *= self._noise_scale
         action[:6] += noise
         return np.clip(action, -self.bounds, self.bounds)

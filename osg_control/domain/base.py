@@ -22,8 +22,16 @@ from typing import Any, Protocol
 import numpy as np
 
 from osg_control.domain.benchmark import Benchmark, validate_benchmark
+from osg_control.domain.spaces import (
+    ACTION_DIM,
+    PAPER_ACTION_BOUNDS,
+    CheckedEnvFactory,
+    observation_bounds,
+    unbounded_observation,
+)
 from osg_control.domain.spec import Node, ObjectFrame, SkillSpec, check_skill_fields
 from osg_control.errors import DomainError, SkillSpecError, lookup
+from osg_control.perception.spec import SIMULATED_PERCEPTIONS
 
 
 @dataclass(frozen=True)
@@ -67,7 +75,7 @@ class StartRegion:
 
 EnvFactory = Callable[..., Any]
 """``make_env(skill=None, config=None, render_mode=None)``: a Gymnasium env of the domain
-(``osg_control.environment.ArmEnv`` or one with its methods)."""
+implementing ``domain.contract.SkillEnv`` (e.g. an ``osg_control.environment.ArmEnv``)."""
 
 
 class ImportSummary(Protocol):
@@ -114,7 +122,9 @@ class Domain:
         home: the node a task's PDDL problem starts at unless the task says otherwise.
         world_fields: the names of the world-state vector's entries.
         facts_of: world-state vector -> the facts that hold.
-        make_env: the env factory (see ``EnvFactory``).
+        make_env: the env factory (see ``EnvFactory``); the domain wraps it so that every
+            env it builds is checked against the domain (``spaces.CheckedEnvFactory``:
+            the contract, the spaces, ``action_bounds`` and ``perceptions``).
         hand_empty: the fact meaning nothing is held.
         watched_facts: preconditions a running skill must keep (lost: the skill stops).
         defaults_dir: the shipped skills and classifier (``skills/``, ``classifier/``,
@@ -129,8 +139,9 @@ class Domain:
         benchmark: an outside benchmark's protocol on this domain's env (``osg evaluate
             benchmark``), if any.
         action_bounds: the per-step bound of each of the 7 action components (m, rad,
-            gripper); its env clips to them and training scales by them (default: the
-            core's ``ArmEnv``'s 2 cm and 0.1 rad).
+            gripper), declared here only: its env clips to them, scripted collection,
+            training and the data-set exports scale by them (default: the paper's 2 cm and
+            0.1 rad, ``spaces.PAPER_ACTION_BOUNDS``).
         step_cost: plan cost per step of a skill's Algorithm 1 budget, added to its
             ``round(-ln p * 1000)`` (0: plans minimise failure only; a domain whose env has
             an episode step limit prefers the shorter of two likely plans with it).
@@ -161,11 +172,11 @@ class Domain:
     watched_facts: frozenset[str] = frozenset()
     defaults_dir: Path | None = None
     env_id: str | None = None
-    perceptions: tuple[str, ...] = ("paper", "robot", "sim")
+    perceptions: tuple[str, ...] = SIMULATED_PERCEPTIONS
     objects: tuple[ObjectFrame, ...] = ()
     published: Mapping[str, Any] = field(default_factory=dict)
     benchmark: Benchmark | None = None
-    action_bounds: tuple[float, ...] = (0.02, 0.02, 0.02, 0.1, 0.1, 0.1, 1.0)
+    action_bounds: tuple[float, ...] = PAPER_ACTION_BOUNDS
     step_cost: float = 0.0
     dataset_layouts: tuple[DatasetLayout, ...] = ()
     own_control_hz: float | None = None
@@ -176,6 +187,13 @@ class Domain:
     def __post_init__(self) -> None:
         object.__setattr__(self, "skills_by_name", {s.name: s for s in self.skills})
         validate_domain(self)
+        factory = self.make_env  # replace() passes the checked one: re-wrapped, not nested
+        if isinstance(factory, CheckedEnvFactory):
+            factory = factory.factory
+        checked = CheckedEnvFactory(
+            factory, self.name, tuple(self.action_bounds), tuple(self.perceptions)
+        )
+        object.__setattr__(self, "make_env", checked)
 
     def with_robot(self, robot: str) -> Domain:
         """This domain with its env built around the registered robot ``robot``.
@@ -193,6 +211,8 @@ class Domain:
             )
         if robot == self.robot:
             return self
+        checked = self.make_env
+        own_factory = checked.factory if isinstance(checked, CheckedEnvFactory) else checked
         defaults = None
         if self.defaults_dir is not None:
             defaults = self.defaults_dir.with_name(f"{self.defaults_dir.name}-{robot}")
@@ -200,7 +220,7 @@ class Domain:
             self,
             robot=robot,
             robot_is_default=False,
-            make_env=partial(self.make_env, robot=robot),
+            make_env=partial(own_factory, robot=robot),
             defaults_dir=defaults if defaults is not None and defaults.is_dir() else None,
         )
 
@@ -213,6 +233,15 @@ class Domain:
         from osg_control.robots.registry import get_robot
 
         return get_robot(self.robot).control_hz
+
+    def observation_bounds(self) -> tuple[np.ndarray, np.ndarray]:
+        """Its env's 10-D state bounds: its robot's (``spaces.observation_bounds``), or
+        unbounded for an env that drives its own arm."""
+        if self.robot is None:
+            return unbounded_observation()
+        from osg_control.robots.registry import get_robot
+
+        return observation_bounds(get_robot(self.robot))
 
     @property
     def cache_name(self) -> str:
@@ -372,7 +401,7 @@ def validate_domain(domain: Domain) -> None:
     for region in domain.start_regions:
         _check_facts(where, f"start_regions[{region.name}].facts", region.facts, facts)
     bounds = np.asarray(domain.action_bounds, dtype=float)
-    if bounds.shape != (7,) or not (np.all(np.isfinite(bounds)) and np.all(bounds > 0)):
+    if bounds.shape != (ACTION_DIM,) or not (np.all(np.isfinite(bounds)) and np.all(bounds > 0)):
         raise DomainError(
             f"{where}: field 'action_bounds' must be 7 positive finite numbers, got "
             f"{domain.action_bounds!r}"

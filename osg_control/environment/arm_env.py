@@ -7,7 +7,7 @@ the latched gripper command (+1 open, -1 closed), the gripper actuator's force m
 [N] and the distance between the fingers [m].
 
 Action (7-D): ``[dx, dy, dz, da, db, dg, g]`` — a relative TCP command (position [m],
-rotation vector [rad], base frame), each clipped to ``ACTION_BOUNDS``, and a gripper
+rotation vector [rad], base frame), each clipped to ``action_bounds``, and a gripper
 command: ``g < -0.5`` closes, ``g > 0.5`` opens, otherwise the gripper holds.
 
 The arm is a ``RobotDescription`` (``control.description``): its joints, limits, drives,
@@ -27,7 +27,6 @@ catalogue or scene object.
 
 from __future__ import annotations
 
-import logging
 from functools import partial
 from typing import Any
 
@@ -39,25 +38,21 @@ from osg_control.control.description import RobotDescription
 from osg_control.control.divergence import DivergenceWatch, non_finite_state
 from osg_control.control.ik import (
     DiffIKController,
-    joint_reset_controller,
     solve_ik,
 )
 from osg_control.control.robot_model import GRIPPER_ACTUATOR, HOME_KEY
 from osg_control.control.servo import uncap_drive
 from osg_control.domain.frames import offsets_of
-from osg_control.domain.spec import Node, SkillSpec
-from osg_control.environment.actions import checked_action
-from osg_control.environment.config import (
-    ACTION_BOUNDS,
+from osg_control.domain.spaces import (
+    ACTION_DIM,
     OBS_DIM,
-    OBS_HIGH,
-    OBS_LOW,
-    RESET_OPTIONS,
-    SIMULATED_PERCEPTIONS,
-    EnvConfig,
-    as_slice,
+    PAPER_ACTION_BOUNDS,
     observation_bounds,
 )
+from osg_control.domain.spec import Node, SkillSpec
+from osg_control.environment.actions import checked_action
+from osg_control.environment.config import RESET_OPTIONS, EnvConfig, as_slice
+from osg_control.environment.joint_reset import JointReset
 from osg_control.environment.options import (
     GRIPPER_STATES,
     check_env_arguments,
@@ -77,16 +72,11 @@ from osg_control.environment.success import GRIPPER_CLOSED_CMD, GRIPPER_OPEN_CMD
 from osg_control.errors import EnvOptionError, SimulationError
 from osg_control.perception.percept import Percept
 from osg_control.perception.sensors import noisy_world, sensor_slices
-
-_LOG = logging.getLogger(__name__)
+from osg_control.perception.spec import SIMULATED_PERCEPTIONS
 
 __all__ = [
-    "ACTION_BOUNDS",
     "GRIPPER_CLOSED_CMD",
     "GRIPPER_OPEN_CMD",
-    "OBS_DIM",
-    "OBS_HIGH",
-    "OBS_LOW",
     "ArmEnv",
     "EnvConfig",
     "success_holds",
@@ -108,11 +98,15 @@ class ArmEnv(SceneHooks, gym.Env):
         config: noise, step budget, IK and random-start options.
         render_mode: ``"rgb_array"`` for ``render``.
         robot: the arm (``control.description``; a domain's env gives its default).
+        action_bounds: the per-step bound of each action component (its domain's
+            ``action_bounds``; default the paper's).
     """
 
     metadata = {"render_modes": ["rgb_array"]}
     camera = "overview"
     """The model camera ``render`` uses."""
+    perceptions = SIMULATED_PERCEPTIONS
+    """The perceptions it simulates."""
 
     def __init__(
         self,
@@ -123,15 +117,16 @@ class ArmEnv(SceneHooks, gym.Env):
         render_mode: str | None = None,
         *,
         robot: RobotDescription,
+        action_bounds: tuple[float, ...] = PAPER_ACTION_BOUNDS,
     ) -> None:
         check_env_arguments(type(self).__name__, skill, config, EnvConfig)
         self.config = config or EnvConfig()
         self.robot = robot
         self.metadata = {**self.metadata, "render_fps": int(robot.control_hz)}
-        if self.config.perception.name not in SIMULATED_PERCEPTIONS:
+        if self.config.perception.name not in self.perceptions:
             raise EnvOptionError(
                 f"EnvConfig.perception: {type(self).__name__} simulates the perceptions "
-                f"{', '.join(SIMULATED_PERCEPTIONS)}, not {self.config.perception.name!r}"
+                f"{', '.join(self.perceptions)}, not {self.config.perception.name!r}"
             )
         self.nodes = nodes
         self.home = home
@@ -140,8 +135,7 @@ class ArmEnv(SceneHooks, gym.Env):
         self.model = self.build_model()
         self.data = mujoco.MjData(self.model)
         self.ik = DiffIKController(robot, self.config.ik)
-        self._reset_ik: DiffIKController | None = None
-        self._said_no_null_space = False
+        self._joint_reset = JointReset(robot, self.config.ik)
         self.n_substeps = robot.substeps(self.model.opt.timestep)
         joints = robot.arm.names
         self._arm_qpos = as_slice([self.model.joint(j).qposadr[0] for j in joints])
@@ -174,7 +168,11 @@ class ArmEnv(SceneHooks, gym.Env):
         }
         """The robot's bodies: those under its base (attached to the scene's world)."""
         self.observation_space = gym.spaces.Box(*observation_bounds(robot), (OBS_DIM,), np.float64)
-        self.action_space = gym.spaces.Box(-ACTION_BOUNDS, ACTION_BOUNDS, (7,), np.float64)
+        self.action_bounds = np.array(action_bounds, dtype=float)
+        """The per-step bound of each action component; steps clip to them."""
+        self.action_space = gym.spaces.Box(
+            -self.action_bounds, self.action_bounds, (ACTION_DIM,), np.float64
+        )
         self._gripper_cmd = GRIPPER_OPEN_CMD
         self._steps = 0
         self._succeeded = False
@@ -405,12 +403,12 @@ class ArmEnv(SceneHooks, gym.Env):
 
     # ----------------------------------------------------------------- step
     def check_action(self, action: np.ndarray) -> np.ndarray:
-        """Validate an action (shape (7,), finite) and clip it to ``ACTION_BOUNDS``.
+        """Validate an action (shape (7,), finite) and clip it to ``action_bounds``.
 
         Raises:
             ValueError: wrong shape or NaN/inf; nothing reaches the actuators.
         """
-        return checked_action(action, ACTION_BOUNDS)
+        return checked_action(action, self.action_bounds)
 
     def step(self, action: np.ndarray) -> tuple[np.ndarray, float, bool, bool, dict[str, Any]]:
         """Apply one 50 ms control step (see module docstring).
@@ -516,17 +514,9 @@ class ArmEnv(SceneHooks, gym.Env):
 
     # ----------------------------------------------------------------- joint reset
     def joint_reset(self, max_steps: int = 40, tolerance: float = 0.05) -> int:
-        """Drive the joints toward the home posture while the TCP holds its pose.
-
-        Null-space motion: the TCP pose is an equality constraint of the IK QP and the
-        posture task pulls toward ``IKConfig.posture`` (the robot's home by default). An arm
-        without a null space (six joints or fewer, ``RobotDescription.redundant``) cannot
-        move with its TCP held: the reset logs so once and returns 0. Runs until every
-        joint is within
-        ``tolerance`` [rad] of the posture or the posture error stops shrinking. Decided
-        from the encoders alone, as a robot's controller would: the joints are read (with
-        the perception's encoder noise) every step, the TCP is held where forward
-        kinematics of the joints read at its start puts it.
+        """Drive the joints toward the home posture (``IKConfig.posture``) while the TCP
+        holds its pose (``joint_reset.JointReset``: null-space motion from the encoders,
+        with the perception's encoder noise; an arm without a null space takes no step).
 
         Returns:
             The number of control steps used.
@@ -534,42 +524,13 @@ class ArmEnv(SceneHooks, gym.Env):
         Raises:
             SimulationError: the physics diverged (or the joint state is non-finite).
         """
+        encoders = partial(self.sensors.encoders, self.data, self.config.perception, self.np_random)
         try:
-            return self._drive_to_posture(max_steps, tolerance)
+            return self._joint_reset.run(
+                self.data, encoders, self.ik.posture, self._simulate, max_steps, tolerance
+            )
         finally:
             self._perceive()
-
-    def _drive_to_posture(self, max_steps: int, tolerance: float) -> int:
-        """``joint_reset``'s loop (the percept is refreshed after it, whatever happens)."""
-        if not self.robot.redundant:
-            if not self._said_no_null_space:
-                _LOG.info(
-                    "joint reset skipped: robot %r has %d joints, no null space under its TCP task",
-                    self.robot.name,
-                    self.robot.n_joints,
-                )
-                self._said_no_null_space = True
-            return 0
-        if self._reset_ik is None:
-            self._reset_ik = joint_reset_controller(self.robot, self.config.ik)
-        encoders = partial(self.sensors.encoders, self.data, self.config.perception, self.np_random)
-        joints = encoders()
-        held: tuple[np.ndarray, np.ndarray] | None = None  # the TCP pose to hold
-        posture = self.ik.posture
-        previous = np.inf
-        for step in range(max_steps):
-            error = float(np.abs(joints - posture).max())
-            if error < tolerance or error > previous - 1e-4:
-                return step
-            previous = error
-            diverged = non_finite_state(self.data, ("qpos",))
-            if diverged is None:
-                held = held or self._reset_ik.tcp_pose(joints)
-                diverged = self._simulate(self._reset_ik.reset_step(joints, *held))
-            if diverged is not None:
-                raise SimulationError(f"{diverged} during joint reset")
-            joints = encoders()
-        return max_steps
 
     # ----------------------------------------------------------------- render
     def render(self) -> np.ndarray | None:  # type: ignore[override]

@@ -1,5 +1,6 @@
-"""The env's options and fixed facts: ``EnvConfig``, the observation and action sizes and
-bounds, the simulated perceptions and the reset options ``ArmEnv`` knows."""
+"""The env's options and fixed facts: ``EnvConfig`` and the reset options ``ArmEnv`` knows
+(the state and action sizes and bounds are ``domain.spaces``'s, the simulated perceptions
+``perception.spec.SIMULATED_PERCEPTIONS``)."""
 
 from __future__ import annotations
 
@@ -8,25 +9,11 @@ from typing import ClassVar
 
 import numpy as np
 
-from osg_control.control.description import RobotDescription
 from osg_control.control.ik import IKConfig
 from osg_control.environment.options import Bounds, check_fields
 from osg_control.errors import EnvOptionError
 from osg_control.perception.spec import PerceptionSpec
 
-OBS_DIM = 10
-ACTION_BOUNDS = np.array([0.02, 0.02, 0.02, 0.1, 0.1, 0.1, 1.0])
-"""Per-step bound of each action component: 2 cm, 0.1 rad, and the gripper's [-1, 1]."""
-OBS_LOW = np.array([-2.0, -2.0, -2.0, -1.0, -1.0, -1.0, -1.0, -1.0, 0.0, -0.01])
-OBS_HIGH = np.array([2.0, 2.0, 2.0, 1.0, 1.0, 1.0, 1.0, 1.0, 70.0, 0.1])
-"""Observation bounds: TCP position within 2 m of the base (reach 0.86 m, plus noise), a
-unit quaternion, the gripper command, its force (a 70 N gripper's force range) and the
-finger distance (0 to 8 cm, with slack for contact penetration); an env's own bounds take
-its robot's gripper force and opening (``observation_bounds``)."""
-WIDTH_SLACK = 0.02
-"""Slack [m] on the finger distance's bound beyond the gripper's opening."""
-SIMULATED_PERCEPTIONS = ("paper", "robot", "sim")
-"""The perceptions an ``ArmEnv`` simulates (``env`` is an outside env's own observation)."""
 RESET_OPTIONS = ("node", "position", "radius", "angle", "gripper", "facts", "world", "holding")
 """The options ``ArmEnv.reset`` knows; any other name is refused."""
 
@@ -78,14 +65,6 @@ class EnvConfig:
             )
         if not isinstance(self.ik, IKConfig):
             raise EnvOptionError(f"EnvConfig.ik must be an IKConfig, got {self.ik!r}")
-
-
-def observation_bounds(robot: RobotDescription) -> tuple[np.ndarray, np.ndarray]:
-    """``OBS_LOW``, ``OBS_HIGH`` with the robot's grip force and finger opening."""
-    high = OBS_HIGH.copy()
-    high[8] = robot.gripper.force
-    high[9] = robot.gripper.max_opening + WIDTH_SLACK
-    return OBS_LOW.copy(), high
 
 
 def as_slice(indices: list[int]) -> slice | np.ndarray:

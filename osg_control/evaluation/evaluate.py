@@ -13,7 +13,7 @@ episodes.
 from __future__ import annotations
 
 from collections.abc import Iterable, Sequence
-from dataclasses import dataclass, replace
+from dataclasses import dataclass
 from functools import cache
 from pathlib import Path
 from typing import Any
@@ -22,10 +22,10 @@ import numpy as np
 from tqdm import tqdm
 
 from osg_control.domain.base import Domain
+from osg_control.domain.contract import SkillEnv
 from osg_control.domain.frames import sample_placements
 from osg_control.domain.registry import get_domain
 from osg_control.domain.spec import nearest_start
-from osg_control.environment.arm_env import ArmEnv
 from osg_control.evaluation.resume import resumable_results, stored_count, stored_flag
 from osg_control.execution.executor import task_env_config
 from osg_control.parallel import LocalExecutor, TaskExecutor
@@ -55,11 +55,6 @@ def cell_means(
     return sums / per_cell
 
 
-def at_noise(perception: PerceptionSpec, noise: float) -> PerceptionSpec:
-    """``perception`` with the paper's TCP noise ``noise`` [m] (a Table I column)."""
-    return replace(perception, tcp_noise=float(noise))
-
-
 @cache
 def cached_executor(
     domain: str, models: str | None, max_replans: int, filter_gain: float | None
@@ -73,7 +68,7 @@ def cached_executor(
 
 
 @cache
-def _plain_env(domain: str, perception: PerceptionSpec) -> ArmEnv:
+def _plain_env(domain: str, perception: PerceptionSpec) -> SkillEnv:
     return get_domain(domain).make_env(config=task_env_config(perception))
 
 
@@ -93,7 +88,7 @@ class StartEpisode:
     randomize: bool = False
 
 
-def _reset_in_region(env: ArmEnv, task: StartEpisode, facts: Sequence[str]) -> np.ndarray:
+def _reset_in_region(env: SkillEnv, task: StartEpisode, facts: Sequence[str]) -> np.ndarray:
     """A start in the episode's region; with ``randomize`` the objects placed at random in
     their regions (drawn after the reset seed: the fixed-placement starts are unchanged)."""
     rng = episode_rng(task.seed, task.name, task.cell, task.index)
@@ -153,19 +148,18 @@ def reach_table(
     episodes: int = 200,
     seed: int = 0,
     workers: int = 2,
-    noise: float = 0.0,
     executor: TaskExecutor | None = None,
     progress: bool = False,
     perception: PerceptionSpec | None = None,
 ) -> dict[str, Any]:
     """Table III: entry-skill success from random starts around the domain's start regions.
 
-    ``noise``: the paper's TCP noise [m] added to ``perception``'s (default: the paper's
-    protocol); ``executor``: where the episodes run (default: a local pool of
-    ``workers``); ``progress``: show a progress bar on stderr.
+    ``perception``: what the robot perceives, whole as the command line gave it (default:
+    the paper's protocol without noise); ``executor``: where the episodes run (default: a
+    local pool of ``workers``); ``progress``: show a progress bar on stderr.
     """
     regions = domain.start_regions
-    seen = at_noise(perception or PerceptionSpec(), noise)
+    seen = perception or PerceptionSpec()
     tasks = grid(
         range(len(regions)),
         episodes,
@@ -186,7 +180,7 @@ def reach_table(
     return {
         "episodes": episodes,
         "seed": seed,
-        "noise": noise,
+        "noise": seen.tcp_noise,
         "perception": seen.to_dict(),
         "rows": rows,
         "average": float(results[:, 0].mean()),
@@ -277,7 +271,6 @@ def task_table(
     episodes: int = 100,
     seed: int = 0,
     workers: int = 2,
-    noise: float = 0.02,
     tasks: Sequence[str] | None = None,
     replans: Sequence[int] = (0, 2),
     filter_gain: float | None = None,
@@ -293,16 +286,17 @@ def task_table(
     once, with the largest budget in ``replans``, and scored for every budget
     (``run_task_episode``).
 
-    ``noise``: the paper's TCP noise [m] added to ``perception``'s (default: the paper's
-    protocol); ``tasks``: task names (default: all the domain's); ``filter_gain``: the executor's
-    ``TcpFilter`` gain (None: raw observations); ``executor``: where the episodes run
-    (default: a local pool of ``workers``); ``resume_dir``: keep finished episodes there and
-    resume from them (``resume``); ``progress``: show a progress bar on stderr.
+    ``perception``: what the robot perceives, whole as the command line gave it (default:
+    the paper's protocol at its 2 cm); ``tasks``: task names (default: all the domain's);
+    ``filter_gain``: the executor's ``TcpFilter`` gain (None: raw observations);
+    ``executor``: where the episodes run (default: a local pool of ``workers``);
+    ``resume_dir``: keep finished episodes there and resume from them (``resume``);
+    ``progress``: show a progress bar on stderr.
     """
     regions = domain.start_regions
     tasks = [domain.task(t).name for t in (tasks or [t.name for t in domain.tasks])]
     cells = [(t, r) for t in tasks for r in range(len(regions))]
-    seen = at_noise(perception or PerceptionSpec(), noise)
+    seen = perception or PerceptionSpec(tcp_noise=0.02)
     budgets = tuple(int(k) for k in replans)
 
     def job(cell: tuple[str, int], i: int) -> TaskEpisode:
@@ -325,7 +319,7 @@ def task_table(
     return {
         "episodes": episodes,
         "seed": seed,
-        "noise": noise,
+        "noise": seen.tcp_noise,
         "perception": seen.to_dict(),
         "randomized_objects": randomize,
         "filter_gain": filter_gain,

@@ -13,8 +13,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from osg_control.domain.contract import JointSpeedEnv
 from osg_control.domain.frames import in_skill_frame, offsets_of
-from osg_control.environment.arm_env import ACTION_BOUNDS, ArmEnv
 
 START = {"radius": 0.05, "angle": 0.1}
 """Random starts within 5 cm and 0.1 rad of the skill's start node."""
@@ -34,7 +34,7 @@ class SpeedCheck:
 
 
 def peak_joint_speed(
-    env: ArmEnv, policy: Callable[[np.ndarray], np.ndarray], episodes: int
+    env: JointSpeedEnv, policy: Callable[[np.ndarray], np.ndarray], episodes: int
 ) -> SpeedCheck:
     """Run ``policy`` on ``env``'s skill for ``episodes`` episodes (seeds 0, 1, ...), each
     followed by the joint reset; the peak speed ratio and the successes.
@@ -61,7 +61,7 @@ def peak_joint_speed(
     return SpeedCheck(peak, successes)
 
 
-def _skill_frame(env: ArmEnv, anchor: str | None, obs: np.ndarray) -> np.ndarray:
+def _skill_frame(env: JointSpeedEnv, anchor: str | None, obs: np.ndarray) -> np.ndarray:
     """The observation in the skill's frame: relative to its object as perceived."""
     if anchor is None:
         return obs
@@ -69,7 +69,7 @@ def _skill_frame(env: ArmEnv, anchor: str | None, obs: np.ndarray) -> np.ndarray
     return in_skill_frame(obs, offsets[anchor])
 
 
-def full_speed_peak(env: ArmEnv, direction: str, steps: int = FULL_SPEED_STEPS) -> float:
+def full_speed_peak(env: JointSpeedEnv, direction: str, steps: int = FULL_SPEED_STEPS) -> float:
     """The peak ``|qvel| / limit`` under ``steps`` TCP commands at the action bound along
     ``direction`` (one of ``DIRECTIONS``) from the env's home node (seed 0).
 
@@ -80,7 +80,7 @@ def full_speed_peak(env: ArmEnv, direction: str, steps: int = FULL_SPEED_STEPS) 
         raise ValueError(f"unknown direction {direction!r}; known directions: {DIRECTIONS}")
     axis = "xyz".index(direction[1])
     action = np.zeros(7)
-    action[axis] = ACTION_BOUNDS[axis] * (1.0 if direction[0] == "+" else -1.0)
+    action[axis] = env.action_bounds[axis] * (1.0 if direction[0] == "+" else -1.0)
     env.reset(seed=0, options={"node": env.home})
     for _ in range(steps):
         env.step(action)

@@ -9,7 +9,7 @@ neither on the number of workers nor on the other skills.
 from __future__ import annotations
 
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from functools import cache
 from pathlib import Path
 from typing import Any
@@ -19,10 +19,11 @@ import numpy as np
 from osg_control.control.estimator import MOTION_MODEL, FilteredPolicy
 from osg_control.data.collect import placed_start_options, run_scripted_episode
 from osg_control.domain.base import Domain
+from osg_control.domain.contract import SkillEnv
 from osg_control.domain.frames import in_skill_frame, sample_placements, skill_offset
 from osg_control.domain.registry import get_domain
-from osg_control.environment.arm_env import ArmEnv, EnvConfig
-from osg_control.evaluation.evaluate import at_noise, cell_means, episode_rng
+from osg_control.environment.config import EnvConfig
+from osg_control.evaluation.evaluate import cell_means, episode_rng
 from osg_control.execution.objects import ObjectTracker
 from osg_control.learning.checkpoints import require_skills
 from osg_control.parallel import LocalExecutor, TaskExecutor
@@ -39,7 +40,7 @@ def _policy(domain: str, directory: str, skill: str) -> Any:
 
 
 @cache
-def _env(domain: str, skill: str, perception: PerceptionSpec) -> ArmEnv:
+def _env(domain: str, skill: str, perception: PerceptionSpec) -> SkillEnv:
     found = get_domain(domain)
     return found.make_env(skill=found.skill(skill), config=EnvConfig(perception=perception))
 
@@ -124,7 +125,7 @@ def learned_rates(
 
     def job(cell: tuple[str, int, float], i: int) -> SkillEpisode:
         name, k, noise = cell
-        seen = at_noise(perception, noise)
+        seen = replace(perception, tcp_noise=noise)  # Table I's column k
         return SkillEpisode(
             domain.name, name, str(policy_dir), seen, seed, first_cell + k, i, filter_gain,
             randomize, filter_motion,

@@ -38,6 +38,7 @@ from osg_control.control.estimator import (
     check_motion_model,
 )
 from osg_control.domain.base import Domain
+from osg_control.domain.contract import SkillEnv
 from osg_control.domain.frames import (
     Offsets,
     in_skill_frame,
@@ -46,7 +47,6 @@ from osg_control.domain.frames import (
 )
 from osg_control.domain.spec import SkillSpec
 from osg_control.environment.arm_env import GRIPPER_OPEN_CMD, EnvConfig
-from osg_control.environment.contract import SkillEnv
 from osg_control.environment.success import success_holds
 from osg_control.errors import SimulationError
 from osg_control.execution import MAX_REPLANS

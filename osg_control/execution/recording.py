@@ -34,7 +34,7 @@ from typing import Any
 import numpy as np
 
 from osg_control.domain.base import Domain
-from osg_control.environment.contract import SkillEnv
+from osg_control.domain.contract import SkillEnv
 from osg_control.errors import UsageError
 from osg_control.io_safety import atomic_write
 

@@ -13,12 +13,13 @@ frame = the env's frame; the robot base stands at (0, 0, 1.8)): ``[x, y, z, qw, 
 qz, gripper command, grip force, finger distance]`` of the ``end_effector`` site.
 
 Action (7-D): ``[dx, dy, dz, da, db, dg, g]``, relative TCP position [m] and rotation
-vector [rad], clipped to ``ACTION_BOUNDS`` (4 cm and 0.2 rad per 80 ms step: 0.5 m/s, which
-keeps a whole kitchen-complete path of about 3 m within the 280-step limit; the 2 cm of the
-core's own kitchen is too slow here), and a gripper command (``g < -0.5`` closes,
-``g > 0.5`` opens). mink's differential IK on an arm-only model compiled from the env's own
-MJCF (``franka.arm``), with the joint limits the env enforces (the intersection of the MJCF
-joint ranges, the actuators' control ranges and ``franka_config.xml``'s position bounds),
+vector [rad], clipped to the domain's ``action_bounds`` (``poses.ACTION_BOUNDS``: 4 cm and
+0.2 rad per 80 ms step: 0.5 m/s, which keeps a whole kitchen-complete path of about 3 m
+within the 280-step limit; the 2 cm of the core's own kitchen is too slow here), and a
+gripper command (``g < -0.5`` closes, ``g > 0.5`` opens). mink's differential IK on an
+arm-only model compiled from the env's own MJCF (``franka.arm``), with the joint limits the
+env enforces (the intersection of the MJCF joint ranges, the actuators' control ranges and
+``franka_config.xml``'s position bounds),
 gives a joint velocity ``v`` for the commanded pose from the perceived joints (``env``: the
 observed ones, as the env's own servo target ``observed qpos + 2 a dt``; ``sim``: the true
 ones); the env's action is ``a = v / 2``, scaled as a whole vector so that ``max |a| <= 1``:
@@ -40,6 +41,7 @@ import gymnasium as gym
 import numpy as np
 
 from osg_control.control.divergence import DivergenceWatch, non_finite_state
+from osg_control.domain.spaces import ACTION_DIM, OBS_DIM, unbounded_observation
 from osg_control.domain.spec import Node, SkillSpec
 from osg_control.environment.actions import checked_action
 from osg_control.environment.options import check_env_arguments, check_facts_hold
@@ -58,6 +60,7 @@ from osg_control.franka.arm import (
 from osg_control.franka.domain import CONTROL_HZ
 from osg_control.franka.perception import (
     ARM,
+    PERCEPTIONS,
     REFERENCE_QUAT,
     ROBOT_QVEL,
     FrankaSensors,
@@ -65,9 +68,7 @@ from osg_control.franka.perception import (
 )
 from osg_control.perception.percept import Percept
 
-ACTION_BOUNDS = np.array(poses.ACTION_BOUNDS)
-"""Per-step bound of each action component: 4 cm, 0.2 rad (per 80 ms step), gripper."""
-__all__ = ["ACTION_BOUNDS", "REFERENCE_QUAT", "FrankaKitchenAdapter", "check_kitchen"]
+__all__ = ["REFERENCE_QUAT", "FrankaKitchenAdapter", "check_kitchen"]
 RESET_OPTIONS = setup.RESET_OPTIONS
 
 
@@ -111,6 +112,8 @@ class FrankaKitchenAdapter(gym.Env):
     """
 
     metadata = {"render_modes": ["rgb_array"], "render_fps": int(CONTROL_HZ)}
+    perceptions = PERCEPTIONS
+    """The perceptions it supports (``franka.perception``)."""
 
     def __init__(
         self,
@@ -152,9 +155,12 @@ class FrankaKitchenAdapter(gym.Env):
         self._arm_dof = np.array([self.model.joint(j).dofadr[0] for j in ARM_JOINTS])
         self.sensors = FrankaSensors(self.kitchen, self.ik.tcp_pose, world_of, facts_of)
         self._arm_qpos = self.sensors.arm_qpos
-        self.observation_space = gym.spaces.Box(-np.inf, np.inf, (10,), np.float64)
-        self.action_space = gym.spaces.Box(-ACTION_BOUNDS, ACTION_BOUNDS, (7,), np.float64)
-        self.action_bounds = ACTION_BOUNDS
+        self.observation_space = gym.spaces.Box(*unbounded_observation(), (OBS_DIM,), np.float64)
+        self.action_bounds = np.array(poses.ACTION_BOUNDS)
+        """The domain's ``action_bounds``: steps clip to them."""
+        self.action_space = gym.spaces.Box(
+            -self.action_bounds, self.action_bounds, (ACTION_DIM,), np.float64
+        )
         self._gripper_cmd = GRIPPER_OPEN_CMD
         self._succeeded = False
         self._steps = 0
@@ -189,6 +195,12 @@ class FrankaKitchenAdapter(gym.Env):
     def world_state(self) -> np.ndarray:
         """Truth: the domain's world-state vector (true object qpos, contact grasp)."""
         return self.sensors.true_world()
+
+    def placement_world(
+        self, placements: dict[str, np.ndarray], holding: str | None
+    ) -> dict[str, Any]:
+        """No ``world`` option: the kitchen's objects are fixtures, none is placed."""
+        return {}
 
     def facts_of(self, world: np.ndarray) -> frozenset[str]:
         """The domain's facts of a world-state vector."""
@@ -335,12 +347,12 @@ class FrankaKitchenAdapter(gym.Env):
         return list(self.last_env_info.get("episode_task_completions", []))
 
     def check_action(self, action: np.ndarray) -> np.ndarray:
-        """Validate (shape (7,), finite) and clip to ``ACTION_BOUNDS``.
+        """Validate (shape (7,), finite) and clip to ``action_bounds``.
 
         Raises:
             ValueError: wrong shape or NaN/inf; nothing reaches the env.
         """
-        return checked_action(action, ACTION_BOUNDS)
+        return checked_action(action, self.action_bounds)
 
     def env_action(self, action: np.ndarray) -> np.ndarray:
         """The env's 9-D action for a (clipped) 7-D TCP action at the perceived state."""

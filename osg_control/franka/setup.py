@@ -118,7 +118,9 @@ def set_up(adapter: Any, node: str, seed: int | None) -> None:
             done = True
             for setup in chain:
                 params = None if attempt else NOISE_FREE
-                policy = ScriptedPolicy(setup, adapter.script_rng, params, adapter.action_bounds)
+                policy = ScriptedPolicy(
+                    setup, adapter.script_rng, params, bounds=adapter.action_bounds
+                )
                 policy.reset()
                 while not policy.done and not adapter.skill_success(setup):
                     # The true state: the set-up prepares the scene, it is not the

@@ -12,8 +12,8 @@ import mujoco
 import numpy as np
 
 from osg_control.data.collect import placed_start_options
+from osg_control.domain.contract import SkillEnv
 from osg_control.domain.frames import sample_placements
-from osg_control.environment.contract import SkillEnv
 from osg_control.execution.executor import Executor
 from osg_control.kitchen.env import KitchenEnv
 from osg_control.kitchen.skills import CUBE

@@ -21,15 +21,13 @@ from osg_control.domain.spec import SkillSpec
 from osg_control.environment.arm_env import ArmEnv, EnvConfig
 from osg_control.errors import SkillSpecError, lookup
 from osg_control.kitchen.detectors import WORLD_SENSORS, detect_grasps
-from osg_control.kitchen.domain import DEFAULT_ROBOT
+from osg_control.kitchen.domain import DEFAULT_ROBOT, facts_of
 from osg_control.kitchen.options import WORLD_OPTIONS, check_world_options
 from osg_control.kitchen.scene import SceneIndex, build_kitchen_model
 from osg_control.kitchen.skills import CUBE, DOOR_OPENED, NODES, SKILLS_BY_NAME, WORLD_FACTS
 from osg_control.kitchen.world import (
     CUBE_HALF_SIZE,
     WorldState,
-    world_facts,
-    world_state_from_array,
 )
 from osg_control.robots.registry import get_robot
 
@@ -90,9 +88,8 @@ class KitchenEnv(ArmEnv):
         """``world.WORLD_FIELDS`` of the current state."""
         return self.scene.read(self.model, self.data).as_array()
 
-    def facts_of(self, world: np.ndarray) -> frozenset[str]:
-        """``world.world_facts`` of a world-state vector."""
-        return world_facts(world_state_from_array(world))
+    facts_of = staticmethod(facts_of)
+    """The domain's ``facts_of`` (``world.world_facts`` of a world-state vector)."""
 
     def placement_offsets(self, world: dict[str, Any]) -> dict[str, np.ndarray]:
         """The cube's displacement when ``world`` places it (``cube_pos``)."""

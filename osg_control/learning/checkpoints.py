@@ -31,7 +31,7 @@ from safetensors.numpy import load as load_safetensors
 from safetensors.numpy import save as save_safetensors
 
 from osg_control import __version__
-from osg_control.data.datasets import ACTION_DIM, OBS_DIM
+from osg_control.domain.spaces import ACTION_DIM, OBS_DIM
 from osg_control.domain.spec import SkillSpec, skill_from_json
 from osg_control.errors import CheckpointError, SkillSpecError
 from osg_control.io_safety import atomic_write

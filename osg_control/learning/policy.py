@@ -6,7 +6,7 @@ from pathlib import Path
 
 import numpy as np
 
-from osg_control.data.datasets import ACTION_DIM, OBS_DIM
+from osg_control.domain.spaces import ACTION_DIM, OBS_DIM
 from osg_control.errors import CheckpointError
 from osg_control.learning.checkpoints import (
     SIDECAR_SUFFIX,

@@ -13,8 +13,6 @@ from osg_control.data.datasets import Dataset
 from osg_control.errors import DatasetError
 from osg_control.learning.checkpoints import normalise_observations
 
-ACTION_SCALE = np.array([0.02, 0.02, 0.02, 0.1, 0.1, 0.1, 1.0], dtype=np.float32)
-"""Per-step action bounds: position [m] (x3), angles [rad] (x3), gripper command (unitless)."""
 ACTION_TOLERANCE = 1e-4
 """Relative amount by which a stored action may exceed its bound (float rounding) [-]."""
 OBS_NORM_EPS = 1e-2
@@ -58,14 +56,15 @@ class SkillData:
 
 def prepare_skill_data(
     dataset: Dataset,
-    action_scale: np.ndarray = ACTION_SCALE,
+    action_scale: np.ndarray,
     eps: float = OBS_NORM_EPS,
 ) -> SkillData:
     """Normalise a loaded data set into training transitions.
 
     Args:
         dataset: the skill's data set (``datasets.load_dataset``).
-        action_scale: (action_dim,) per-dimension action bound, physical units.
+        action_scale: (action_dim,) per-dimension action bound, physical units (the
+            domain's ``action_bounds``).
         eps: added to the observation std (default: ``OBS_NORM_EPS``, ``TD3BCConfig``'s default).
 
     Returns:

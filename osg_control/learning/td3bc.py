@@ -29,7 +29,7 @@ from typing import Any
 import numpy as np
 import torch
 
-from osg_control.data.datasets import ACTION_DIM, OBS_DIM
+from osg_control.domain.spaces import ACTION_DIM, OBS_DIM
 from osg_control.learning.replay import OBS_NORM_EPS, Batch
 
 

@@ -42,6 +42,9 @@ PERCEPTIONS: dict[str, str] = {
     "sim": "the simulator's state (an oracle)",
 }
 """The known perceptions and what each perceives."""
+SIMULATED_PERCEPTIONS: tuple[str, ...] = ("paper", "robot", "sim")
+"""The perceptions an ``ArmEnv`` simulates (``env`` is an outside env's own observation),
+also a ``Domain``'s default ``perceptions``."""
 
 
 @dataclass(frozen=True)

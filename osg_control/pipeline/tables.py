@@ -175,7 +175,6 @@ def table_iii(
         episodes,
         seed,
         workers,
-        perception.tcp_noise,
         progress=progress,
         perception=perception,
     )
@@ -201,7 +200,6 @@ def tables_iv_v(
         episodes,
         seed,
         workers,
-        perception.tcp_noise,
         filter_gain=filter_gain,
         progress=progress,
         perception=perception,

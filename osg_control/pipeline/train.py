@@ -17,13 +17,14 @@ from typing import Any
 import numpy as np
 import torch
 
-from osg_control.data.datasets import ACTION_DIM, OBS_DIM, load_dataset
+from osg_control.data.datasets import load_dataset
 from osg_control.domain.base import Domain
+from osg_control.domain.spaces import ACTION_DIM, OBS_DIM
 from osg_control.domain.spec import SkillSpec, skill_from_json
 from osg_control.errors import DatasetError, OSGError, SkillSpecError
 from osg_control.io_safety import check_output_dir
 from osg_control.learning.checkpoints import Checkpoint, Layer, save_checkpoint, sha256_file
-from osg_control.learning.replay import ACTION_SCALE, BatchedReplay, SkillData, prepare_skill_data
+from osg_control.learning.replay import BatchedReplay, SkillData, prepare_skill_data
 from osg_control.learning.td3bc import TD3BC, TD3BCConfig
 from osg_control.pipeline.resume import untrained_skills
 from osg_control.pipeline.training_loop import (
@@ -108,7 +109,7 @@ def skill_names(domain: Domain, names: list[str]) -> list[str]:
 
 
 def load_skill_input(
-    data_dir: Path, name: str, config: TD3BCConfig, action_scale: np.ndarray = ACTION_SCALE
+    data_dir: Path, name: str, config: TD3BCConfig, action_scale: np.ndarray
 ) -> SkillInput:
     """Load and normalise ``<data_dir>/<name>.h5`` (observation eps from ``config``, actions
     per ``action_scale``: the domain's ``action_bounds``).
