@@ -15,6 +15,7 @@ from osg_control.commands import (
     add_filter_argument,
     add_perception_arguments,
     add_randomize_argument,
+    camera_setups,
     domain_of,
     perception_of,
 )
@@ -161,9 +162,16 @@ def run_task(args: argparse.Namespace) -> int:
         payload = {
             "models": models,
             "perception": perception.to_dict(),
+            **(
+                {"cameras": camera_setups(domain, perception)}
+                if perception.name == "camera"
+                else {}
+            ),
             "episodes": results,
             "success_rate": successes / len(results),
         }
+        if perception.name == "camera":
+            payload["cameras"] = camera_setups(domain, perception)
         print(json.dumps(payload, indent=2))
     else:
         print(f"success rate {successes}/{len(results)}")

@@ -54,6 +54,7 @@ from osg_control.control.servo import uncap_drive
 from osg_control.domain.frames import node_position, offsets_of
 from osg_control.domain.spec import Node, ObjectFrame, SkillSpec
 from osg_control.environment.actions import checked_action
+from osg_control.environment.camera_sensing import CameraPerception, CameraSensing
 from osg_control.environment.options import (
     GRIPPER_STATES,
     Bounds,
@@ -90,7 +91,7 @@ OBS_HIGH = np.array([2.0, 2.0, 2.0, 1.0, 1.0, 1.0, 1.0, 1.0, 70.0, 0.1])
 """Observation bounds: TCP position within 2 m of the base (reach 0.86 m, plus noise), a
 unit quaternion, the gripper command, its force (the actuator's 70 N force range) and the
 finger distance (0 to 8 cm, with slack for contact penetration)."""
-SIMULATED_PERCEPTIONS = ("paper", "robot", "sim")
+SIMULATED_PERCEPTIONS = ("paper", "robot", "sim", "camera")
 """The perceptions an ``ArmEnv`` simulates (``env`` is an outside env's own observation)."""
 RESET_OPTIONS = ("node", "position", "radius", "angle", "gripper", "facts", "world", "holding")
 """The options ``ArmEnv.reset`` knows; any other name is refused."""
@@ -184,6 +185,8 @@ class ArmEnv(gym.Env):
     world_sensors: dict[str, str] = {}
     """World field -> the sensor kind that reads it (``perception.sensors``), in the order of
     ``read_world``'s vector."""
+    camera_perception: CameraPerception | None = None
+    """The scene's fixed cameras and what they locate (the ``camera`` perception), if any."""
 
     def __init__(
         self,
@@ -245,6 +248,8 @@ class ArmEnv(gym.Env):
         )
         """The arm's simulated encoders, gripper and TCP readouts."""
         self._percept: Percept | None = None
+        self.cameras: CameraSensing | None = None
+        """The ``camera`` perception's cameras (made at the first percept)."""
         self.anchor_offsets: dict[str, np.ndarray] = {}
         """Each object's true displacement from its nominal place at the last reset (the
         frame the env's own skill is scored in; scoring and scripted collection only)."""
@@ -365,11 +370,15 @@ class ArmEnv(gym.Env):
         return self._perceive()
 
     def _perceive(
-        self, truth: np.ndarray | None = None, truth_facts: frozenset[str] | None = None
+        self,
+        truth: np.ndarray | None = None,
+        truth_facts: frozenset[str] | None = None,
+        decision: bool = True,
     ) -> Percept:
         """Read the simulated sensors once (``config.perception``) and keep the percept
         (``truth``: the world vector, if the caller has read it already; ``truth_facts``:
-        its facts, if computed, which an exact ``sim`` perception then reuses)."""
+        its facts, if computed, which an exact ``sim`` perception then reuses; ``decision``:
+        a decision point, where the ``camera`` perception renders whatever its rate)."""
         spec = self.config.perception
         truth = self.read_world() if truth is None else truth
         if truth.shape != (len(self.world_sensors),):
@@ -385,11 +394,31 @@ class ArmEnv(gym.Env):
             state, joints = self.sensors.perceived(
                 self.data, self._gripper_cmd, spec, self.np_random
             )
-            world = self.detect_world(
-                state, noisy_world(spec, self.np_random, truth, self._sensor_slices)
-            )
+            seen = noisy_world(spec, self.np_random, truth, self._sensor_slices)
+            if spec.name == "camera":
+                seen = self._camera_world(state, seen, decision)
+            world = self.detect_world(state, seen)
             self._percept = Percept(state, joints, world, self.facts_of(world))
         return self._percept
+
+    def _camera_world(self, state: np.ndarray, world: np.ndarray, decision: bool) -> np.ndarray:
+        """``world`` with the objects the scene's cameras locate (``camera_sensing``).
+
+        Raises:
+            EnvOptionError: the scene declares no cameras.
+        """
+        if self.cameras is None:
+            if self.camera_perception is None:
+                raise EnvOptionError(
+                    f"{type(self).__name__}: the camera perception needs cameras, and this "
+                    "scene declares none (camera_perception)"
+                )
+            self.cameras = CameraSensing(
+                self.model, self.camera_perception, self.config.perception, self.world_sensors
+            )
+        previous = self._percept.facts if self._percept is not None else frozenset()
+        held = {frame.name for frame in self.objects if frame.held_fact in previous}
+        return self.cameras.read(self.data, state[:3], world, held, decision)
 
     # ----------------------------------------------------------------- reset
     def reset(
@@ -461,6 +490,8 @@ class ArmEnv(gym.Env):
         self._succeeded = False
         self._episode_over = False
         self.peak_joint_speed_ratio = 0.0
+        if self.cameras is not None:
+            self.cameras.reset()
         world = self.read_world()
         self.anchor_offsets = offsets_of(self.objects, tuple(self.world_sensors), world)
         self._perceive(world)
@@ -570,7 +601,9 @@ class ArmEnv(gym.Env):
         truncated = not terminated and budget is not None and self._steps >= budget
         self._episode_over = self._episode_over or terminated or truncated
         info = self._info(world, facts)
-        info["percept"] = self._perceive(world, facts)
+        info["percept"] = self._perceive(world, facts, decision=False)
+        if self.cameras is not None:
+            info["camera"] = self.cameras.report(float(self.data.time))
         info["action_applied"] = action
         info["joint_speed_ratio"] = self._step_speed_ratio
         if failure is not None:
@@ -686,6 +719,8 @@ class ArmEnv(gym.Env):
         return np.asarray(self._renderer.render())
 
     def close(self) -> None:
+        if self.cameras is not None:
+            self.cameras.close()
         if self._renderer is not None:
             self._renderer.close()
             self._renderer = None

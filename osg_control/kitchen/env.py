@@ -18,6 +18,7 @@ from osg_control.domain.frames import placement_offsets
 from osg_control.domain.spec import SkillSpec
 from osg_control.environment.arm_env import ArmEnv, EnvConfig
 from osg_control.errors import SkillSpecError, lookup
+from osg_control.kitchen.cameras import KITCHEN_CAMERAS
 from osg_control.kitchen.detectors import WORLD_SENSORS, detect_grasps
 from osg_control.kitchen.options import WORLD_OPTIONS, check_world_options
 from osg_control.kitchen.scene import SceneIndex, build_kitchen_model
@@ -50,6 +51,7 @@ class KitchenEnv(ArmEnv):
     holdable = tuple(_FINGER_ON)
     world_sensors = WORLD_SENSORS
     objects = (CUBE,)
+    camera_perception = KITCHEN_CAMERAS
 
     def __init__(
         self,
