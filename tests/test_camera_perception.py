@@ -38,12 +38,9 @@ def _blind(env: KitchenEnv) -> None:
     assert env.cameras is not None
     render = env.cameras.rig.render
 
-    def blank(data, wants_depth):
-        images = render(data, lambda rgb: wants_depth(np.zeros_like(rgb)))
-        return [
-            (np.zeros_like(rgb), None if depth is None else np.zeros_like(depth))
-            for rgb, depth in images
-        ]
+    def blank(data, index, wants_depth):
+        rgb, depth = render(data, index, lambda rgb: wants_depth(np.zeros_like(rgb)))
+        return np.zeros_like(rgb), None if depth is None else np.zeros_like(depth)
 
     env.cameras.rig.render = blank  # type: ignore[method-assign]
 

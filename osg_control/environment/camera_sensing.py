@@ -3,7 +3,8 @@
 A scene declares its cameras and what they look for (``CameraPerception``); the env's
 ``CameraSensing`` renders them at the perception's rate (``PerceptionSpec.camera_every``
 control steps) and at every decision point (a reset, the end of a joint reset, an explicit
-``sense``), and locates each target (``perception.colour_pose``). Between renders, and
+``sense``), and locates each target (``perception.colour_pose``): the camera that last
+saw a target first, the others only while a target is still unlocated. Between renders, and
 while a target is out of sight (its mask too small: occluded, in the hand, blank images),
 its last estimate is kept with its age; a target the robot perceived itself holding moves
 with the perceived TCP, at the offset it had from the TCP when last seen or when the
@@ -17,6 +18,7 @@ import math
 import time
 from collections.abc import Iterable, Mapping
 from dataclasses import dataclass
+from functools import partial
 from typing import Any
 
 import mujoco
@@ -26,6 +28,7 @@ from osg_control.control.robot import CONTROL_HZ
 from osg_control.perception.camera import CameraRig, camera_setups
 from osg_control.perception.colour_pose import (
     ColourTarget,
+    Sighting,
     best_sighting,
     colour_mask,
     locate,
@@ -107,6 +110,8 @@ class CameraSensing:
         self._seen_at: dict[str, float] = {}
         self._in_hand: dict[str, np.ndarray] = {}
         self._pixels: dict[str, int] = {}
+        self._seen_by = [-math.inf] * len(self.rig.setups)
+        """When each camera last saw a target (the first to render next time)."""
 
     def read(
         self,
@@ -141,24 +146,28 @@ class CameraSensing:
         return out
 
     def _look(self, data: mujoco.MjData, now: float) -> set[str]:
-        """Render every camera and locate every target; return the targets seen."""
+        """Render the cameras and locate the targets; return the targets seen.
+
+        The cameras are rendered in order of the latest to have seen a target, and
+        rendering stops once every target is located (one camera usually sees them all:
+        the others' renders are saved)."""
         started = time.perf_counter()
-        masks: list[list[np.ndarray]] = []  # per camera, per target
-
-        def wants_depth(rgb: np.ndarray) -> bool:
-            masks.append([colour_mask(rgb, target) for target in self.targets])
-            return any(visible(m, t) for m, t in zip(masks[-1], self.targets, strict=True))
-
-        images = self.rig.render(data, wants_depth)
+        sightings: dict[str, list[Sighting]] = {t.name: [] for t in self.targets}
+        for index in sorted(range(len(self.rig.setups)), key=lambda i: -self._seen_by[i]):
+            masks: list[np.ndarray] = []
+            _rgb, depth = self.rig.render(data, index, partial(self._masks_into, masks))
+            if depth is None:
+                continue
+            for mask, target in zip(masks, self.targets, strict=True):
+                sighting = locate(self.rig.setups[index], mask, depth, target)
+                if sighting is not None:
+                    sightings[target.name].append(sighting)
+                    self._seen_by[index] = now
+            if all(sightings.values()):
+                break
         seen = set()
-        for i, target in enumerate(self.targets):
-            sighting = best_sighting(
-                [
-                    locate(setup, mask[i], depth, target)
-                    for setup, mask, (_, depth) in zip(self.rig.setups, masks, images, strict=True)
-                    if depth is not None
-                ]
-            )
+        for target in self.targets:
+            sighting = best_sighting(list(sightings[target.name]))
             self._pixels[target.name] = 0 if sighting is None else sighting.pixels
             if sighting is None:
                 continue
@@ -171,6 +180,11 @@ class CameraSensing:
         self.renders += 1
         self.seconds += time.perf_counter() - started
         return seen
+
+    def _masks_into(self, masks: list[np.ndarray], rgb: np.ndarray) -> bool:
+        """Append each target's mask of ``rgb`` to ``masks``; whether any target shows."""
+        masks.extend(colour_mask(rgb, target) for target in self.targets)
+        return any(visible(m, t) for m, t in zip(masks, self.targets, strict=True))
 
     def ages(self, now: float) -> dict[str, float | None]:
         """Seconds since each target was last seen (None: never)."""

@@ -2,7 +2,7 @@
 
 A camera is data of the scene (an MJCF ``<camera>`` element): its intrinsics follow from
 its vertical field of view and the image size, its extrinsics from its pose in the world.
-``CameraRig`` renders every camera of a set with one ``mujoco.Renderer`` created once,
+``CameraRig`` renders the cameras of a set with one ``mujoco.Renderer`` created once,
 shadows off (about 5x cheaper on a CPU, and the colour mask does not need them).
 ``back_project`` turns pixels and their depth into world points.
 
@@ -116,9 +116,9 @@ class CameraRig:
         self._renderer: mujoco.Renderer | None = None
 
     def render(
-        self, data: mujoco.MjData, wants_depth: Callable[[np.ndarray], bool]
-    ) -> list[tuple[np.ndarray, np.ndarray | None]]:
-        """One ``(rgb, depth)`` pair per camera: uint8 (H, W, 3) and float depth [m] along
+        self, data: mujoco.MjData, index: int, wants_depth: Callable[[np.ndarray], bool]
+    ) -> tuple[np.ndarray, np.ndarray | None]:
+        """Camera ``index``'s ``(rgb, depth)``: uint8 (H, W, 3) and float depth [m] along
         the optical axis (H, W); the depth only where ``wants_depth(rgb)`` (a depth render
         costs about half an RGB one: skipped for a camera that sees nothing of interest)."""
         if self._renderer is None:
@@ -126,17 +126,14 @@ class CameraRig:
             self._renderer = mujoco.Renderer(self.model, height=first.height, width=first.width)
             self._renderer.scene.flags[mujoco.mjtRndFlag.mjRND_SHADOW] = False
         renderer = self._renderer
-        images: list[tuple[np.ndarray, np.ndarray | None]] = []
-        for setup in self.setups:
-            renderer.update_scene(data, camera=setup.name)
-            rgb = renderer.render().copy()
-            depth = None
-            if wants_depth(rgb):
-                renderer.enable_depth_rendering()
-                depth = renderer.render().copy()
-                renderer.disable_depth_rendering()
-            images.append((rgb, depth))
-        return images
+        renderer.update_scene(data, camera=self.setups[index].name)
+        rgb = renderer.render().copy()
+        depth = None
+        if wants_depth(rgb):
+            renderer.enable_depth_rendering()
+            depth = renderer.render().copy()
+            renderer.disable_depth_rendering()
+        return rgb, depth
 
     def close(self) -> None:
         """Free the renderer (a later ``render`` makes a new one)."""

@@ -106,7 +106,6 @@ def visible(mask: np.ndarray, target: ColourTarget) -> bool:
     return cv2.countNonZero(mask) >= target.min_pixels
 
 
-def best_sighting(sightings: list[Sighting | None]) -> Sighting | None:
+def best_sighting(sightings: list[Sighting]) -> Sighting | None:
     """The sighting with the most pixels (the camera that sees the target best)."""
-    seen = [s for s in sightings if s is not None]
-    return max(seen, key=lambda s: s.pixels) if seen else None
+    return max(sightings, key=lambda s: s.pixels) if sightings else None
