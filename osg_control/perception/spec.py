@@ -34,8 +34,8 @@ OBJECT_NOISE = 0.01
 """Default object position noise [m] of the ``robot`` perception's pose estimator."""
 OBJECT_ANGLE_NOISE = 0.05
 """Object orientation noise [rad] (about 3 degrees) of the ``robot`` pose estimator."""
-CAMERA_EVERY = 5
-"""Control steps between two camera renders outside decision points (4 Hz at 20 Hz)."""
+CAMERA_EVERY = 10
+"""Control steps between two camera renders outside decision points (2 Hz at 20 Hz)."""
 CAMERA_SIZE = (320, 240)
 """Camera image width and height [px]."""
 PERCEPTIONS: dict[str, str] = {
