@@ -153,3 +153,9 @@ def test_the_cli_accepts_camera_and_records_it_in_json(capsys) -> None:
     assert [perception["image_width"], perception["image_height"]] == list(CAMERA_SIZE)
     assert [c["name"] for c in payload["cameras"]] == ["counter_cam", "cabinet_cam"]
     assert payload["episodes"][0]["scored_success"] is True
+
+
+def test_run_refuses_an_unknown_video_camera(capsys) -> None:
+    argv = ["run", "--goal", "cube-lifted", "--video-camera", "nowhere", "--perception", "camera"]
+    assert main(argv) == 2
+    assert "counter_cam" in capsys.readouterr().err

@@ -9,7 +9,7 @@
 - ``camera``: the ``robot`` perception's encoders and gripper, with the objects a scene's
   fixed cameras locate (``environment.camera_sensing``) from rendered RGB and depth images
   every ``camera_every`` control steps and at every decision point; fields no camera reads
-  (the kitchen's door and valve) from the ``robot`` pose estimator.
+  (e.g. a door's travel) from the ``robot`` pose estimator.
 - ``env``: an outside env's own observation (FrankaKitchen-v1: its robot and object noise).
 - ``sim``: the simulator's state itself, an oracle (reported as such wherever it is used).
 
