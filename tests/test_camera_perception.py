@@ -159,3 +159,22 @@ def test_run_refuses_an_unknown_video_camera(capsys) -> None:
     argv = ["run", "--goal", "cube-lifted", "--video-camera", "nowhere", "--perception", "camera"]
     assert main(argv) == 2
     assert "counter_cam" in capsys.readouterr().err
+
+
+def test_a_lost_grasp_makes_the_cameras_look_where_the_cube_fell() -> None:
+    """The cube knocked out of the hand: the grasp is lost, and the next step renders (off
+    the rate) and finds the cube where it lies, so a replan starts from there."""
+    from osg_control.kitchen.disturbances import displace_cube
+
+    env = _camera_env(max_steps=None)
+    env.reset(seed=0, options={"node": "cube-grasped", "holding": "cube"})
+    assert "holding-cube" in env.percept().facts
+    displace_cube(env, np.array([0.05, 0.0]))
+    renders = env.cameras.renders
+    shut = np.array([0.0, 0.0, 0.0, 0.0, 0.0, 0.0, -1.0])
+    for _ in range(3):
+        env.step(shut)
+    assert "holding-cube" not in env.percept().facts
+    assert env.cameras.renders > renders
+    assert np.linalg.norm(env.percept().world[CUBE] - env.world_state()[CUBE]) < 0.005
+    assert "cube-on-counter" in env.percept().facts

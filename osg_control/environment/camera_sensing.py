@@ -3,9 +3,10 @@
 A scene declares its cameras and what they look for (``CameraPerception``); the env's
 ``CameraSensing`` renders them at the perception's rate (``PerceptionSpec.camera_every``
 control steps) and at every decision point (a reset, the end of a joint reset, an explicit
-``sense``), and locates each target (``perception.colour_pose``): the camera that last
-saw a target first, the others only while a target is still unlocated. Between renders, and
-while a target is out of sight (its mask too small: occluded, in the hand, blank images),
+``sense``, and the step after a held target's grasp is lost: where did it go?), and
+locates each target (``perception.colour_pose``): the camera that last saw a target
+first, the others only while a target is still unlocated. Between renders, and while a
+target is out of sight (its mask too small: occluded, in the hand, blank images),
 its last estimate is kept with its age; a target the robot perceived itself holding moves
 with the perceived TCP, at the offset it had from the TCP when last seen or when the
 grasp closed (the hand carries it), as a robot predicts what its gripper holds. A target
@@ -110,6 +111,7 @@ class CameraSensing:
         self._seen_at: dict[str, float] = {}
         self._in_hand: dict[str, np.ndarray] = {}
         self._pixels: dict[str, int] = {}
+        self._held_before: set[str] = set()
         self._seen_by = [-math.inf] * len(self.rig.setups)
         """When each camera last saw a target (the first to render next time)."""
 
@@ -132,7 +134,10 @@ class CameraSensing:
         """
         now = float(data.time)
         seen: set[str] = set()
-        if decision or self._last_render is None or now - self._last_render >= self.period - 1e-9:
+        released = bool(self._held_before - held)  # a grasp just lost: look where it fell
+        self._held_before = set(held)
+        due = self._last_render is None or now - self._last_render >= self.period - 1e-9
+        if decision or released or due:
             seen = self._look(data, now)
         out = np.array(world, dtype=float)
         for target in self.targets:
