@@ -178,3 +178,14 @@ def test_a_lost_grasp_makes_the_cameras_look_where_the_cube_fell() -> None:
     assert env.cameras.renders > renders
     assert np.linalg.norm(env.percept().world[CUBE] - env.world_state()[CUBE]) < 0.005
     assert "cube-on-counter" in env.percept().facts
+
+
+def test_a_rim_seen_without_its_top_is_moved_half_the_box_away_from_the_camera() -> None:
+    from osg_control.perception.colour_pose import _edge_shift
+
+    grid = np.stack(np.meshgrid(np.linspace(0, 0.045, 10), np.linspace(0, 0.045, 10)), -1)
+    face = grid.reshape(-1, 2)
+    np.testing.assert_array_equal(_edge_shift(face, np.array([1.0, 0.0]), 0.0225), [0, 0])
+    rim = np.stack([np.zeros(10), np.linspace(0, 0.045, 10)], 1)  # an edge along y
+    shift = _edge_shift(rim, np.array([-1.0, 0.1]), 0.0225)  # camera on the +x side
+    np.testing.assert_allclose(shift, [-0.0225, 0.0], atol=1e-9)

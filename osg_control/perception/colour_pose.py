@@ -9,9 +9,11 @@ The method (``locate``):
 3. the masked pixels are back-projected by their depth into world points;
 4. the top face is the points within ``top_band`` of the 95th percentile of their height
    (a robust top: an anti-aliased edge pixel does not move it), side faces dropped;
-5. the centre is the top face's centroid lowered by ``half_height``; the yaw is the angle
-   of OpenCV's ``minAreaRect`` around the top face's points, modulo a quarter turn (a
-   square face).
+5. the centre is the top face's centroid lowered by ``half_height``; when those points
+   are only a rim (narrower across than half the box: the top hidden, e.g. under the
+   hand), it is moved half the box away from the camera across the rim; the yaw is the
+   angle of OpenCV's ``minAreaRect`` around the top face's points, modulo a quarter turn
+   (a square face).
 
 The object is taken upright (its top face horizontal), as a box resting or held by a
 top-down grasp is. No segmentation image or simulator pose is read.
@@ -96,9 +98,25 @@ def locate(
         return None
     centre = top.mean(axis=0)
     centre[2] = top_z - target.half_height
+    centre[:2] += _edge_shift(top[:, :2], centre[:2] - setup.position[:2], target.half_height)
     (_, _), (_, _), angle = cv2.minAreaRect((top[:, :2] * 1000.0).astype(np.float32))
     yaw = math.radians(angle) % (math.pi / 2)
     return Sighting(centre, yaw, int(rows.size), setup.name)
+
+
+def _edge_shift(points: np.ndarray, away: np.ndarray, half: float) -> np.ndarray:
+    """The shift [m] from the centroid of the top's visible points to the box's centre:
+    zero for a top face seen whole; half the box away from the camera (``away``: the
+    horizontal direction from it) when the points are only an edge, narrower than half the
+    box across (the top hidden, e.g. under the hand: the highest red is a side's rim)."""
+    if len(points) < 3:
+        return np.zeros(2)
+    _values, axes = np.linalg.eigh(np.cov(points.T))
+    across = axes[:, 0]  # the direction of least spread
+    projected = points @ across
+    if float(projected.max() - projected.min()) >= half:
+        return np.zeros(2)
+    return across * half * (1.0 if float(across @ away) >= 0 else -1.0)
 
 
 def visible(mask: np.ndarray, target: ColourTarget) -> bool:
