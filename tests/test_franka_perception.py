@@ -177,8 +177,8 @@ def test_env_grasp_and_force_come_from_the_fingers_not_contacts() -> None:
 
 
 def test_bad_perceptions_are_refused() -> None:
-    with pytest.raises(UsageError, match="unknown perception 'camera'"):
-        PerceptionSpec("camera")
+    with pytest.raises(UsageError, match="unknown perception 'lidar'"):
+        PerceptionSpec("lidar")
     with pytest.raises(EnvOptionError, match="supports the perceptions env, sim, not 'robot'"):
         FrankaConfig(perception=PerceptionSpec("robot"))
     with pytest.raises(EnvOptionError, match="must be a PerceptionSpec"):

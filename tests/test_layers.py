@@ -4,6 +4,7 @@ nor any robot, and no layer imports one above it."""
 from __future__ import annotations
 
 import ast
+import importlib.util
 import re
 from pathlib import Path
 
@@ -245,3 +246,28 @@ def test_the_arm_env_check_finds_an_import_of_it() -> None:
     """The check above sees an ``ArmEnv`` import where it is (the check can fail)."""
     tree = ast.parse(f"from {ARM_ENV_MODULE} import ArmEnv, EnvConfig\n")
     assert f"{ARM_ENV_MODULE}.ArmEnv" in _imports(tree)
+
+
+def test_every_package_import_names_a_module_that_exists() -> None:
+    """mypy runs with ``ignore_missing_imports`` (for third-party packages), so it would let
+    an import of a removed ``osg_control`` module through; this does not (package, tests,
+    tools)."""
+    root = PACKAGE.parent
+    files = [
+        *PACKAGE.rglob("*.py"),
+        *(root / "tests").rglob("*.py"),
+        *(root / "tools").glob("*.py"),
+    ]
+    missing = []
+    for path in files:
+        for node in ast.walk(ast.parse(path.read_text())):
+            if isinstance(node, ast.ImportFrom) and node.module and node.level == 0:
+                modules = [node.module]
+            elif isinstance(node, ast.Import):
+                modules = [alias.name for alias in node.names]
+            else:
+                continue
+            for module in modules:
+                if module.startswith("osg_control") and importlib.util.find_spec(module) is None:
+                    missing.append(f"{path.relative_to(root)}:{node.lineno}: {module}")
+    assert not missing, "\n".join(missing)

@@ -149,7 +149,10 @@ def test_a_grasp_is_detected_from_the_finger_width_not_from_contacts() -> None:
 @pytest.mark.parametrize(
     ("args", "message"),
     [
-        (("camera",), "unknown perception 'camera'; known perceptions: paper, robot, env, sim"),
+        (
+            ("lidar",),
+            "unknown perception 'lidar'; known perceptions: paper, robot, camera, env, sim",
+        ),
         (("paper", -0.01), "--noise must be finite and in [0, 1]"),
         (("paper", float("nan")), "--noise must be finite and in [0, 1]"),
         (("robot", 0.0, float("inf")), "--object-noise must be finite and in [0, 1]"),
@@ -175,7 +178,7 @@ def test_a_spec_refuses_a_negative_noise_and_a_domain_refuses_an_unknown_percept
 @pytest.mark.parametrize(
     "argv",
     [
-        ["evaluate", "tasks", "--perception", "camera"],
+        ["evaluate", "tasks", "--perception", "lidar"],
         ["evaluate", "tasks", "--perception", "env"],
         ["evaluate", "tasks", "--perception", "robot", "--object-noise", "-1"],
         ["run", "--goal", "cube-lifted", "--perception", "paper", "--noise", "nan"],

@@ -7,7 +7,7 @@ returning the exit code). Add a module here to expose it.
 from __future__ import annotations
 
 import argparse
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 if TYPE_CHECKING:
     from osg_control.domain.base import Domain
@@ -108,6 +108,21 @@ def perception_of(
     spec = perception_spec(name, noise, args.object_noise)
     check_supported(spec, domain.perceptions, domain.name)
     return spec
+
+
+def camera_setups(domain: Domain, perception: PerceptionSpec) -> list[dict[str, Any]] | None:
+    """The ``camera`` perception's cameras (name, resolution, field of view, pose) for a
+    command's ``--json``; None under any other perception."""
+    if perception.name != "camera":
+        return None
+    from osg_control.execution.executor import task_env_config
+
+    env = domain.make_env(config=task_env_config(perception))
+    try:
+        env.reset(seed=0)
+        return [setup.to_dict() for setup in env.cameras.rig.setups]
+    finally:
+        env.close()
 
 
 def add_backend_arguments(parser: argparse.ArgumentParser) -> None:

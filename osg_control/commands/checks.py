@@ -71,6 +71,21 @@ def _goal(dest: str, value: Any) -> None:
 
 def _video(dest: str, value: Any) -> None:
     """``--video`` needs an OpenGL back end (MUJOCO_GL=egl or osmesa on a headless machine)."""
+    _needs_gl(_option(dest), "leave out --video")
+
+
+def _perception(dest: str, value: Any) -> None:
+    """``--perception camera`` renders images: it needs an OpenGL back end too."""
+    if value == "camera":
+        _needs_gl(f"{_option(dest)} camera", "choose another perception")
+
+
+def _needs_gl(what: str, otherwise: str) -> None:
+    """Render a tiny scene once.
+
+    Raises:
+        UsageError: no OpenGL back end, naming ``MUJOCO_GL`` (exit 2, nothing run).
+    """
     import warnings
 
     import mujoco
@@ -85,8 +100,8 @@ def _video(dest: str, value: Any) -> None:
             renderer.close()
     except Exception as err:  # any GL failure means: no back end to render with
         raise UsageError(
-            f"{_option(dest)}: no OpenGL back end to render with ({err}); set MUJOCO_GL=egl "
-            "or MUJOCO_GL=osmesa, or leave out --video"
+            f"{what}: no OpenGL back end to render with ({err}); set MUJOCO_GL=egl "
+            f"or MUJOCO_GL=osmesa, or {otherwise}"
         ) from err
 
 
@@ -116,6 +131,7 @@ CHECKS: dict[str, Callable[[str, Any], None]] = {
     "filter": _finite_range(0.0, 1.0, low_open=True),
     "validation_fraction": _finite_range(0.0, 1.0, high_open=True),
     "video": _video,
+    "perception": _perception,
 }
 """Argument destination -> its check (run only when the argument is present and not None).
 Every numeric option of every verb has an entry with both bounds

@@ -13,6 +13,7 @@ from osg_control.commands import (
     add_filter_argument,
     add_perception_arguments,
     add_randomize_argument,
+    camera_setups,
     domain_of,
     perception_of,
 )
@@ -190,6 +191,8 @@ def run_tasks(args: argparse.Namespace) -> int:
             perception=perception,
             randomize=args.randomize_objects,
         )
+    if perception.name == "camera":
+        table["cameras"] = camera_setups(domain, perception)
     return print_result(domain, args, table, format_task_table)
 
 

@@ -14,6 +14,7 @@ from osg_control.commands import (
     add_filter_argument,
     add_perception_arguments,
     add_randomize_argument,
+    camera_setups,
     domain_of,
     perception_of,
 )
@@ -66,6 +67,13 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     )
     run.add_argument("--models", type=Path, default=None, help="defaults directory to use")
     run.add_argument("--video", type=Path, default=None, help="write an MP4 of the first episode")
+    run.add_argument(
+        "--video-camera",
+        default=None,
+        metavar="NAME",
+        help="the scene camera the video films from (default: its overview camera; e.g. the "
+        "kitchen's counter_cam to watch what the camera perception sees)",
+    )
     run.add_argument(
         "--rerun",
         type=Path,
@@ -142,6 +150,8 @@ def run_task(args: argparse.Namespace) -> int:
         config=task_env_config(perception),
         render_mode="rgb_array" if args.video else None,
     )
+    if args.video_camera is not None:
+        _film_from(env, args.video_camera)
     rng = np.random.default_rng(args.seed)
     results = []
     frames: list[Any] = []
@@ -180,13 +190,34 @@ def run_task(args: argparse.Namespace) -> int:
         payload = {
             "models": models,
             "perception": perception.to_dict(),
+            **(
+                {"cameras": camera_setups(domain, perception)}
+                if perception.name == "camera"
+                else {}
+            ),
             "episodes": results,
             "success_rate": successes / len(results),
         }
+        if perception.name == "camera":
+            payload["cameras"] = camera_setups(domain, perception)
         print(dump_json(payload))
     else:
         print(f"success rate {successes}/{len(results)}")
     return 0 if successes == len(results) else 1
+
+
+def _film_from(env: Any, camera: str) -> None:
+    """Point ``render`` (the video) at a scene camera.
+
+    Raises:
+        UsageError: a camera the scene lacks (its cameras listed; exit 2, nothing run).
+    """
+    cameras = [env.model.camera(i).name for i in range(env.model.ncam)]
+    if camera not in cameras:
+        raise UsageError(
+            f"--video-camera: the scene has no camera {camera!r}; its cameras: {cameras}"
+        )
+    env.camera = camera
 
 
 def _recorder(path: Path | None, domain: Domain) -> RunRecorder | None:

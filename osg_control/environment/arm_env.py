@@ -51,6 +51,7 @@ from osg_control.domain.spaces import (
 )
 from osg_control.domain.spec import Node, SkillSpec
 from osg_control.environment.actions import checked_action
+from osg_control.environment.camera_sensing import CameraPerception, CameraSensing
 from osg_control.environment.config import RESET_OPTIONS, EnvConfig, as_slice
 from osg_control.environment.joint_reset import JointReset
 from osg_control.environment.options import (
@@ -105,8 +106,13 @@ class ArmEnv(SceneHooks, gym.Env):
     metadata = {"render_modes": ["rgb_array"]}
     camera = "overview"
     """The model camera ``render`` uses."""
-    perceptions = SIMULATED_PERCEPTIONS
-    """The perceptions it simulates."""
+    camera_perception: CameraPerception | None = None
+    """The scene's fixed cameras and what they locate (the ``camera`` perception), if any."""
+
+    @property
+    def perceptions(self) -> tuple[str, ...]:
+        """The perceptions it simulates: ``camera`` too where the scene declares cameras."""
+        return SIMULATED_PERCEPTIONS + (("camera",) if self.camera_perception is not None else ())
 
     def __init__(
         self,
@@ -190,6 +196,8 @@ class ArmEnv(SceneHooks, gym.Env):
         )
         """The arm's simulated encoders, gripper and TCP readouts."""
         self._percept: Percept | None = None
+        self.cameras: CameraSensing | None = None
+        """The ``camera`` perception's cameras (made at the first percept)."""
         self.anchor_offsets: dict[str, np.ndarray] = {}
         """Each object's true displacement from its nominal place at the last reset (the
         frame the env's own skill is scored in; scoring and scripted collection only)."""
@@ -246,11 +254,15 @@ class ArmEnv(SceneHooks, gym.Env):
         return self._perceive()
 
     def _perceive(
-        self, truth: np.ndarray | None = None, truth_facts: frozenset[str] | None = None
+        self,
+        truth: np.ndarray | None = None,
+        truth_facts: frozenset[str] | None = None,
+        decision: bool = True,
     ) -> Percept:
         """Read the simulated sensors once (``config.perception``) and keep the percept
         (``truth``: the world vector, if the caller has read it already; ``truth_facts``:
-        its facts, if computed, which an exact ``sim`` perception then reuses)."""
+        its facts, if computed, which an exact ``sim`` perception then reuses; ``decision``:
+        a decision point, where the ``camera`` perception renders whatever its rate)."""
         spec = self.config.perception
         truth = self.read_world() if truth is None else truth
         if truth.shape != (len(self.world_sensors),):
@@ -266,11 +278,28 @@ class ArmEnv(SceneHooks, gym.Env):
             state, joints = self.sensors.perceived(
                 self.data, self._gripper_cmd, spec, self.np_random
             )
-            world = self.detect_world(
-                state, noisy_world(spec, self.np_random, truth, self._sensor_slices)
-            )
+            seen = noisy_world(spec, self.np_random, truth, self._sensor_slices)
+            if spec.name == "camera":
+                seen = self._camera_world(state, seen, decision)
+            world = self.detect_world(state, seen)
             self._percept = Percept(state, joints, world, self.facts_of(world))
         return self._percept
+
+    def _camera_world(self, state: np.ndarray, world: np.ndarray, decision: bool) -> np.ndarray:
+        """``world`` with the objects the scene's cameras locate (``camera_sensing``; the
+        ``camera`` perception is refused at construction where the scene declares none)."""
+        if self.cameras is None:
+            assert self.camera_perception is not None  # ``perceptions`` lists camera
+            self.cameras = CameraSensing(
+                self.model,
+                self.camera_perception,
+                self.config.perception,
+                self.world_sensors,
+                self.robot.control_hz,
+            )
+        previous = self._percept.facts if self._percept is not None else frozenset()
+        held = {frame.name for frame in self.objects if frame.held_fact in previous}
+        return self.cameras.read(self.data, state[:3], world, held, decision)
 
     # ----------------------------------------------------------------- reset
     def reset(
@@ -343,6 +372,8 @@ class ArmEnv(SceneHooks, gym.Env):
         self._succeeded = False
         self._episode_over = False
         self.peak_joint_speed_ratio = 0.0
+        if self.cameras is not None:
+            self.cameras.reset()
         world = self.read_world()
         self.anchor_offsets = offsets_of(self.objects, tuple(self.world_sensors), world)
         self._perceive(world)
@@ -452,7 +483,9 @@ class ArmEnv(SceneHooks, gym.Env):
         truncated = not terminated and budget is not None and self._steps >= budget
         self._episode_over = self._episode_over or terminated or truncated
         info = self._info(world, facts)
-        info["percept"] = self._perceive(world, facts)
+        info["percept"] = self._perceive(world, facts, decision=False)
+        if self.cameras is not None:
+            info["camera"] = self.cameras.report(float(self.data.time))
         info["action_applied"] = action
         info["joint_speed_ratio"] = self._step_speed_ratio
         if failure is not None:
@@ -543,6 +576,8 @@ class ArmEnv(SceneHooks, gym.Env):
         return np.asarray(self._renderer.render())
 
     def close(self) -> None:
+        if self.cameras is not None:
+            self.cameras.close()
         if self._renderer is not None:
             self._renderer.close()
             self._renderer = None

@@ -46,6 +46,8 @@ class ObjectTracker:
         readings = offsets_of(self.domain.objects, self.domain.world_fields, percept.world)
         for frame in self.domain.objects:
             name, reading = frame.name, readings[frame.name]
+            if not np.isfinite(reading).all():
+                continue  # not seen (a camera that never saw it): no reading to fold in
             held = frame.held_fact in percept.facts
             if held and (name not in self._mean or name in self._in_hand):
                 self._fold_in_hand(name, reading, percept.position)

@@ -80,6 +80,7 @@ def kitchen_domain() -> Domain:
         hand_empty="hand-empty",
         watched_facts=WATCHED_FACTS,
         objects=(CUBE,),
+        perceptions=("paper", "robot", "sim", "camera"),
         defaults_dir=PACKAGE_DIR / "kitchen" / "defaults",
         env_id="osg/Kitchen-v0",
         published=PUBLISHED,

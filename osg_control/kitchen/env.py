@@ -20,6 +20,7 @@ from osg_control.domain.frames import placement_offsets
 from osg_control.domain.spec import SkillSpec
 from osg_control.environment.arm_env import ArmEnv, EnvConfig
 from osg_control.errors import SkillSpecError, lookup
+from osg_control.kitchen.cameras import KITCHEN_CAMERAS
 from osg_control.kitchen.detectors import WORLD_SENSORS, detect_grasps
 from osg_control.kitchen.domain import DEFAULT_ROBOT, facts_of
 from osg_control.kitchen.options import WORLD_OPTIONS, check_world_options
@@ -58,6 +59,7 @@ class KitchenEnv(ArmEnv):
     holdable = tuple(_FINGER_ON)
     world_sensors = WORLD_SENSORS
     objects = (CUBE,)
+    camera_perception = KITCHEN_CAMERAS
 
     def __init__(
         self,

@@ -6,6 +6,10 @@
   kinematics of the perceived joints, finger width with ``FINGER_NOISE`` [m], object
   positions with ``object_noise`` [m] (default 1 cm) and orientations with
   ``OBJECT_ANGLE_NOISE`` [rad] from a simulated pose estimator.
+- ``camera``: the ``robot`` perception's encoders and gripper, with the objects a scene's
+  fixed cameras locate (``environment.camera_sensing``) from rendered RGB and depth images
+  every ``camera_every`` control steps and at every decision point; fields no camera reads
+  (e.g. a door's travel) from the ``robot`` pose estimator.
 - ``env``: an outside env's own observation (FrankaKitchen-v1: its robot and object noise).
 - ``sim``: the simulator's state itself, an oracle (reported as such wherever it is used).
 
@@ -35,9 +39,16 @@ MAX_NOISE = 1.0
 """The largest noise level [m, or rad for angles] a perception takes: a metre of position
 noise already places every object anywhere in the scene; 1e300 made the observations
 non-finite."""
+CAMERA_EVERY = 10
+"""Control steps between two camera renders outside decision points (2 Hz at 20 Hz)."""
+CAMERA_SIZE = (320, 240)
+"""Camera image width and height [px]."""
+MAX_CAMERA_COUNT = 8192
+"""The largest camera rate (control steps between renders) and image side [px] taken."""
 PERCEPTIONS: dict[str, str] = {
     "paper": "noise on the perceived TCP position, objects exact (the paper's protocol)",
     "robot": "joint encoders, TCP by forward kinematics, noisy object pose estimator",
+    "camera": "joint encoders, TCP by forward kinematics, objects from fixed cameras' images",
     "env": "an outside env's own observation, with its own noise",
     "sim": "the simulator's state (an oracle)",
 }
@@ -59,6 +70,9 @@ class PerceptionSpec:
         finger_noise: noise on the perceived finger width [m].
         object_noise: noise on object positions [m] (the pose estimator's).
         object_angle_noise: noise on object orientations and joint angles [rad].
+        camera_every: control steps between camera renders outside decision points
+            (``camera``; 0 elsewhere).
+        image_width, image_height: the camera images' size [px] (``camera``).
     """
 
     name: str = "paper"
@@ -67,6 +81,9 @@ class PerceptionSpec:
     finger_noise: float = 0.0
     object_noise: float = 0.0
     object_angle_noise: float = 0.0
+    camera_every: int = 0
+    image_width: int = 0
+    image_height: int = 0
 
     def __post_init__(self) -> None:
         if self.name not in PERCEPTIONS:
@@ -88,6 +105,15 @@ class PerceptionSpec:
                     f"perception {field_name} must be finite and in [0, {MAX_NOISE:g}], "
                     f"got {value!r}"
                 )
+        sizes = (self.camera_every, self.image_width, self.image_height)
+        if self.name == "camera" and not all(
+            isinstance(v, int) and 1 <= v <= MAX_CAMERA_COUNT for v in sizes
+        ):
+            raise UsageError(
+                f"the camera perception needs a rate and an image size in [1, "
+                f"{MAX_CAMERA_COUNT}], got camera_every={self.camera_every}, "
+                f"image {self.image_width}x{self.image_height}"
+            )
 
     @property
     def exact(self) -> bool:
@@ -113,10 +139,10 @@ def perception_spec(
     """The named perception with the command line's noise levels.
 
     Args:
-        name: ``paper``, ``robot``, ``env`` or ``sim``.
+        name: ``paper``, ``robot``, ``camera``, ``env`` or ``sim``.
         noise: the paper's TCP position noise [m] (``paper``; refused elsewhere when > 0).
-        object_noise: the pose estimator's position noise [m] (``robot``; default
-            ``OBJECT_NOISE``).
+        object_noise: the pose estimator's position noise [m] (``robot``, and ``camera``'s
+            fields no camera reads; default ``OBJECT_NOISE``).
 
     Raises:
         UsageError: an unknown name (the known ones listed), a noise that is not a
@@ -134,21 +160,29 @@ def perception_spec(
                 f"{label} must be finite and in [0, {MAX_NOISE:g}] (>= 0 and at most "
                 f"{MAX_NOISE:g}), got {value!r}"
             )
-    if name == "robot":
+    if name in ("robot", "camera"):
         if noise:
             raise UsageError(
-                "--noise is the paper protocol's TCP noise; the robot perception takes the TCP "
+                f"--noise is the paper protocol's TCP noise; the {name} perception takes the TCP "
                 "from its joint encoders (use --perception paper, or --object-noise)"
             )
+        camera = {}
+        if name == "camera":
+            camera = {
+                "camera_every": CAMERA_EVERY,
+                "image_width": CAMERA_SIZE[0],
+                "image_height": CAMERA_SIZE[1],
+            }
         return PerceptionSpec(
-            "robot",
+            name,
             joint_noise=ENCODER_NOISE,
             finger_noise=FINGER_NOISE,
             object_noise=OBJECT_NOISE if object_noise is None else object_noise,
             object_angle_noise=OBJECT_ANGLE_NOISE,
+            **camera,
         )
-    if object_noise and name != "robot":
-        raise UsageError(f"--object-noise applies to the robot perception, not {name!r}")
+    if object_noise:
+        raise UsageError(f"--object-noise applies to the robot perception and camera, not {name!r}")
     if name == "paper":
         return PerceptionSpec("paper", tcp_noise=noise)
     if noise and name == "sim":
