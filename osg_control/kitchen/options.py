@@ -2,7 +2,7 @@
 
 A cube position must be one where the cube rests and the arm can reach it: on the counter's
 top, clear of the cabinet's plinth and the valve, or on the cabinet's floor, and within the
-Panda's reach of its shoulder. The scene's dimensions are ``robots/kitchen.xml``'s.
+robot's workspace (``robot_model.workspace``). The scene's dimensions are ``robots/kitchen.xml``'s.
 """
 
 from __future__ import annotations
@@ -34,14 +34,13 @@ COUNTER_OBSTACLES = {
 """Footprints (x, y) [m] on the counter's top that the cube would cut into."""
 REST_TOLERANCE = 0.005
 """How far [m] above its surface a cube position may lie (it settles in the start's 0.1 s)."""
-SHOULDER = np.array([0.0, 0.0, 0.333])
-REACH = 0.855
-"""The Panda's reach [m] from its shoulder (joint 2)."""
+Sphere = tuple[tuple[float, float, float], float]
+"""A robot's workspace: centre [m] and radius [m] (``robot_model.workspace``)."""
 
 
-def check_world_options(world: dict[str, Any], holding: str | None) -> None:
-    """Refuse a non-finite or out-of-range door opening or cube position, or a cube position
-    with the cube held.
+def check_world_options(world: dict[str, Any], holding: str | None, reach: Sphere) -> None:
+    """Refuse a non-finite or out-of-range door opening or cube position (outside the
+    robot's workspace ``reach`` included), or a cube position with the cube held.
 
     Raises:
         EnvOptionError: naming the option and its value.
@@ -57,18 +56,22 @@ def check_world_options(world: dict[str, Any], holding: str | None) -> None:
                 "reset options contradict each other: world.cube_pos while holding 'cube' "
                 "(a held cube is placed in the fingers)"
             )
-        check_cube_position(finite_option("world.cube_pos", world["cube_pos"], (3,)))
+        check_cube_position(finite_option("world.cube_pos", world["cube_pos"], (3,)), reach)
 
 
-def check_cube_position(pos: np.ndarray) -> None:
+def check_cube_position(pos: np.ndarray, reach: Sphere) -> None:
     """Refuse a cube position where it does not rest on a surface or out of reach.
 
     Raises:
         EnvOptionError: naming the option, the value and the rule broken.
     """
     where = f"reset option world.cube_pos {pos.tolist()}"
-    if np.linalg.norm(pos - SHOULDER) > REACH:
-        raise EnvOptionError(f"{where} is out of the arm's reach ({REACH} m from its shoulder)")
+    centre, radius = reach
+    if np.linalg.norm(pos - np.array(centre)) > radius:
+        raise EnvOptionError(
+            f"{where} is out of the arm's reach ({radius:.3f} m from its first joint at "
+            f"{list(centre)})"
+        )
     surface = _resting_surface(pos)
     if surface is None:
         raise EnvOptionError(
