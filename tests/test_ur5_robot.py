@@ -19,6 +19,7 @@ from osg_control.domain.registry import get_domain
 from osg_control.errors import EnvOptionError
 from osg_control.kitchen.options import check_cube_position
 from osg_control.kitchen.scene import ROBOT_MOUNTS
+from osg_control.paths import PACKAGE_DIR
 from osg_control.robots.registry import get_robot
 
 
@@ -77,3 +78,22 @@ def test_osg_robot_ur5_collects_scripted_episodes(
     assert row["skill"] == "move-home-to-cube" and row["episodes"] == 2
     assert row["steps"] > 0 and row["success_rate"] in (0.0, 0.5, 1.0)
     assert (tmp_path / "move-home-to-cube.h5").is_file()
+
+
+def test_the_shipped_ur5_defaults_run_kitchen_tasks(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """``osg --robot ur5 evaluate tasks`` runs from ``kitchen/defaults-ur5`` (skills,
+    classifier and plan costs of the UR5) with nothing but the checkout."""
+    monkeypatch.setenv("OSG_CACHE_DIR", str(tmp_path))
+    kitchen = get_domain("kitchen").with_robot("ur5")
+    assert kitchen.defaults_dir == PACKAGE_DIR / "kitchen" / "defaults-ur5"
+    argv = ["--robot", "ur5", "evaluate", "tasks", "--task", "pick-up", "open-door"]
+    argv += ["--perception", "robot", "--episodes", "1", "--replans", "2", "--workers", "1"]
+    assert cli.main([*argv, "--json"]) == 0
+    report = json.loads(capsys.readouterr().out)
+    assert report["models"]["source"] == "shipped defaults"
+    assert report["models"]["directory"] == str(kitchen.defaults_dir)
+    assert report["tasks"] == ["pick-up", "open-door"]
+    (averages,) = report["averages"]  # one replanning budget
+    assert len(averages) == 2 and all(0.0 <= rate <= 1.0 for rate in averages)

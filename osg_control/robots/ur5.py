@@ -9,14 +9,7 @@ domain's to say (``Domain.mounts``): the home kitchen mounts it at
 
 from __future__ import annotations
 
-from osg_control.control.description import (
-    ArmJoints,
-    Gripper,
-    ModelSource,
-    RobotDescription,
-    ServoGains,
-    TcpFrame,
-)
+from osg_control.control import description as rd
 from osg_control.robots import ur5_model as m
 
 
@@ -24,15 +17,15 @@ def _floats(values: object) -> tuple[float, ...]:
     return tuple(float(v) for v in values)  # type: ignore[attr-defined]
 
 
-def ur5_description() -> RobotDescription:
+def ur5_description() -> rd.RobotDescription:
     """The UR5 (its limits read from the URDF)."""
     lower, upper = m.joint_limits()
     tcp_pos, tcp_quat = m.tcp_in_flange()
-    return RobotDescription(
+    return rd.RobotDescription(
         name="ur5",
         summary="Universal Robots UR5 (example-robot-data URDF), 6 joints, 2F-85-like gripper",
-        model=ModelSource(mujoco=m.ur5_bare_spec, pinocchio=m.load_pinocchio_arm),
-        arm=ArmJoints(
+        model=rd.ModelSource(mujoco=m.ur5_bare_spec, pinocchio=m.load_pinocchio_arm),
+        arm=rd.ArmJoints(
             names=m.ARM_JOINTS,
             lower=_floats(lower),
             upper=_floats(upper),
@@ -40,9 +33,9 @@ def ur5_description() -> RobotDescription:
             effort=_floats(m.effort_limits()),
             armature=m.ARM_ARMATURE,
         ),
-        servo=ServoGains(kp=m.SERVO_KP, kv=m.SERVO_KV),
-        tcp=TcpFrame(body=m.TCP_BODY, pos=tcp_pos, quat=tcp_quat, frame=m.TCP_FRAME),
-        gripper=Gripper(
+        servo=rd.ServoGains(kp=m.SERVO_KP, kv=m.SERVO_KV),
+        tcp=rd.TcpFrame(body=m.TCP_BODY, pos=tcp_pos, quat=tcp_quat, frame=m.TCP_FRAME),
+        gripper=rd.Gripper(
             joints=m.FINGER_JOINTS,
             bodies=m.FINGER_BODIES,
             open_position=m.FINGER_OPEN,
