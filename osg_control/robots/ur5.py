@@ -47,6 +47,6 @@ def ur5_description() -> rd.RobotDescription:
         ),
         home_q=_floats(m.HOME_Q),
         control_hz=20.0,
-        # The 2F-85 reports its fingers' position and current; the model reads the force
-        # from the actuator as the Panda's does.
+        # sensors: the default (encoders, finger width, grip force): the 2F-85 reports its
+        # fingers' position and motor current, read here from the actuator's force.
     )
