@@ -3,8 +3,8 @@
 
 Its limits are the URDF's (``check_models`` holds them to it); the servo gains, armature,
 gripper drive and home posture are ``ur5_model``'s. Where it stands in a scene is the
-domain's to say (``Domain.mounts``): the home kitchen mounts it at
-``ur5_model.KITCHEN_BASE``.
+domain's to say (``Domain.mounts``): the home kitchen mounts it at (0.10, 0.15, 0)
+(``kitchen.scene.ROBOT_MOUNTS``).
 """
 
 from __future__ import annotations
