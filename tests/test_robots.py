@@ -49,12 +49,14 @@ def test_the_toy_arm_matches_its_models() -> None:
     assert TOY.n_joints == 6 and not TOY.redundant
 
 
+@pytest.mark.parametrize("robot", [TOY, "ur5"], ids=["toy6", "ur5"])
 @pytest.mark.parametrize("skill", ["move-home-to-cube", "grab-cube"])
-def test_a_six_joint_arm_runs_kitchen_episodes(skill: str) -> None:
-    """Algorithm 1's scripted policy reaches the skill's goal with the toy arm (success on
-    the simulator's truth), under the robot perception (encoders of six joints)."""
+def test_a_six_joint_arm_runs_kitchen_episodes(skill: str, robot: RobotDescription | str) -> None:
+    """Algorithm 1's scripted policy reaches the skill's goal with a six-joint arm, the toy
+    arm defined in the tests or the registered UR5 at its kitchen mount (success on the
+    simulator's truth), under the robot perception (encoders of six joints)."""
     spec = get_domain("kitchen").skill(skill)
-    env = KitchenEnv(skill=spec, robot=TOY)
+    env = KitchenEnv(skill=spec, robot=robot)
     obs, info = env.reset(seed=3)
     assert info["arm_q"].shape == (6,) and env.percept().joints.shape == (6,)
     policy = ScriptedPolicy(spec, np.random.default_rng(3), bounds=env.action_bounds)
@@ -226,7 +228,7 @@ def test_an_unknown_robot_lists_the_known_ones() -> None:
 
 def test_registered_robots_are_found_by_name(toy_registered: RobotDescription) -> None:
     assert toy_registered is TOY
-    assert registry.robot_names() == ["panda", "toy6"]
+    assert registry.robot_names() == ["panda", "toy6", "ur5"]
     assert registry.get_robot("panda") is PANDA
 
 
@@ -245,7 +247,7 @@ def test_osg_robots_json_lists_every_robot(
 ) -> None:
     assert cli.main(["robots", "--json"]) == 0
     listed = {entry["name"]: entry for entry in json.loads(capsys.readouterr().out)}
-    assert sorted(listed) == ["panda", "toy6"]
+    assert sorted(listed) == ["panda", "toy6", "ur5"]
     assert listed["panda"]["joints"] == list(PANDA.arm.names)
     assert listed["panda"]["redundant"] and not listed["toy6"]["redundant"]
     assert listed["toy6"]["gripper"]["max_opening"] == pytest.approx(0.08)

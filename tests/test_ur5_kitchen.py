@@ -13,11 +13,15 @@ import mujoco
 import numpy as np
 import pytest
 
+from osg_control.control.robot_model import GRIPPER_ACTUATOR, robot_spec
 from osg_control.domain.spec import TOP_DOWN_QUAT
 from osg_control.kitchen import skills
+from osg_control.kitchen.scene import ROBOT_MOUNTS
 from osg_control.kitchen.world import WorldState, world_facts
 from osg_control.robots import ur5_model
-from osg_control.robots.ur5_model import ARM_JOINTS, FINGER_JOINTS, HOME_Q, KITCHEN_BASE
+from osg_control.robots.ur5_model import ARM_JOINTS, FINGER_JOINTS, HOME_Q
+
+KITCHEN_BASE = ROBOT_MOUNTS["ur5"]
 
 
 def _reach_tool() -> ModuleType:
@@ -68,12 +72,12 @@ def test_the_ur5_does_the_kitchen_stages_in_kitchen_physics() -> None:
     cube ends in the cabinet and the valve opens (the kitchen's own facts), with no MuJoCo
     warning."""
     tool = _reach_tool()
-    arm = ur5_model.ur5_spec(with_gripper=False, base=KITCHEN_BASE).compile()
+    arm = robot_spec(tool.ur5_at(KITCHEN_BASE), with_gripper=False).compile()
     model, _ = tool.kitchen_with_ur5(KITCHEN_BASE)
     data = mujoco.MjData(model)
     arm_qpos = [model.joint(n).qposadr[0] for n in ARM_JOINTS]
     actuators = [model.actuator(n).id for n in ARM_JOINTS]
-    gripper = model.actuator(ur5_model.GRIPPER_ACTUATOR).id
+    gripper = model.actuator(GRIPPER_ACTUATOR).id
     data.qpos[arm_qpos] = data.ctrl[actuators] = HOME_Q
     data.qpos[[model.joint(n).qposadr[0] for n in FINGER_JOINTS]] = ur5_model.FINGER_OPEN
     data.ctrl[gripper] = ur5_model.FINGER_OPEN

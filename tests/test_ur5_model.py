@@ -3,41 +3,54 @@ the gripper lifts a 4.5 cm box in MuJoCo physics, and missing files are named.""
 
 from __future__ import annotations
 
-from pathlib import Path
-
 import mink
 import mujoco
 import numpy as np
 import pinocchio as pin
 import pytest
 
+from osg_control.control.description import (
+    ORIGIN,
+    Placement,
+    RobotDescription,
+    RobotDescriptionError,
+    mounted,
+)
+from osg_control.control.reach import reach_pose
+from osg_control.control.robot_model import (
+    GRIPPER_ACTUATOR,
+    HOME_KEY,
+    pinocchio_arm,
+    robot_spec,
+)
+from osg_control.control.scene_model import with_robot
 from osg_control.control.servo import DAMPING_SUFFIX
 from osg_control.domain.spec import TOP_DOWN_QUAT
-from osg_control.errors import ModelNotFoundError
-from osg_control.robots import files, ur5_model
-from osg_control.robots.reach import reach_pose
-from osg_control.robots.ur5_model import (
-    ARM_JOINTS,
-    FINGER_JOINTS,
-    HOME_Q,
-    KITCHEN_BASE,
-    ORIGIN,
-    TCP_FRAME,
-    TCP_SITE,
-)
+from osg_control.kitchen.scene import ROBOT_MOUNTS
+from osg_control.robots import ur5_model
+from osg_control.robots.registry import get_robot
+from osg_control.robots.ur5_model import ARM_JOINTS, FINGER_JOINTS, HOME_Q, TCP_FRAME
+
+KITCHEN_BASE = ROBOT_MOUNTS["ur5"]
+TCP_SITE = "tcp"
 
 KINEMATICS_TOL = 1e-9
 
 
+def ur5_at(base: Placement) -> RobotDescription:
+    """The registered UR5 mounted at ``base``."""
+    return mounted(get_robot("ur5"), base)
+
+
 @pytest.fixture(scope="module")
 def arm_model() -> mujoco.MjModel:
-    """The arm-only model an IK backend uses, placed as in the kitchen."""
-    return ur5_model.ur5_spec(with_gripper=False, base=KITCHEN_BASE).compile()
+    """The arm-only model an IK backend uses, mounted as in the kitchen."""
+    return robot_spec(ur5_at(KITCHEN_BASE), with_gripper=False).compile()
 
 
 @pytest.fixture(scope="module")
 def full_model() -> mujoco.MjModel:
-    return ur5_model.ur5_spec(with_gripper=True, base=KITCHEN_BASE).compile()
+    return robot_spec(ur5_at(KITCHEN_BASE), with_gripper=True).compile()
 
 
 def random_configurations(count: int, seed: int) -> np.ndarray:
@@ -74,12 +87,13 @@ def test_limits_come_from_the_urdf(full_model: mujoco.MjModel) -> None:
 
 
 @pytest.mark.parametrize("base", [ORIGIN, KITCHEN_BASE, ((0.3, -0.2, 0.5), (0.6, 0.0, 0.0, 0.8))])
-def test_tcp_pose_and_jacobian_agree_at_random_configurations(base: ur5_model.Placement) -> None:
+def test_tcp_pose_and_jacobian_agree_at_random_configurations(base: Placement) -> None:
     """MuJoCo's TCP site (arm-only and gripper models) and Pinocchio's TCP frame, with the
-    base placed alike."""
-    arm_model = ur5_model.ur5_spec(with_gripper=False, base=base).compile()
-    full_model = ur5_model.ur5_spec(with_gripper=True, base=base).compile()
-    pin_model = ur5_model.load_pinocchio_arm(base)
+    base mounted alike (``robot_model.robot_spec``, ``robot_model.pinocchio_arm``)."""
+    robot = ur5_at(base)
+    arm_model = robot_spec(robot, with_gripper=False).compile()
+    full_model = robot_spec(robot, with_gripper=True).compile()
+    pin_model = pinocchio_arm(robot)
     pin_data = pin_model.createData()
     frame = pin_model.getFrameId(TCP_FRAME)
     for q in random_configurations(50, seed=0):
@@ -97,7 +111,7 @@ def test_tcp_pose_and_jacobian_agree_at_random_configurations(base: ur5_model.Pl
 
 def test_the_bare_spec_is_links_joints_and_the_finger_coupling() -> None:
     """What a robot description's MuJoCo builder returns: no actuator, site or key."""
-    model = ur5_model.ur5_bare_spec(KITCHEN_BASE).compile()
+    model = ur5_model.ur5_bare_spec().compile()
     assert (model.nu, model.nsite, model.nkey, model.neq) == (0, 0, 0, 1)
     joints = [model.joint(i).name for i in range(model.njnt)]
     assert joints == [*ARM_JOINTS, *FINGER_JOINTS]
@@ -110,17 +124,15 @@ def test_the_bare_spec_is_links_joints_and_the_finger_coupling() -> None:
     [((0.0, 0.0), (1.0, 0.0, 0.0, 0.0)), ((0.0, np.nan, 0.0), (1.0, 0.0, 0.0, 0.0)),
      ((0.0, 0.0, 0.0), (0.0, 0.0, 0.0, 0.0))],
 )  # fmt: skip
-def test_a_bad_placement_is_refused(base: ur5_model.Placement) -> None:
-    with pytest.raises(ValueError, match="base placement"):
-        ur5_model.ur5_bare_spec(base)
-    with pytest.raises(ValueError, match="base placement"):
-        ur5_model.load_pinocchio_arm(base)
+def test_a_bad_mount_is_refused(base: Placement) -> None:
+    with pytest.raises(RobotDescriptionError, match="field 'mount'"):
+        ur5_at(base)
 
 
 def test_tcp_is_between_the_pads(full_model: mujoco.MjModel) -> None:
     """The TCP lies midway between the pads' centres, on the closing axis (its y)."""
     data = mujoco.MjData(full_model)
-    mujoco.mj_resetDataKeyframe(full_model, data, full_model.key(ur5_model.HOME_KEY).id)
+    mujoco.mj_resetDataKeyframe(full_model, data, full_model.key(HOME_KEY).id)
     mujoco.mj_forward(full_model, data)
     site = data.site(TCP_SITE)
     left = data.geom("left_finger_pad").xpos
@@ -137,12 +149,12 @@ def test_home_posture(full_model: mujoco.MjModel) -> None:
     TCP pointing down at the kitchen's home node with the base at ``KITCHEN_BASE``."""
     lower, upper = ur5_model.joint_limits()
     assert np.all(HOME_Q > lower) and np.all(HOME_Q < upper)
-    key = full_model.key(ur5_model.HOME_KEY)
+    key = full_model.key(HOME_KEY)
     np.testing.assert_array_equal(key.qpos, [*HOME_Q, *[ur5_model.FINGER_OPEN] * 2])
     np.testing.assert_array_equal(key.ctrl[:6], HOME_Q)
     np.testing.assert_array_equal(key.ctrl[6:12], 0.0)
     assert full_model.actuator(ARM_JOINTS[0] + DAMPING_SUFFIX).id == 6
-    assert key.ctrl[full_model.actuator(ur5_model.GRIPPER_ACTUATOR).id] == ur5_model.FINGER_OPEN
+    assert key.ctrl[full_model.actuator(GRIPPER_ACTUATOR).id] == ur5_model.FINGER_OPEN
     position, rotation, _ = mujoco_tcp(full_model, HOME_Q)
     np.testing.assert_allclose(position, [0.35, 0.0, 0.45], atol=5e-4)
     np.testing.assert_allclose(rotation[:, 2], [0.0, 0.0, -1.0], atol=1e-3)
@@ -177,13 +189,13 @@ def _grasp_scene() -> tuple[mujoco.MjModel, mujoco.MjData]:
         friction=[1.5, 0.02, 0.001],
         condim=4,
     )
-    ur5_model.attach_ur5(spec, KITCHEN_BASE)
+    with_robot(spec, ur5_at(KITCHEN_BASE))
     model = spec.compile()
     data = mujoco.MjData(model)
     data.qpos[[model.joint(n).qposadr[0] for n in ARM_JOINTS]] = HOME_Q
     data.qpos[[model.joint(n).qposadr[0] for n in FINGER_JOINTS]] = ur5_model.FINGER_OPEN
     data.ctrl[[model.actuator(n).id for n in ARM_JOINTS]] = HOME_Q
-    data.ctrl[model.actuator(ur5_model.GRIPPER_ACTUATOR).id] = ur5_model.FINGER_OPEN
+    data.ctrl[model.actuator(GRIPPER_ACTUATOR).id] = ur5_model.FINGER_OPEN
     return model, data
 
 
@@ -205,7 +217,7 @@ def test_gripper_closes_on_and_lifts_a_box(arm_model: mujoco.MjModel) -> None:
     grasp = reach_pose(arm_model, TCP_SITE, (*BOX_AT, BOX_HALF), TOP_DOWN_QUAT, above.q, limits)
     assert above.reached() and grasp.reached()
     box = model.body("box").id
-    gripper = model.actuator(ur5_model.GRIPPER_ACTUATOR).id
+    gripper = model.actuator(GRIPPER_ACTUATOR).id
     _move(model, data, above.q, 2.0)
     _move(model, data, grasp.q, 1.5)
     np.testing.assert_allclose(data.xpos[box], [*BOX_AT, BOX_HALF], atol=2e-3)  # not pushed
@@ -283,31 +295,3 @@ def test_max_step_walks_the_straight_line(arm_model: mujoco.MjModel) -> None:
     off_line = [np.linalg.norm((p - start) - line * np.dot(p - start, line)) for p in points]
     assert max(off_line) < 5e-3
     assert np.max(np.linalg.norm(np.diff(points, axis=0), axis=1)) < 0.021
-
-
-# ------------------------------------------------------------------ files
-def test_a_missing_file_names_every_path_tried(
-    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
-) -> None:
-    monkeypatch.setattr(files, "data_roots", lambda: [tmp_path / "a", tmp_path / "b"])
-    with pytest.raises(ModelNotFoundError) as error:
-        files.find_robot_file(ur5_model.URDF_PATH)
-    message = str(error.value)
-    assert str(tmp_path / "a" / ur5_model.URDF_PATH) in message
-    assert str(tmp_path / "b" / ur5_model.URDF_PATH) in message
-    assert files.ENV_VARIABLE in message
-
-
-def test_the_environment_variable_is_searched_first(
-    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
-) -> None:
-    monkeypatch.setenv(files.ENV_VARIABLE, str(tmp_path))
-    assert files.data_roots()[0] == tmp_path
-    copy = tmp_path / ur5_model.URDF_PATH
-    copy.parent.mkdir(parents=True)
-    copy.write_text("<robot/>")
-    assert files.find_robot_file(ur5_model.URDF_PATH) == copy
-    text = "package://example-robot-data/robots/x.stl"
-    assert files.resolve_package_uris(text, ur5_model.URDF_PATH) == f"{tmp_path}/robots/x.stl"
-    with pytest.raises(ModelNotFoundError, match="unresolved package://"):
-        files.resolve_package_uris("package://other/x.stl", ur5_model.URDF_PATH)

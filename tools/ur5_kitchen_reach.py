@@ -1,8 +1,8 @@
-"""Measure whether the UR5, placed at ``ur5_model.KITCHEN_BASE`` (or ``--base``), reaches every
+"""Measure whether the UR5, mounted where the kitchen puts it (or at ``--base``), reaches every
 node of the home kitchen with the TCP pointing down, and what it touches there.
 
 Usage: python tools/ur5_kitchen_reach.py [--base X Y Z] [--steps N] [--max-step M] [--json]
-Per node: mink differential IK (``robots.reach.reach_pose``: frame + posture tasks, joint
+Per node: mink differential IK (``control.reach.reach_pose``: frame + posture tasks, joint
 position and velocity limits, 50 ms steps, the target walking a straight line at most
 ``--max-step`` per step) from ``HOME_Q`` toward the node's pose, then the arm put there in
 the kitchen scene (the door shut, then open; fingers open) and the geoms the robot touches
@@ -24,13 +24,19 @@ from typing import Any
 import mujoco
 import numpy as np
 
+from osg_control.control.description import Placement, RobotDescription, mounted
+from osg_control.control.reach import Reach, reach_pose
+from osg_control.control.robot_model import robot_spec
+from osg_control.control.scene_model import with_robot
 from osg_control.domain.spec import TOP_DOWN_QUAT
 from osg_control.kitchen.domain import kitchen_domain
-from osg_control.kitchen.scene import kitchen_xml_path
+from osg_control.kitchen.scene import ROBOT_MOUNTS, kitchen_xml_path
 from osg_control.kitchen.skills import NODES, SKILLS
 from osg_control.robots import ur5_model
-from osg_control.robots.reach import Reach, reach_pose
-from osg_control.robots.ur5_model import KITCHEN_BASE, Placement
+from osg_control.robots.registry import get_robot
+
+KITCHEN_BASE = ROBOT_MOUNTS["ur5"]
+"""The UR5's mount in the kitchen."""
 
 MANIPULATED_GEOMS = frozenset({"cube", "handle", "valve_lever"})
 """What the fingers grasp or push: contacts with them are the skills' point."""
@@ -38,10 +44,17 @@ DOOR_OPEN = 0.45
 HOME = kitchen_domain().home
 
 
+def ur5_at(base: Placement) -> RobotDescription:
+    """The UR5's description mounted at ``base``."""
+    return mounted(get_robot("ur5"), base)
+
+
 def kitchen_with_ur5(base: Placement) -> tuple[mujoco.MjModel, frozenset[int]]:
-    """The kitchen with the UR5 attached at ``base``; the robot's geom ids."""
-    scene = mujoco.MjSpec.from_file(str(kitchen_xml_path()))
-    robot_bodies = ur5_model.attach_ur5(scene, base)
+    """The kitchen with the UR5 mounted at ``base``; the robot's geom ids."""
+    robot = ur5_at(base)
+    alone = robot_spec(robot)
+    robot_bodies = {body.name for body in alone.bodies} - {alone.worldbody.name}
+    scene = with_robot(mujoco.MjSpec.from_file(str(kitchen_xml_path())), robot)
     with warnings.catch_warnings():
         warnings.filterwarnings("ignore", message="Attaching a spec with an empty prefix")
         model = scene.compile()
@@ -94,7 +107,14 @@ def reach_world(
     """``reach_pose`` toward a kitchen pose (``arm`` built at its placement)."""
     limits = dict(zip(ur5_model.ARM_JOINTS, ur5_model.velocity_limits(), strict=True))
     return reach_pose(
-        arm, ur5_model.TCP_SITE, position, orientation, start_q, limits, steps, max_step=max_step
+        arm,
+        get_robot("ur5").tcp.site,
+        position,
+        orientation,
+        start_q,
+        limits,
+        steps,
+        max_step=max_step,
     )
 
 
@@ -104,7 +124,7 @@ def measure(
     """One row per kitchen node (IK errors from ``HOME_Q``, the final q, what the robot
     touches there) and one per skill (its waypoints reached in turn from its start node's
     q: the worst error, what the robot touches along the way)."""
-    arm = ur5_model.ur5_spec(with_gripper=False, base=base).compile()
+    arm = robot_spec(ur5_at(base), with_gripper=False).compile()
     scene, robot_geoms = kitchen_with_ur5(base)
     rows = []
     node_q = {}
@@ -170,7 +190,7 @@ def min_singular_value(arm: mujoco.MjModel, path: np.ndarray) -> float:
     """The smallest singular value of the TCP's 6 x 6 Jacobian over ``path``: how far the
     arm stays from a singularity (the stretched elbow, the wrist, the shoulder)."""
     data = mujoco.MjData(arm)
-    site = arm.site(ur5_model.TCP_SITE).id
+    site = arm.site(get_robot("ur5").tcp.site).id
     jacobian = np.zeros((6, arm.nv))
     smallest = np.inf
     for q in path:
@@ -190,7 +210,7 @@ def main(argv: list[str] | None = None) -> int:
         nargs=3,
         default=KITCHEN_BASE[0],
         metavar=("X", "Y", "Z"),
-        help="the base link's position [m] (not rotated; default: ur5_model.KITCHEN_BASE)",
+        help="the base link's position [m] (not rotated; default: the kitchen's mount)",
     )
     parser.add_argument("--steps", type=int, default=400, help="IK steps of 50 ms per node")
     parser.add_argument(

@@ -26,10 +26,15 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import Any
 
 from osg_control.errors import OSGError
+
+Placement = tuple[tuple[float, float, float], tuple[float, float, float, float]]
+"""Where a robot's base stands in a scene: a position [m] and an orientation (w, x, y, z)."""
+ORIGIN: Placement = ((0.0, 0.0, 0.0), (1.0, 0.0, 0.0, 0.0))
+"""The scene's origin, not rotated: where a robot stands unless a domain mounts it elsewhere."""
 
 SENSORS: tuple[str, ...] = ("encoders", "finger_width", "grip_force")
 """What an arm may measure of itself: joint encoders (the ``robot`` perception's TCP by
@@ -148,6 +153,10 @@ class RobotDescription:
         control_hz: the rate of the arm's control loop [Hz].
         sensors: what it measures of itself (``SENSORS``).
         gravity_compensation: whether the drives cancel the links' weight.
+        mount: where its base stands in the scene it is built into. A domain declares it
+            (``Domain.mounts``) and ``mounted`` sets it: both models are built with the
+            base there, so the IK, the TCP readouts and the resets work in scene
+            coordinates. The default is the scene's origin.
     """
 
     name: str
@@ -161,6 +170,7 @@ class RobotDescription:
     control_hz: float = 20.0
     sensors: tuple[str, ...] = SENSORS
     gravity_compensation: bool = True
+    mount: Placement = ORIGIN
 
     def __post_init__(self) -> None:
         check_description(self)
@@ -201,7 +211,14 @@ class RobotDescription:
             "control_hz": self.control_hz,
             "sensors": list(self.sensors),
             "redundant": self.redundant,
+            "mount": {"position": list(self.mount[0]), "quat": list(self.mount[1])},
         }
+
+
+def mounted(robot: RobotDescription, mount: Placement) -> RobotDescription:
+    """``robot`` with its base at ``mount`` in the scene (checked: ``RobotDescriptionError``
+    for a non-finite position or a quaternion that is not a unit one)."""
+    return replace(robot, mount=(tuple(mount[0]), tuple(mount[1])))  # type: ignore[arg-type]
 
 
 def _fail(robot: str, field: str, message: str) -> RobotDescriptionError:
@@ -251,6 +268,7 @@ def check_description(robot: RobotDescription) -> None:
             raise _fail(name, "home_q", f"joint {joint!r}: {q} is outside [{lo}, {hi}]")
     _check_tcp(robot)
     _check_gripper(robot)
+    _check_mount(robot)
     if not (math.isfinite(robot.control_hz) and robot.control_hz > 0):
         raise _fail(name, "control_hz", f"must be positive, got {robot.control_hz}")
     unknown = sorted(set(robot.sensors) - set(SENSORS))
@@ -287,3 +305,13 @@ def _check_gripper(robot: RobotDescription) -> None:
         or min(gripper.armature, gripper.damping) < 0
     ):
         raise _fail(robot.name, "gripper", "armature and damping must be >= 0")
+
+
+def _check_mount(robot: RobotDescription) -> None:
+    position, quat = robot.mount
+    if len(position) != 3 or len(quat) != 4 or not _finite((*position, *quat)):
+        raise _fail(
+            robot.name, "mount", f"needs 3 position and 4 quaternion numbers: {robot.mount}"
+        )
+    if abs(math.fsum(v * v for v in quat) - 1.0) > 1e-6:
+        raise _fail(robot.name, "mount", f"must hold a unit quaternion, got {quat}")

@@ -16,7 +16,7 @@ import qpsolvers
 
 from osg_control.control.description import RobotDescription
 from osg_control.control.qp import SOLVERS
-from osg_control.control.robot_model import robot_spec
+from osg_control.control.robot_model import pinocchio_arm, robot_spec
 from osg_control.errors import ControllerError
 
 BACKEND_NAMES: tuple[str, ...] = ("mink", "pinocchio")
@@ -231,7 +231,7 @@ class PinocchioBackend(Backend):
         import pinocchio as pin
 
         super().__init__(config, robot)
-        self.model = robot.model.pinocchio()
+        self.model = pinocchio_arm(robot)
         self.model.velocityLimit = self.velocity_limit.copy()
         self.data = self.model.createData()
         self.frame_id = self.model.getFrameId(robot.tcp.frame)

@@ -22,7 +22,12 @@ from typing import Any
 import mujoco
 import numpy as np
 
-from osg_control.control.description import RobotDescription, RobotDescriptionError
+from osg_control.control.description import (
+    ORIGIN,
+    Placement,
+    RobotDescription,
+    RobotDescriptionError,
+)
 from osg_control.control.mujoco_log import install_warning_handler
 from osg_control.control.servo import add_speed_capped_drives
 from osg_control.errors import ModelNotFoundError
@@ -46,6 +51,7 @@ def robot_spec(robot: RobotDescription, with_gripper: bool = True) -> mujoco.MjS
     """
     spec = robot.model.mujoco()
     spec.modelname = robot.name
+    _place_base(spec, robot.mount)
     tcp = robot.tcp
     spec.body(tcp.body).add_site(name=tcp.site, pos=tcp.pos, quat=tcp.quat, size=[0.005] * 3)
     if robot.gravity_compensation:
@@ -89,11 +95,65 @@ def robot_spec(robot: RobotDescription, with_gripper: bool = True) -> mujoco.MjS
     return spec
 
 
+def _place_base(spec: mujoco.MjSpec, mount: Placement) -> None:
+    """Move the bodies hanging from the world (the robot's base) to ``mount``."""
+    if mount == ORIGIN:
+        return
+    position, quat = np.array(mount[0], dtype=float), np.array(mount[1], dtype=float)
+    for body in spec.worldbody.bodies:
+        placed_pos, placed_quat = np.zeros(3), np.zeros(4)
+        mujoco.mju_mulPose(
+            placed_pos, placed_quat, position, quat, np.array(body.pos), np.array(body.quat)
+        )
+        body.pos, body.quat = placed_pos, placed_quat
+
+
+def pinocchio_arm(robot: RobotDescription) -> Any:
+    """The robot's arm-only ``pinocchio.Model`` (``ModelSource.pinocchio``) with its base at
+    ``robot.mount``: the joints and frames hanging from the universe moved there."""
+    model = robot.model.pinocchio()
+    if robot.mount == ORIGIN:
+        return model
+    import pinocchio as pin
+
+    position, quat = robot.mount
+    w, x, y, z = quat
+    placement = pin.SE3(pin.Quaternion(w, x, y, z).normalized().matrix(), np.array(position))
+    for joint in range(1, model.njoints):
+        if model.parents[joint] == 0:
+            model.jointPlacements[joint] = placement * model.jointPlacements[joint]
+    for frame in list(model.frames)[1:]:  # the universe stays the world
+        if frame.parentJoint == 0:
+            frame.placement = placement * frame.placement
+    return model
+
+
 @cache
 def arm_model(robot: RobotDescription) -> mujoco.MjModel:
     """The compiled arm-only model (gripper removed), shared read-only: the IK's and
     ``check_models``' (copy it before changing it)."""
     return robot_spec(robot, with_gripper=False).compile()
+
+
+@cache
+def workspace(robot: RobotDescription) -> tuple[tuple[float, float, float], float]:
+    """A sphere every TCP position of ``robot`` lies in, in scene coordinates: centred on
+    its first joint's anchor (at its mount), of radius the sum of the distances between
+    consecutive joint anchors and from the last to the TCP at the home posture (each a
+    rigid link, so by the triangle inequality no posture reaches farther).
+
+    Returns:
+        The centre [m] and the radius [m].
+    """
+    model = arm_model(robot)
+    data = mujoco.MjData(model)
+    data.qpos[:] = robot.home_q
+    mujoco.mj_kinematics(model, data)
+    anchors = np.array([data.xanchor[model.joint(name).id] for name in robot.arm.names])
+    points = np.vstack([anchors, data.site(robot.tcp.site).xpos])
+    radius = float(np.linalg.norm(np.diff(points, axis=0), axis=1).sum())
+    x, y, z = (float(v) for v in anchors[0])
+    return (x, y, z), radius
 
 
 def check_models(robot: RobotDescription) -> None:
@@ -170,15 +230,20 @@ def reduced_urdf_model(urdf: Path, locked_joints: tuple[str, ...]) -> Any:
     return pin.buildReducedModel(full, locked, pin.neutral(full))
 
 
-def urdf_for_mujoco(urdf: Path, package_prefix: str, mesh_dir: Path) -> str:
+def urdf_for_mujoco(
+    urdf: Path, package_prefix: str, mesh_dir: Path, *, drop_visuals: bool = False
+) -> str:
     """A URDF's text for MuJoCo: ``package_prefix`` (a ``package://`` path) resolved to
     ``mesh_dir``, the ``.dae`` visuals (which MuJoCo cannot read) replaced by the collision
-    STLs, visuals kept and inertias balanced.
+    STLs (or with ``drop_visuals`` every visual removed: what is seen is what collides),
+    visuals kept and inertias balanced.
 
     Raises:
         ModelNotFoundError: a ``package://`` path is left unresolved.
     """
     text = urdf.read_text()
+    if drop_visuals:
+        text = re.sub(r"<visual>.*?</visual>", "", text, flags=re.DOTALL)
     collision = str(mesh_dir / "collision")
     text = re.sub(re.escape(package_prefix) + r"visual/(\w+)\.dae", collision + r"/\1.stl", text)
     text = text.replace(package_prefix, str(mesh_dir) + "/")

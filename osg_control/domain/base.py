@@ -21,6 +21,7 @@ from typing import Any, Protocol
 
 import numpy as np
 
+from osg_control.control.description import ORIGIN, Placement, mounted
 from osg_control.domain.benchmark import Benchmark, validate_benchmark
 from osg_control.domain.spaces import (
     ACTION_DIM,
@@ -154,6 +155,9 @@ class Domain:
             other robot can be chosen.
         robot_is_default: whether ``robot`` is the domain's own (False after
             ``with_robot`` chose another).
+        mounts: where a robot's base stands in its scene, by robot name (a robot not
+            named stands at the origin); ``with_robot`` builds the env around the robot so
+            mounted (``description.mounted``), IK and readouts in scene coordinates.
     """
 
     name: str
@@ -182,6 +186,7 @@ class Domain:
     own_control_hz: float | None = None
     robot: str | None = None
     robot_is_default: bool = True
+    mounts: Mapping[str, Placement] = field(default_factory=dict)
     skills_by_name: dict[str, SkillSpec] = field(init=False, repr=False, compare=False)
 
     def __post_init__(self) -> None:
@@ -196,14 +201,17 @@ class Domain:
         object.__setattr__(self, "make_env", checked)
 
     def with_robot(self, robot: str) -> Domain:
-        """This domain with its env built around the registered robot ``robot``.
+        """This domain with its env built around the registered robot ``robot``, at its
+        mount (``mounts``).
 
         Another robot than the domain's own has its own artifacts (``cache_name``) and the
         shipped defaults of ``<defaults_dir>-<robot>`` if the domain ships them (none
-        otherwise: the default robot's policies do not drive another arm).
+        otherwise: the default robot's policies do not drive another arm). It is checked
+        to reach the domain's nodes and skill waypoints first (``domain.reach``).
 
         Raises:
             DomainError: the domain's env drives its own arm (``robot`` is None).
+            UnreachableError: the robot, at its mount, does not reach a node or waypoint.
         """
         if self.robot is None:
             raise DomainError(
@@ -216,11 +224,16 @@ class Domain:
         defaults = None
         if self.defaults_dir is not None:
             defaults = self.defaults_dir.with_name(f"{self.defaults_dir.name}-{robot}")
+        from osg_control.domain.reach import check_reach
+        from osg_control.robots.registry import get_robot
+
+        description = mounted(get_robot(robot), self.mounts.get(robot, ORIGIN))
+        check_reach(self, description)
         return replace(
             self,
             robot=robot,
             robot_is_default=False,
-            make_env=partial(own_factory, robot=robot),
+            make_env=partial(own_factory, robot=description),
             defaults_dir=defaults if defaults is not None and defaults.is_dir() else None,
         )
 

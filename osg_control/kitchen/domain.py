@@ -8,6 +8,7 @@ import numpy as np
 
 from osg_control.domain.base import Domain, StartRegion
 from osg_control.kitchen.paper import PUBLISHED
+from osg_control.kitchen.scene import ROBOT_MOUNTS
 from osg_control.kitchen.skills import CUBE, NODES, SKILLS, WORLD_FACTS
 from osg_control.kitchen.tasks import DEFAULT_WORLD, KITCHEN_TASKS
 from osg_control.kitchen.world import WORLD_FIELDS, world_facts, world_state_from_array
@@ -85,4 +86,5 @@ def kitchen_domain() -> Domain:
         env_id="osg/Kitchen-v0",
         published=PUBLISHED,
         robot=DEFAULT_ROBOT,
+        mounts=ROBOT_MOUNTS,
     )

@@ -16,6 +16,7 @@ import mujoco
 import numpy as np
 
 from osg_control.control.description import RobotDescription
+from osg_control.control.robot_model import workspace
 from osg_control.domain.frames import placement_offsets
 from osg_control.domain.spec import SkillSpec
 from osg_control.environment.arm_env import ArmEnv, EnvConfig
@@ -24,13 +25,12 @@ from osg_control.kitchen.cameras import KITCHEN_CAMERAS
 from osg_control.kitchen.detectors import WORLD_SENSORS, detect_grasps
 from osg_control.kitchen.domain import DEFAULT_ROBOT, facts_of
 from osg_control.kitchen.options import WORLD_OPTIONS, check_world_options
-from osg_control.kitchen.scene import SceneIndex, build_kitchen_model
+from osg_control.kitchen.scene import SceneIndex, build_kitchen_model, kitchen_robot
 from osg_control.kitchen.skills import CUBE, DOOR_OPENED, NODES, SKILLS_BY_NAME, WORLD_FACTS
 from osg_control.kitchen.world import (
     CUBE_HALF_SIZE,
     WorldState,
 )
-from osg_control.robots.registry import get_robot
 
 HANDLE_GRASP_SLACK = 0.015
 """How far along the handle fin [m] (x) a handle-holding start may grasp it: about the
@@ -73,8 +73,7 @@ class KitchenEnv(ArmEnv):
             if isinstance(skill, str)
             else skill
         )  # anything else is checked (named) by ArmEnv
-        if not isinstance(robot, RobotDescription):
-            robot = get_robot(robot or DEFAULT_ROBOT)
+        robot = kitchen_robot(robot or DEFAULT_ROBOT)
         super().__init__(NODES, "home", spec, config or EnvConfig(), render_mode, robot=robot)
         self.scene = SceneIndex(self.model, robot)
 
@@ -115,7 +114,7 @@ class KitchenEnv(ArmEnv):
     def check_world(self, world: dict[str, Any], holding: str | None) -> None:
         """Refuse a non-finite or out-of-range ``door_opening`` or ``cube_pos``
         (``options.check_world_options``)."""
-        check_world_options(world, holding)
+        check_world_options(world, holding, workspace(self.robot))
 
     def place_world(
         self, world: dict[str, Any], facts: frozenset[str], holding: str | None

@@ -2,7 +2,7 @@
 
 A cube position must be one where the cube rests and the arm can reach it: on the counter's
 top, clear of the cabinet's plinth and the valve, or on the cabinet's floor, and within the
-Panda's reach of its shoulder. The scene's dimensions are ``robots/kitchen.xml``'s.
+robot's workspace (``robot_model.workspace``). The scene's dimensions are ``robots/kitchen.xml``'s.
 """
 
 from __future__ import annotations
@@ -13,7 +13,6 @@ import numpy as np
 
 from osg_control.environment.options import finite_option
 from osg_control.errors import EnvOptionError
-from osg_control.kitchen.skills import SHOULDER, WORKSPACE_RADIUS
 from osg_control.kitchen.world import CABINET_INTERIOR_HIGH, CABINET_INTERIOR_LOW, CUBE_HALF_SIZE
 
 DOOR_TRAVEL = 0.45
@@ -35,11 +34,13 @@ COUNTER_OBSTACLES = {
 """Footprints (x, y) [m] on the counter's top that the cube would cut into."""
 REST_TOLERANCE = 0.005
 """How far [m] above its surface a cube position may lie (it settles in the start's 0.1 s)."""
+Sphere = tuple[tuple[float, float, float], float]
+"""A robot's workspace: centre [m] and radius [m] (``robot_model.workspace``)."""
 
 
-def check_world_options(world: dict[str, Any], holding: str | None) -> None:
-    """Refuse a non-finite or out-of-range door opening or cube position, or a cube position
-    with the cube held.
+def check_world_options(world: dict[str, Any], holding: str | None, reach: Sphere) -> None:
+    """Refuse a non-finite or out-of-range door opening or cube position (outside the
+    robot's workspace ``reach`` included), or a cube position with the cube held.
 
     Raises:
         EnvOptionError: naming the option and its value.
@@ -55,19 +56,21 @@ def check_world_options(world: dict[str, Any], holding: str | None) -> None:
                 "reset options contradict each other: world.cube_pos while holding 'cube' "
                 "(a held cube is placed in the fingers)"
             )
-        check_cube_position(finite_option("world.cube_pos", world["cube_pos"], (3,)))
+        check_cube_position(finite_option("world.cube_pos", world["cube_pos"], (3,)), reach)
 
 
-def check_cube_position(pos: np.ndarray) -> None:
+def check_cube_position(pos: np.ndarray, reach: Sphere) -> None:
     """Refuse a cube position where it does not rest on a surface or out of reach.
 
     Raises:
         EnvOptionError: naming the option, the value and the rule broken.
     """
     where = f"reset option world.cube_pos {pos.tolist()}"
-    if np.linalg.norm(pos - SHOULDER) > WORKSPACE_RADIUS:
+    centre, radius = reach
+    if np.linalg.norm(pos - np.array(centre)) > radius:
         raise EnvOptionError(
-            f"{where} is out of the arm's reach ({WORKSPACE_RADIUS} m from its shoulder)"
+            f"{where} is out of the arm's reach ({radius:.3f} m from its first joint at "
+            f"{list(centre)})"
         )
     surface = _resting_surface(pos)
     if surface is None:

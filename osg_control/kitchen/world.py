@@ -39,7 +39,7 @@ class WorldState:
     Attributes:
         door_opening: door travel along its slide [m] (0 = shut).
         valve_angle: valve knob angle [rad].
-        cube_pos: cube centre [m], world = robot base frame.
+        cube_pos: cube centre [m] in the kitchen's world frame.
         cube_quat: cube orientation, ``w, x, y, z``.
         cube_grasped: both fingers touch the cube.
         handle_grasped: both fingers touch the door handle.

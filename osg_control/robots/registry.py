@@ -20,7 +20,10 @@ from osg_control.control.description import RobotDescription, RobotDescriptionEr
 from osg_control.control.robot_model import check_models
 
 ENTRY_POINT_GROUP = "osg_control.robots"
-BUILTIN: dict[str, str] = {"panda": "osg_control.robots.panda:PANDA"}
+BUILTIN: dict[str, str] = {
+    "panda": "osg_control.robots.panda:PANDA",
+    "ur5": "osg_control.robots.ur5:ur5_description",
+}
 """The robots this package ships: name -> ``module:attribute``."""
 
 _REGISTERED: dict[str, Callable[[], RobotDescription]] = {}

@@ -7,11 +7,11 @@ the URDF's ``tool0`` frame. MuJoCo cannot read the URDF's ``.dae`` visuals: they
 and the URDF's collision STLs (convex hulls in MuJoCo) are what is seen and what collides.
 example-robot-data's UR5 has no gripper, so ``ur5_bare_spec`` mounts one on the flange, modelled
 on a Robotiq 2F-85: two prismatic fingers driven together (an equality couples them, as a
-mimic joint would) by one position actuator, ``MAX_OPENING`` between the pads, friction pads
-with torsional friction. The real 2F-85's linkage (its fingertips swing on an arc) is not
-modelled. MuJoCo also gets speed-capped joint drives (``control.servo``), gravity
-compensation, the SRDF's disabled collision pairs, a TCP site and a home keyframe; Pinocchio
-gets the arm (six joints) with the TCP frame ``TCP_FRAME``.
+mimic joint would), ``MAX_OPENING`` between the pads, friction pads with torsional friction.
+The real 2F-85's linkage (its fingertips swing on an arc) is not modelled. The SRDF's disabled
+collision pairs are excluded; Pinocchio gets the arm (six joints) with the TCP frame
+``TCP_FRAME``. These are the builders of ``robots.ur5``'s description: the core
+(``control.robot_model``) adds the TCP site, drives, gripper actuator, home key and mount.
 
 Tool convention (the Panda's): the TCP's z axis points out of the flange (the approach
 direction) and the fingers close along its y axis; the TCP lies between the pads' centres.
@@ -19,16 +19,13 @@ direction) and the fingers close along its y axis; the TCP lies between the pads
 
 from __future__ import annotations
 
-import re
-import warnings
 from functools import cache
 from xml.etree import ElementTree
 
 import mujoco
 import numpy as np
 
-from osg_control.control.servo import add_speed_capped_drives
-from osg_control.robots.files import find_robot_file, resolve_package_uris
+from osg_control.control.robot_model import find_example_robot_data, urdf_for_mujoco
 
 URDF_PATH = "robots/ur_description/urdf/ur5_robot.urdf"
 """The URDF inside example-robot-data (its ``ur5`` robot)."""
@@ -49,16 +46,10 @@ FLANGE_FRAME = "tool0"
 """The URDF's flange frame (z out of the flange), where the gripper is mounted."""
 TCP_BODY = "wrist_3_link"
 """The link that carries the flange and the TCP site (MuJoCo fuses ``tool0`` into it)."""
-_BASE_LINK = "base_link"
 _MARKER_LINK = "ee_link"
 """The URDF's end-effector marker link, whose 1 cm collision box is dropped."""
 TCP_FRAME = "ur5_tcp"
 """The TCP frame added to the Pinocchio model."""
-TCP_SITE = "tcp"
-"""The TCP site of the MuJoCo model."""
-GRIPPER_ACTUATOR = "gripper"
-HOME_KEY = "arm-home"
-"""The MuJoCo keyframe of ``HOME_Q`` with the fingers open."""
 
 FINGER_OPEN = 0.0425
 """Each finger's travel when open [m]: ``MAX_OPENING`` between the pads."""
@@ -71,18 +62,8 @@ TCP_DEPTH = 0.134
 
 HOME_Q = np.array([-0.9241, -1.9798, 1.4823, -1.0733, -1.5708, -2.4949])
 """Home arm configuration [rad]: elbow up, the TCP pointing down above the base's +x side
-(placed at ``KITCHEN_BASE``, it is at the kitchen's home node, 0.35 0 0.45)."""
-
-Placement = tuple[tuple[float, float, float], tuple[float, float, float, float]]
-"""A base link's position [m] and orientation (w, x, y, z) in the world."""
-ORIGIN: Placement = ((0.0, 0.0, 0.0), (1.0, 0.0, 0.0, 0.0))
-KITCHEN_BASE: Placement = ((0.10, 0.15, 0.0), (1.0, 0.0, 0.0, 0.0))
-"""Where the UR5's base link goes in the home kitchen: on the counter top, 10 cm ahead of and
-15 cm to the cabinet's side of the Panda's base (the origin), not rotated (q = 0 stretches the
-arm along +x). At the origin, ``release-handle``'s lift point (0.42 0.54 0.50, TCP down) is out
-of reach (3 cm short, the elbow straight); here every node and skill path is reached clear of
-the furniture, the TCP Jacobian's smallest singular value staying above 0.13
-(``tools/ur5_kitchen_reach.py``)."""
+(mounted where the kitchen puts it, ``kitchen.scene.ROBOT_MOUNTS``, it is at the kitchen's
+home node, 0.35 0 0.45)."""
 
 # Gripper geometry in the flange frame (z out of the flange, fingers closing along y) [m].
 # A 75 mm coupling disc, a palm box, and per finger a link box reaching from the palm to the
@@ -118,26 +99,11 @@ FINGER_DAMPING = 20.0
 through thin parts."""
 
 
-def check_placement(base: Placement) -> None:
-    """Refuse a placement that is not a finite position and a non-zero quaternion.
-
-    Raises:
-        ValueError: naming the placement.
-    """
-    position, quat = np.asarray(base[0], dtype=float), np.asarray(base[1], dtype=float)
-    if position.shape != (3,) or quat.shape != (4,):
-        raise ValueError(f"base placement {base}: needs 3 position and 4 quaternion values")
-    if not (np.all(np.isfinite(position)) and np.all(np.isfinite(quat))):
-        raise ValueError(f"base placement {base}: not finite")
-    if np.linalg.norm(quat) < 1e-9:
-        raise ValueError(f"base placement {base}: the quaternion is zero")
-
-
 @cache
 def _urdf_arm():  # type: ignore[no-untyped-def]
     import pinocchio as pin
 
-    return pin.buildModelFromUrdf(str(find_robot_file(URDF_PATH)))
+    return pin.buildModelFromUrdf(str(find_example_robot_data(URDF_PATH)))
 
 
 def tcp_in_flange() -> tuple[tuple[float, float, float], tuple[float, float, float, float]]:
@@ -159,22 +125,16 @@ def flange_to_tcp() -> tuple[np.ndarray, np.ndarray]:
     return np.array(tool0.translation) + rotation[:, 2] * TCP_DEPTH, rotation
 
 
-def load_pinocchio_arm(base: Placement = ORIGIN):  # type: ignore[no-untyped-def]
+def load_pinocchio_arm():  # type: ignore[no-untyped-def]
     """The arm's Pinocchio model (six joints, no gripper) with the TCP frame ``TCP_FRAME``,
-    its base link at ``base`` in the model's world.
+    its base link at the model's origin (``robot_model.pinocchio_arm`` mounts it).
 
     Returns:
         A new ``pinocchio.Model`` (callers may modify it).
     """
     import pinocchio as pin
 
-    check_placement(base)
     model = pin.Model(_urdf_arm())
-    placement = pin.SE3(pin.Quaternion(*base[1]).normalized().matrix(), np.array(base[0]))
-    model.jointPlacements[1] = placement * model.jointPlacements[1]
-    for frame in list(model.frames)[1:]:  # the universe stays the world
-        if frame.parentJoint == 0:
-            frame.placement = placement * frame.placement
     flange = model.getFrameId(FLANGE_FRAME)
     position, rotation = flange_to_tcp()
     frame = model.frames[flange]
@@ -207,18 +167,15 @@ def effort_limits() -> np.ndarray:
 
 
 def _urdf_for_mujoco() -> str:
-    """The URDF's text without its ``.dae`` visuals (MuJoCo cannot load them), with absolute
-    mesh paths and a compiler tag keeping what is left."""
-    text = find_robot_file(URDF_PATH).read_text()
-    text = re.sub(r"<visual>.*?</visual>", "", text, flags=re.DOTALL)
-    text = resolve_package_uris(text, URDF_PATH)
-    compiler = '<mujoco><compiler discardvisual="false" balanceinertia="true"/></mujoco>'
-    return re.sub(r"(<robot[^>]*>)", r"\1" + compiler, text, count=1)
+    """The URDF's text for MuJoCo without its ``.dae`` visuals (``robot_model.urdf_for_mujoco``)."""
+    urdf = find_example_robot_data(URDF_PATH)
+    root = urdf.parents[len(URDF_PATH.split("/")) - 1]
+    return urdf_for_mujoco(urdf, "package://example-robot-data/", root, drop_visuals=True)
 
 
 def disabled_collision_pairs() -> list[tuple[str, str]]:
     """The SRDF's link pairs that are never checked for collision."""
-    root = ElementTree.parse(find_robot_file(SRDF_PATH)).getroot()
+    root = ElementTree.parse(find_example_robot_data(SRDF_PATH)).getroot()
     return [(e.attrib["link1"], e.attrib["link2"]) for e in root.iter("disable_collisions")]
 
 
@@ -270,21 +227,14 @@ def _add_gripper(flange: mujoco.MjsBody, position: np.ndarray, quat: np.ndarray)
         )
 
 
-def ur5_bare_spec(base: Placement = ORIGIN) -> mujoco.MjSpec:
+def ur5_bare_spec() -> mujoco.MjSpec:
     """The bare UR5 from the URDF with the gripper mounted: links (collision meshes), joints,
     inertias, the SRDF's excluded pairs, the fingers' slide joints and their coupling; no
-    actuator, TCP site or keyframe (``ur5_spec`` adds them).
-
-    Args:
-        base: where the base link goes in the spec's world (attach the spec at a scene's
-            origin: the IK models built with the same ``base`` then work in scene
-            coordinates).
+    actuator, TCP site or keyframe (``robot_model.robot_spec`` adds them); the base link at
+    the origin (``robot_model.robot_spec`` mounts it).
     """
-    check_placement(base)
     spec = mujoco.MjSpec.from_string(_urdf_for_mujoco())
     spec.modelname = "ur5"
-    root = spec.body(_BASE_LINK)
-    root.pos, root.quat = list(base[0]), list(base[1])
     for geom in list(spec.body(_MARKER_LINK).geoms):
         spec.delete(geom)  # a 1 cm box where the gripper's coupling is
     for link1, link2 in disabled_collision_pairs():
@@ -301,69 +251,3 @@ def ur5_bare_spec(base: Placement = ORIGIN) -> mujoco.MjSpec:
     coupling.data = polynomial
     coupling.solref = [0.005, 1.0]  # stiffer than the default 0.02 s: the fingers centre
     return spec
-
-
-def ur5_spec(with_gripper: bool = True, base: Placement = ORIGIN) -> mujoco.MjSpec:
-    """The driven UR5: ``ur5_bare_spec(base)`` with the TCP site, gravity compensation, the
-    arm's drives, the gripper's actuator ``GRIPPER_ACTUATOR`` and the home key.
-
-    Args:
-        with_gripper: keep the fingers and the gripper's actuator. The arm-only model
-            (``False``) is what an IK backend works on; its TCP site is at the same place.
-        base: where the base link goes (``ur5_bare_spec``).
-
-    The actuators are, in order: a stiffness actuator per arm joint (named after it), a
-    damping actuator per arm joint (``control.servo``), then the gripper's (its control is
-    each finger's travel, 0 closed to ``FINGER_OPEN``).
-    """
-    spec = ur5_bare_spec(base)
-    position, quat = tcp_in_flange()
-    spec.body(TCP_BODY).add_site(name=TCP_SITE, pos=position, quat=quat, size=[0.005] * 3)
-    world = spec.worldbody.name
-    for body in spec.bodies:
-        body.gravcomp = 0.0 if body.name == world else 1.0
-    if not with_gripper:
-        for name in FINGER_BODIES:
-            spec.delete(spec.body(name))
-        for equality in list(spec.equalities):
-            spec.delete(equality)
-    for name, armature in zip(ARM_JOINTS, ARM_ARMATURE, strict=True):
-        spec.joint(name).armature = armature
-    effort = tuple(float(e) for e in effort_limits())
-    add_speed_capped_drives(spec, ARM_JOINTS, SERVO_KP, SERVO_KV, effort, velocity_limits())
-    qpos_home = list(HOME_Q)
-    ctrl_home = list(HOME_Q) + [0.0] * len(ARM_JOINTS)
-    if with_gripper:
-        gripper = spec.add_actuator(
-            name=GRIPPER_ACTUATOR, target=FINGER_JOINTS[0], trntype=mujoco.mjtTrn.mjTRN_JOINT
-        )
-        gripper.set_to_position(kp=GRIPPER_KP, kv=GRIPPER_KV)
-        gripper.ctrlrange = [0.0, FINGER_OPEN]
-        gripper.ctrllimited = True
-        gripper.forcerange = [-GRIP_FORCE, GRIP_FORCE]
-        gripper.forcelimited = True
-        for name in FINGER_JOINTS:
-            spec.joint(name).armature = FINGER_ARMATURE
-            spec.joint(name).damping = [FINGER_DAMPING, 0.0, 0.0]
-        qpos_home += [FINGER_OPEN, FINGER_OPEN]
-        ctrl_home.append(FINGER_OPEN)
-    spec.add_key(name=HOME_KEY, qpos=qpos_home, ctrl=ctrl_home)
-    return spec
-
-
-def attach_ur5(scene: mujoco.MjSpec, base: Placement = ORIGIN) -> frozenset[str]:
-    """Attach the UR5 with its gripper (placed at ``base``; its own keyframes dropped: a
-    scene's keyframe must cover the scene's joints too) at the origin of ``scene``.
-
-    Returns:
-        The names of the robot's bodies in ``scene``.
-    """
-    robot = ur5_spec(with_gripper=True, base=base)
-    for key in list(robot.keys):
-        robot.delete(key)
-    names = frozenset(body.name for body in robot.bodies) - {robot.worldbody.name}
-    with warnings.catch_warnings():
-        # The URDF's names are unique in a scene, so no prefix is needed.
-        warnings.filterwarnings("ignore", message="Attaching a spec with an empty prefix")
-        scene.attach(robot, frame=scene.worldbody.add_frame(), prefix="")
-    return names

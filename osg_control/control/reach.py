@@ -12,6 +12,7 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from dataclasses import dataclass
+from typing import Any
 
 import mujoco
 import numpy as np
@@ -53,6 +54,7 @@ def reach_pose(
     orientation_cost: float = 0.5,
     posture_cost: float = 1e-3,
     max_step: float | None = None,
+    stop_within: tuple[float, float] | None = None,
 ) -> Reach:
     """Drive ``model``'s (an arm-only model's) ``site`` toward the pose (``position`` [m],
     ``quat`` w x y z, in the model's world frame) from ``start_q`` for ``steps`` control
@@ -106,9 +108,16 @@ def reach_pose(
         )
         configuration.integrate_inplace(velocity, CONTROL_PERIOD)
         path[step] = configuration.q
+        if stop_within is not None and waypoint is goal:
+            errors = _errors(configuration, site, target)
+            if errors[0] <= stop_within[0] and errors[1] <= stop_within[1]:
+                return Reach(configuration.q.copy(), *errors, path[: step + 1])
+    return Reach(configuration.q.copy(), *_errors(configuration, site, target), path)
+
+
+def _errors(configuration: Any, site: str, target: Any) -> tuple[float, float]:
+    """The site's distance [m] and rotation angle [rad] from ``target``."""
     reached = configuration.get_transform_frame_to_world(site, "site")
     offset = reached.translation() - target.translation()
     turn = (reached.rotation().inverse() @ target.rotation()).log()
-    return Reach(
-        configuration.q.copy(), float(np.linalg.norm(offset)), float(np.linalg.norm(turn)), path
-    )
+    return float(np.linalg.norm(offset)), float(np.linalg.norm(turn))
