@@ -67,11 +67,12 @@ def test_an_env_lacking_contract_members_is_refused_naming_them() -> None:
 
 def test_with_robot_keeps_the_check() -> None:
     """``with_robot`` re-wraps the domain's own factory once (its envs are still checked)."""
-    other = KITCHEN.with_robot("other-arm")
+    other = KITCHEN.with_robot("ur5")
     assert isinstance(other.make_env, CheckedEnvFactory)
     assert isinstance(other.make_env.factory, functools.partial)
     assert other.make_env.factory.func is KITCHEN.make_env.factory
-    assert other.make_env.factory.keywords == {"robot": "other-arm"}
+    assert list(other.make_env.factory.keywords) == ["robot"]
+    assert other.make_env.factory.keywords["robot"].name == "ur5"  # at its kitchen mount
 
 
 def test_observation_bounds_are_the_robots() -> None:

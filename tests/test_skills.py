@@ -27,11 +27,19 @@ def test_every_spec_round_trips_through_json(skill: object) -> None:
     assert skill_from_json(skill.to_json()) == skill  # type: ignore[attr-defined]
 
 
-def test_pose_outside_the_workspace_names_skill_and_field() -> None:
-    skill = get_skill("grab-cube")
-    far = dataclasses.replace(skill, waypoints=(Waypoint((1.5, 0.0, 0.2), "open"),))
-    with pytest.raises(SkillSpecError, match=r"'grab-cube'.*'waypoints\[0\]'.*workspace"):
-        validate_skill(far)
+def test_a_waypoint_out_of_reach_is_named_with_its_skill() -> None:
+    """Reach is the robot's (``domain.reach``, checked by ``with_robot``): a waypoint 1.5 m
+    out is named, with its skill and index, for the kitchen's own Panda too."""
+    from osg_control.domain.reach import unreachable
+    from osg_control.robots.registry import get_robot
+
+    kitchen = kitchen_domain()
+    far = dataclasses.replace(
+        get_skill("grab-cube"), waypoints=(Waypoint((1.5, 0.0, 0.2), "open"),)
+    )
+    skills = tuple(far if s.name == far.name else s for s in kitchen.skills)
+    missed = unreachable(dataclasses.replace(kitchen, skills=skills), get_robot("panda"))
+    assert len(missed) == 1 and missed[0].startswith("skill 'grab-cube' waypoint 0"), missed
 
 
 def test_missing_field_names_the_skill() -> None:
