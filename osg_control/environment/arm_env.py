@@ -35,12 +35,9 @@ import mujoco
 import numpy as np
 
 from osg_control.control.description import RobotDescription
-from osg_control.control.divergence import DivergenceWatch, non_finite_state
-from osg_control.control.ik import (
-    DiffIKController,
-    solve_ik,
-)
-from osg_control.control.robot_model import GRIPPER_ACTUATOR, HOME_KEY
+from osg_control.control.divergence import non_finite_state
+from osg_control.control.ik import DiffIKController
+from osg_control.control.robot_model import GRIPPER_ACTUATOR
 from osg_control.control.servo import uncap_drive
 from osg_control.domain.frames import offsets_of
 from osg_control.domain.spaces import (
@@ -51,7 +48,7 @@ from osg_control.domain.spaces import (
 )
 from osg_control.domain.spec import Node, SkillSpec
 from osg_control.environment.actions import checked_action
-from osg_control.environment.camera_sensing import CameraPerception, CameraSensing
+from osg_control.environment.camera_sensing import CameraSensing
 from osg_control.environment.config import RESET_OPTIONS, EnvConfig, as_slice
 from osg_control.environment.joint_reset import JointReset
 from osg_control.environment.options import (
@@ -65,15 +62,15 @@ from osg_control.environment.options import (
     node_option,
     reset_options,
 )
+from osg_control.environment.perceiving import Perceiving
 from osg_control.environment.poses import quat_rotation, sample_start_pose
-from osg_control.environment.scene_hooks import SceneHooks
 from osg_control.environment.sensing import ArmSensors
+from osg_control.environment.start_placement import StartPlacement
 from osg_control.environment.stepping import ArmControlStep
 from osg_control.environment.success import GRIPPER_CLOSED_CMD, GRIPPER_OPEN_CMD, success_holds
 from osg_control.errors import EnvOptionError, SimulationError
 from osg_control.perception.percept import Percept
-from osg_control.perception.sensors import noisy_world, sensor_slices
-from osg_control.perception.spec import SIMULATED_PERCEPTIONS
+from osg_control.perception.sensors import sensor_slices
 
 __all__ = [
     "GRIPPER_CLOSED_CMD",
@@ -84,13 +81,15 @@ __all__ = [
 ]
 
 
-class ArmEnv(SceneHooks, gym.Env):
+class ArmEnv(Perceiving, StartPlacement, gym.Env):
     """A robot arm driven by relative TCP commands in a domain's scene (see module docstring).
 
     Subclasses implement the scene's hooks (``scene_hooks.SceneHooks``): ``build_model``,
     ``read_world``, ``facts_of``; they may override ``check_world``, ``place_world``,
     ``snap_start``, ``held_geoms`` and ``finger_opening``, and declare ``world_facts``,
-    ``world_options``, ``holdable``, ``objects`` and ``world_sensors``.
+    ``world_options``, ``holdable``, ``objects`` and ``world_sensors``. Its percepts
+    (``perceiving``), truth readouts (``truth``) and start placement (``start_placement``)
+    are the bases' jobs.
 
     Args:
         nodes: the domain's nodes (start poses and skills' termination poses).
@@ -106,13 +105,6 @@ class ArmEnv(SceneHooks, gym.Env):
     metadata = {"render_modes": ["rgb_array"]}
     camera = "overview"
     """The model camera ``render`` uses."""
-    camera_perception: CameraPerception | None = None
-    """The scene's fixed cameras and what they locate (the ``camera`` perception), if any."""
-
-    @property
-    def perceptions(self) -> tuple[str, ...]:
-        """The perceptions it simulates: ``camera`` too where the scene declares cameras."""
-        return SIMULATED_PERCEPTIONS + (("camera",) if self.camera_perception is not None else ())
 
     def __init__(
         self,
@@ -209,98 +201,6 @@ class ArmEnv(SceneHooks, gym.Env):
         episode is over and, by Gymnasium's protocol, takes no more steps."""
         return self._episode_over
 
-    @property
-    def arm_q(self) -> np.ndarray:
-        """True arm joint positions [rad] (a copy): the simulator's, for scoring and the step
-        info (what decides reads the encoders, ``percept().joints``)."""
-        return self.data.qpos[self._arm_qpos].copy()
-
-    def tcp_pose(self) -> tuple[np.ndarray, np.ndarray]:
-        """True TCP position [m] and rotation matrix: the simulator's truth, for scoring and
-        set-ups (what decides reads ``percept``)."""
-        return (
-            self.data.site_xpos[self._tcp].copy(),
-            self.data.site_xmat[self._tcp].reshape(3, 3).copy(),
-        )
-
-    def true_state(self) -> np.ndarray:
-        """Truth (scoring): the 10-D state of the simulator (the ``sim`` percept's state)."""
-        return self.sensors.true_state(self.data, self._gripper_cmd)
-
-    def world_state(self) -> np.ndarray:
-        """The scene's true state beyond the robot: for scoring and labels, never for
-        deciding (``percept().world`` is what the robot perceives)."""
-        return self.read_world()
-
-    def facts(self) -> frozenset[str]:
-        """The world facts that hold now in the simulator (scoring; ``percept().facts`` is
-        what the robot believes)."""
-        return self.facts_of(self.read_world())
-
-    def observe(self) -> np.ndarray:
-        """The perceived 10-D state of the latest percept (a copy)."""
-        return self.percept().state.copy()
-
-    def percept(self) -> Percept:
-        """What the robot perceived at the last reset, step or joint reset: the only input
-        of whatever decides (the executor, policies, classifier, fact detectors)."""
-        if self._percept is None:
-            raise RuntimeError("the env has not been reset")
-        return self._percept
-
-    def sense(self) -> Percept:
-        """Read the sensors now without stepping (e.g. after the scene was edited from
-        outside); ``percept`` then returns this reading."""
-        return self._perceive()
-
-    def _perceive(
-        self,
-        truth: np.ndarray | None = None,
-        truth_facts: frozenset[str] | None = None,
-        decision: bool = True,
-    ) -> Percept:
-        """Read the simulated sensors once (``config.perception``) and keep the percept
-        (``truth``: the world vector, if the caller has read it already; ``truth_facts``:
-        its facts, if computed, which an exact ``sim`` perception then reuses; ``decision``:
-        a decision point, where the ``camera`` perception renders whatever its rate)."""
-        spec = self.config.perception
-        truth = self.read_world() if truth is None else truth
-        if truth.shape != (len(self.world_sensors),):
-            raise EnvOptionError(
-                f"{type(self).__name__}: world_sensors name {len(self.world_sensors)} fields, "
-                f"read_world gives {truth.shape}; declare a sensor for every world field"
-            )
-        if spec.name == "sim":
-            state = self.sensors.true_state(self.data, self._gripper_cmd)
-            facts = self.facts_of(truth) if truth_facts is None else truth_facts
-            self._percept = Percept(state, self.arm_q, truth, facts)
-        else:
-            state, joints = self.sensors.perceived(
-                self.data, self._gripper_cmd, spec, self.np_random
-            )
-            seen = noisy_world(spec, self.np_random, truth, self._sensor_slices)
-            if spec.name == "camera":
-                seen = self._camera_world(state, seen, decision)
-            world = self.detect_world(state, seen)
-            self._percept = Percept(state, joints, world, self.facts_of(world))
-        return self._percept
-
-    def _camera_world(self, state: np.ndarray, world: np.ndarray, decision: bool) -> np.ndarray:
-        """``world`` with the objects the scene's cameras locate (``camera_sensing``; the
-        ``camera`` perception is refused at construction where the scene declares none)."""
-        if self.cameras is None:
-            assert self.camera_perception is not None  # ``perceptions`` lists camera
-            self.cameras = CameraSensing(
-                self.model,
-                self.camera_perception,
-                self.config.perception,
-                self.world_sensors,
-                self.robot.control_hz,
-            )
-        previous = self._percept.facts if self._percept is not None else frozenset()
-        held = {frame.name for frame in self.objects if frame.held_fact in previous}
-        return self.cameras.read(self.data, state[:3], world, held, decision)
-
     # ----------------------------------------------------------------- reset
     def reset(
         self, *, seed: int | None = None, options: dict[str, Any] | None = None
@@ -379,59 +279,6 @@ class ArmEnv(SceneHooks, gym.Env):
         self._perceive(world)
         return self.observe(), self._info(world)
 
-    def _place(
-        self,
-        pos: np.ndarray,
-        rot: np.ndarray,
-        gripper: str,
-        holding: str | None,
-        world: dict[str, Any],
-        facts: frozenset[str],
-    ) -> bool:
-        """Teleport the arm (IK) and the world; return False if the start is in collision."""
-        mujoco.mj_resetDataKeyframe(self.model, self.data, self.model.key(HOME_KEY).id)
-        q, converged = solve_ik(self.ik, np.array(self.robot.home_q), pos, rot, iterations=300)
-        if not converged:
-            return False
-        self.data.qpos[self._arm_qpos] = q
-        self.data.ctrl[self._arm_act] = q
-        mujoco.mj_kinematics(self.model, self.data)
-        self.place_world(world, facts, holding)
-        closed = gripper == "closed" or holding is not None
-        finger = self.finger_opening(holding) if holding else self._finger_open
-        self.data.qpos[self._finger_qpos] = finger if (holding or not closed) else 0.0
-        self._gripper_cmd = GRIPPER_CLOSED_CMD if closed else GRIPPER_OPEN_CMD
-        self.data.ctrl[self._gripper_act] = 0.0 if closed else self._finger_open
-        mujoco.mj_forward(self.model, self.data)
-        if self._robot_in_collision(allowed_geoms=self.held_geoms(holding)):
-            return False
-        self._settle(0.1)
-        return not self._robot_in_collision(allowed_geoms=self.held_geoms(holding))
-
-    def _robot_in_collision(self, allowed_geoms: set[int]) -> bool:
-        for contact in self.data.contact[: self.data.ncon]:
-            bodies = {self.model.geom_bodyid[contact.geom1], self.model.geom_bodyid[contact.geom2]}
-            robot = bodies & self._robot_bodies
-            if not robot or len(robot) == 2:
-                continue
-            if {contact.geom1, contact.geom2} & allowed_geoms:
-                continue
-            if contact.dist < -0.002:
-                return True
-        return False
-
-    def _settle(self, seconds: float) -> None:
-        """Let contacts settle with the arm servoed in place.
-
-        Raises:
-            SimulationError: the physics diverged (e.g. a start placed inside the furniture).
-        """
-        watch = DivergenceWatch(self.data)
-        mujoco.mj_step(self.model, self.data, round(seconds / self.model.opt.timestep))
-        diverged = watch.check()
-        if diverged is not None:
-            raise SimulationError(f"{diverged} while placing the start")
-
     # ----------------------------------------------------------------- step
     def check_action(self, action: np.ndarray) -> np.ndarray:
         """Validate an action (shape (7,), finite) and clip it to ``action_bounds``.
@@ -502,48 +349,6 @@ class ArmEnv(SceneHooks, gym.Env):
     def _record_peak(self, peak: float) -> None:
         self.peak_joint_speed_ratio = max(self.peak_joint_speed_ratio, peak)
         self._step_speed_ratio = peak
-
-    def skill_success(
-        self, skill: SkillSpec | None = None, world: np.ndarray | None = None
-    ) -> bool:
-        """The success predicate on the simulator's truth (scoring and Algorithm 1's
-        labels): TCP within tolerance of beta, gripper state, world effect.
-
-        Args:
-            skill: the skill to check (default: the env's own).
-            world: the current world state, if the caller has read it already.
-        """
-        skill = skill or self.skill
-        if skill is None:
-            return False
-        facts = self.facts_of(self.read_world() if world is None else world)
-        return self._truth_success(skill, facts)
-
-    def _truth_success(self, skill: SkillSpec, facts: frozenset[str]) -> bool:
-        """The success predicate with ``facts``: the true world's."""
-        return success_holds(
-            skill,
-            self.nodes[skill.end],
-            self.data.site_xpos[self._tcp],
-            self._gripper_cmd,
-            facts,
-            self.node_position(skill.end),
-        )
-
-    def _info(
-        self, world: np.ndarray | None = None, facts: frozenset[str] | None = None
-    ) -> dict[str, Any]:
-        """The step's information: ``world`` and ``world_facts`` are the simulator's truth,
-        for scoring and for labelling scripted data, never for deciding (``percept``);
-        ``facts``: ``world``'s, if the caller has them already."""
-        world = self.read_world() if world is None else world
-        return {
-            "world": world,
-            "world_facts": sorted(self.facts_of(world) if facts is None else facts),
-            "steps": self._steps,
-            "success": self._succeeded,
-            "arm_q": self.arm_q,
-        }
 
     # ----------------------------------------------------------------- joint reset
     def joint_reset(self, max_steps: int = 40, tolerance: float = 0.05) -> int:

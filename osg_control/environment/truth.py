@@ -1,0 +1,98 @@
+"""``TruthReadouts``: ``ArmEnv``'s readouts of the simulator's truth (arm joints, TCP pose,
+10-D state, world state and facts), the skill success predicate on it and the step info:
+for scoring, labels and set-ups, never for deciding (that reads ``Perceiving.percept``)."""
+
+from __future__ import annotations
+
+from typing import Any
+
+import mujoco
+import numpy as np
+
+from osg_control.domain.spec import SkillSpec
+from osg_control.environment.scene_hooks import SceneHooks
+from osg_control.environment.sensing import ArmSensors
+from osg_control.environment.success import success_holds
+
+
+class TruthReadouts(SceneHooks):
+    """The truth part of ``ArmEnv`` (``ArmEnv.__init__`` sets the attributes below)."""
+
+    data: mujoco.MjData
+    sensors: ArmSensors
+    skill: SkillSpec | None
+    _arm_qpos: slice | np.ndarray
+    _tcp: int
+    _gripper_cmd: float
+    _steps: int
+    _succeeded: bool
+
+    @property
+    def arm_q(self) -> np.ndarray:
+        """True arm joint positions [rad] (a copy): the simulator's, for scoring and the step
+        info (what decides reads the encoders, ``percept().joints``)."""
+        return self.data.qpos[self._arm_qpos].copy()
+
+    def tcp_pose(self) -> tuple[np.ndarray, np.ndarray]:
+        """True TCP position [m] and rotation matrix: the simulator's truth, for scoring and
+        set-ups (what decides reads ``percept``)."""
+        return (
+            self.data.site_xpos[self._tcp].copy(),
+            self.data.site_xmat[self._tcp].reshape(3, 3).copy(),
+        )
+
+    def true_state(self) -> np.ndarray:
+        """Truth (scoring): the 10-D state of the simulator (the ``sim`` percept's state)."""
+        return self.sensors.true_state(self.data, self._gripper_cmd)
+
+    def world_state(self) -> np.ndarray:
+        """The scene's true state beyond the robot: for scoring and labels, never for
+        deciding (``percept().world`` is what the robot perceives)."""
+        return self.read_world()
+
+    def facts(self) -> frozenset[str]:
+        """The world facts that hold now in the simulator (scoring; ``percept().facts`` is
+        what the robot believes)."""
+        return self.facts_of(self.read_world())
+
+    def skill_success(
+        self, skill: SkillSpec | None = None, world: np.ndarray | None = None
+    ) -> bool:
+        """The success predicate on the simulator's truth (scoring and Algorithm 1's
+        labels): TCP within tolerance of beta, gripper state, world effect.
+
+        Args:
+            skill: the skill to check (default: the env's own).
+            world: the current world state, if the caller has read it already.
+        """
+        skill = skill or self.skill
+        if skill is None:
+            return False
+        facts = self.facts_of(self.read_world() if world is None else world)
+        return self._truth_success(skill, facts)
+
+    def _truth_success(self, skill: SkillSpec, facts: frozenset[str]) -> bool:
+        """The success predicate with ``facts``: the true world's."""
+        return success_holds(
+            skill,
+            self.nodes[skill.end],
+            self.data.site_xpos[self._tcp],
+            self._gripper_cmd,
+            facts,
+            self.node_position(skill.end),
+        )
+
+    def _info(
+        self, world: np.ndarray | None = None, facts: frozenset[str] | None = None
+    ) -> dict[str, Any]:
+        """The step's information: ``world`` and ``world_facts`` are the simulator's truth,
+        for scoring and for labelling scripted data, never for deciding (``percept``);
+        ``facts``: ``world``'s, if the caller has them already."""
+        world = self.read_world() if world is None else world
+        return {
+            "world": world,
+            "world_facts": sorted(self.facts_of(world) if facts is None else facts),
+            "steps": self._steps,
+            "success": self._succeeded,
+            "arm_q": self.arm_q,
+        }
