@@ -191,3 +191,34 @@ def test_a_rim_seen_without_its_top_is_moved_half_the_box_away_from_the_camera()
     rim = np.stack([np.zeros(10), np.linspace(0, 0.045, 10)], 1)  # an edge along y
     shift = _edge_shift(rim, np.array([-1.0, 0.1]), 0.0225)  # camera on the +x side
     np.testing.assert_allclose(shift, [-0.0225, 0.0], atol=1e-9)
+
+
+@pytest.mark.slow
+def test_camera_episodes_run_in_forked_workers(tmp_path) -> None:
+    """The CLI's GL check renders in a child process: a context made in the parent made
+    every forked worker's renderer hang (EGL does not survive a fork). Run as its own
+    process: this test process has a GL context already (the module's check above)."""
+    import os
+    import subprocess
+    import sys
+
+    argv = ["evaluate", "tasks", "--task", "pick-up", "--episodes", "1", "--perception",
+            "camera", "--workers", "2", "--replans", "2", "--json"]  # fmt: skip
+    run = subprocess.run(
+        [sys.executable, "-c", "import sys; from osg_control.cli import main; "
+         "sys.exit(main(sys.argv[1:]))", *argv],
+        env={**os.environ, "OSG_CACHE_DIR": str(tmp_path)},
+        capture_output=True, text=True, timeout=300, check=False,
+    )  # fmt: skip
+    assert run.returncode in (0, 1), run.stderr[-2000:]
+    assert json.loads(run.stdout)["perception"]["name"] == "camera"
+
+
+@pytest.mark.parametrize("flag", [["--video", "VIDEO"], ["--perception", "camera"]])
+def test_no_gl_back_end_is_a_usage_error_naming_mujoco_gl(flag, tmp_path, monkeypatch, capsys):
+    monkeypatch.setenv("MUJOCO_GL", "no-such-back-end")
+    argv = ["run", "--goal", "door-open", *[str(tmp_path / "v.mp4") if f == "VIDEO" else f
+                                            for f in flag]]  # fmt: skip
+    assert main(argv) == 2
+    assert "no OpenGL back end" in capsys.readouterr().err
+    assert not (tmp_path / "v.mp4").exists()

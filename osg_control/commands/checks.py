@@ -81,28 +81,46 @@ def _perception(dest: str, value: Any) -> None:
 
 
 def _needs_gl(what: str, otherwise: str) -> None:
-    """Render a tiny scene once.
+    """Render a tiny scene once, in a child process: a GL context made in this process
+    would be inherited by the forked workers of ``--workers N``, whose own renderers then
+    hang (EGL does not survive a fork).
 
     Raises:
         UsageError: no OpenGL back end, naming ``MUJOCO_GL`` (exit 2, nothing run).
     """
-    import warnings
+    import subprocess
+    import sys
 
-    import mujoco
-
-    model = mujoco.MjModel.from_xml_string("<mujoco><worldbody/></mujoco>")
     try:
-        with warnings.catch_warnings():
-            warnings.simplefilter("error")  # GLFW reports a missing display as a warning
-            renderer = mujoco.Renderer(model, 16, 16)
-            renderer.update_scene(mujoco.MjData(model))
-            renderer.render()
-            renderer.close()
-    except Exception as err:  # any GL failure means: no back end to render with
+        probe = subprocess.run(
+            [sys.executable, "-c", _GL_PROBE],
+            check=False,
+            capture_output=True,
+            text=True,
+            timeout=120,
+        )
+        failure = None if probe.returncode == 0 else (probe.stderr.strip() or "no output")
+    except (OSError, subprocess.TimeoutExpired) as err:
+        failure = str(err)
+    if failure is not None:
+        reason = failure.splitlines()[-1]
         raise UsageError(
-            f"{what}: no OpenGL back end to render with ({err}); set MUJOCO_GL=egl "
+            f"{what}: no OpenGL back end to render with ({reason}); set MUJOCO_GL=egl "
             f"or MUJOCO_GL=osmesa, or {otherwise}"
-        ) from err
+        )
+
+
+_GL_PROBE = """
+import warnings
+import mujoco
+warnings.simplefilter("error")  # GLFW reports a missing display as a warning
+model = mujoco.MjModel.from_xml_string("<mujoco><worldbody/></mujoco>")
+renderer = mujoco.Renderer(model, 16, 16)
+renderer.update_scene(mujoco.MjData(model))
+renderer.render()
+renderer.close()
+"""
+"""The render ``_needs_gl`` runs in a child process (any failure: no back end)."""
 
 
 MAX_COUNT = 10**9
