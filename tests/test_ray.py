@@ -73,6 +73,19 @@ def test_ray_collection_has_the_same_bytes_as_the_local_pool(
 
 
 @pytest.mark.slow
+def test_ray_workers_rebuild_another_robots_domain(
+    tmp_path: Path, ray_executor: RayExecutor
+) -> None:
+    """Ray's workers are fresh processes: they find the UR5's kitchen by its ``ref``
+    (``kitchen@ur5``), so its collection has the local pool's bytes, not the Panda's."""
+    ur5 = KITCHEN.with_robot("ur5")
+    local = collect_skill(ur5, SKILL, 2, 3, tmp_path / "local", LocalExecutor(2), False, 1)
+    remote = collect_skill(ur5, SKILL, 2, 3, tmp_path / "ray", ray_executor, False, 1)
+    panda = collect_skill(KITCHEN, SKILL, 2, 3, tmp_path / "panda", ray_executor, False, 1)
+    assert _sha256(local.path) == _sha256(remote.path) != _sha256(panda.path)
+
+
+@pytest.mark.slow
 def test_ray_task_table_equals_the_local_one(ray_executor: RayExecutor) -> None:
     args = (None, 1, 0, 2, ["open-door"], [0])
     local = task_table(KITCHEN, *args, executor=LocalExecutor(2))

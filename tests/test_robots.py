@@ -282,7 +282,7 @@ def test_the_robot_option_selects_the_kitchen_robot(toy_registered: RobotDescrip
 
     def verb(args: Any) -> int:
         domain = get_domain(args.domain)
-        seen.extend([domain.robot, domain.cache_name, domain.defaults_dir])
+        seen.extend([domain.robot, domain.ref, domain.defaults_dir])
         seen.append(domain.make_env(skill="move-home-to-cube").robot.name)
         return 0
 
@@ -293,4 +293,14 @@ def test_the_robot_option_selects_the_kitchen_robot(toy_registered: RobotDescrip
         verb(args)
     assert seen == ["toy6", "kitchen@toy6", None, "toy6"]
     assert get_domain("kitchen") is kitchen and kitchen.robot == "panda"
-    assert kitchen.cache_name == "kitchen" and kitchen.with_robot("panda") is kitchen
+    assert kitchen.ref == "kitchen" and kitchen.with_robot("panda") is kitchen
+
+
+def test_a_domain_ref_names_its_robot(toy_registered: RobotDescription) -> None:
+    """``get_domain`` takes ``Domain.ref``: ``kitchen@toy6`` is the kitchen around the toy
+    arm (how a fresh worker process finds it again); an unknown robot lists the known ones."""
+    toy = get_domain("kitchen@toy6")
+    assert (toy.name, toy.robot, toy.ref) == ("kitchen", "toy6", "kitchen@toy6")
+    assert get_domain(toy.ref) is toy and get_domain("kitchen").robot == "panda"
+    with pytest.raises(RobotDescriptionError, match="panda"):
+        get_domain("kitchen@no-such-arm")

@@ -37,7 +37,7 @@ def test_the_kitchen_mounts_the_ur5_and_its_home_is_the_home_node() -> None:
     """``with_robot`` builds the env around the UR5 at the kitchen's mount: the home key
     puts the TCP on the home node, in scene coordinates."""
     kitchen = get_domain("kitchen").with_robot("ur5")
-    assert (kitchen.robot, kitchen.cache_name) == ("ur5", "kitchen@ur5")
+    assert (kitchen.robot, kitchen.ref) == ("ur5", "kitchen@ur5")
     env = kitchen.make_env(skill="move-home-to-cube")
     assert env.robot.name == "ur5" and env.robot.mount == ROBOT_MOUNTS["ur5"]
     env.reset(seed=0)

@@ -195,10 +195,10 @@ def _domain_values(args: argparse.Namespace) -> None:
 
 def _robot(args: argparse.Namespace, domain: Domain) -> None:
     """``--robot`` is a robot the domain's env can drive, whose description matches its
-    models; Ray's workers rebuild the domain by name, so they run its own robot only.
+    models (workers, Ray's included, rebuild it from ``Domain.ref``).
 
     Raises:
-        UsageError: the domain drives its own arm, or ``--backend ray`` with another robot.
+        UsageError: the domain drives its own arm.
         RobotDescriptionError: the robot's description does not match its models (exit 1).
     """
     robot = getattr(args, "robot", None)
@@ -207,11 +207,6 @@ def _robot(args: argparse.Namespace, domain: Domain) -> None:
     if domain.robot is None:
         raise UsageError(
             f"--robot: domain {domain.name!r} drives its own arm; no robot can be chosen"
-        )
-    if getattr(args, "backend", None) == "ray":
-        raise UsageError(
-            f"--robot {robot} with --backend ray: Ray workers rebuild domain {domain.name!r} "
-            f"with its own robot ({domain.robot}); use --backend local"
         )
     from osg_control.robots.registry import get_robot
 

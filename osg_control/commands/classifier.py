@@ -32,13 +32,13 @@ Verbs: TypeAlias = "argparse._SubParsersAction[argparse.ArgumentParser]"
 
 
 def _data_dir(domain: Domain, path: Path | None) -> Path:
-    return Path(path) if path else cache_dir() / domain.cache_name / "data"
+    return Path(path) if path else cache_dir() / domain.ref / "data"
 
 
 def _trained_dir(domain: Domain, path: Path | None) -> Path:
     """Where ``osg classifier train`` writes: the given folder, else the cache (never the
     installed package)."""
-    return Path(path) if path else cache_dir() / domain.cache_name / "classifier"
+    return Path(path) if path else cache_dir() / domain.ref / "classifier"
 
 
 def _model_dir(domain: Domain, path: Path | None) -> Path:

@@ -49,7 +49,7 @@ def run_collect(args: argparse.Namespace) -> int:
     domain = domain_of(args)
     skills = list(domain.skills) if args.skill == "all" else [domain.skill(args.skill)]
     out = check_output_dir(
-        args.out or cache_dir() / domain.cache_name / "data",
+        args.out or cache_dir() / domain.ref / "data",
         "data folder",
         collection_bytes(domain, skills, args.episodes),
     )

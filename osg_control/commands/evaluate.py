@@ -201,7 +201,7 @@ def evaluation_cache(domain: Domain, kind: str, models: Path | None) -> Path:
     (resume), checked writable before the work."""
     fingerprint = f"{models_fingerprint(domain, models)}-{source_fingerprint()}"
     return check_output_dir(
-        cache_dir() / domain.cache_name / "evaluation" / f"{kind}-{fingerprint}", "evaluation cache"
+        cache_dir() / domain.ref / "evaluation" / f"{kind}-{fingerprint}", "evaluation cache"
     )
 
 

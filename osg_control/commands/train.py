@@ -150,11 +150,11 @@ def print_summary(trained: TrainedSkills, as_json: bool) -> None:
 def run(args: argparse.Namespace) -> int:
     """Train the selected skills batched and write their checkpoints."""
     domain = domain_of(args)
-    data_dir = args.data or cache_dir() / domain.cache_name / "data"
+    data_dir = args.data or cache_dir() / domain.ref / "data"
     trained = train_skills(
         domain,
         data_dir,
-        args.out or cache_dir() / domain.cache_name / "skills",
+        args.out or cache_dir() / domain.ref / "skills",
         skill_names(domain, args.skill),
         args.steps,
         args.seed,

@@ -59,7 +59,7 @@ _ENVS: dict[tuple[str, str], SkillEnv] = {}
 
 def _env_for(domain: Domain, skill: SkillSpec) -> SkillEnv:
     """One env per skill per process, reused across episodes."""
-    key = (domain.name, skill.to_json())
+    key = (domain.ref, skill.to_json())
     if key not in _ENVS:
         _ENVS[key] = domain.make_env(skill=skill, config=EnvConfig())
     return _ENVS[key]
@@ -200,7 +200,7 @@ def chunk_tasks(
     def chunk(k: int) -> ChunkTask:
         start, stop = k * chunk_episodes, min((k + 1) * chunk_episodes, episodes)
         path = parts / f"seed{seed}_{start:06d}_{stop:06d}.h5"
-        return ChunkTask(domain.name, skill, seed, start, stop, path)
+        return ChunkTask(domain.ref, skill, seed, start, stop, path)
 
     return Jobs(-(-episodes // chunk_episodes), chunk)
 

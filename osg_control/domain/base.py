@@ -204,7 +204,7 @@ class Domain:
         """This domain with its env built around the registered robot ``robot``, at its
         mount (``mounts``).
 
-        Another robot than the domain's own has its own artifacts (``cache_name``) and the
+        Another robot than the domain's own has its own artifacts (``ref``) and the
         shipped defaults of ``<defaults_dir>-<robot>`` if the domain ships them (none
         otherwise: the default robot's policies do not drive another arm). It is checked
         to reach the domain's nodes and skill waypoints first (``domain.reach``).
@@ -257,9 +257,11 @@ class Domain:
         return observation_bounds(get_robot(self.robot))
 
     @property
-    def cache_name(self) -> str:
-        """The folder of its artifacts under the cache: ``name``, or ``name@robot`` with
-        another robot than its own (``with_robot``)."""
+    def ref(self) -> str:
+        """How the domain is found again: ``name``, or ``name@robot`` with another robot
+        than its own (``with_robot``). ``registry.get_domain`` takes it, so a worker in a
+        fresh process (Ray's) rebuilds the same robot's domain; it also names the folder
+        of its artifacts under the cache."""
         return self.name if self.robot_is_default else f"{self.name}@{self.robot}"
 
     def skill(self, name: str) -> SkillSpec:

@@ -54,13 +54,20 @@ def domain_names() -> list[str]:
 
 
 def get_domain(name: str) -> Domain:
-    """The domain registered under ``name``.
+    """The domain registered under ``name``, or ``NAME@ROBOT`` (``Domain.ref``): domain
+    NAME with the registered robot ROBOT (``Domain.with_robot``).
 
     Raises:
         DomainError: an unknown name (the known ones listed), or a factory that does not
             give a valid ``Domain``.
+        RobotDescriptionError: an unknown robot after ``@`` (the known ones listed).
+        UnreachableError: a robot that does not reach the domain's nodes.
     """
     if name in _BUILT:
+        return _BUILT[name]
+    if "@" in name:
+        base, robot = name.split("@", 1)
+        _BUILT[name] = get_domain(base).with_robot(robot)
         return _BUILT[name]
     factory = _FACTORIES.get(name)
     if factory is None:

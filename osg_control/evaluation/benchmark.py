@@ -210,7 +210,7 @@ def run_benchmark(
         chosen = bench.tasks_of(name)
     jobs = [
         BenchmarkEpisode(
-            domain.name,
+            domain.ref,
             models,
             name,
             chosen,

@@ -163,7 +163,7 @@ def reach_table(
     tasks = grid(
         range(len(regions)),
         episodes,
-        lambda r, i: StartEpisode(domain.name, "reach", models, r, seen, seed, r, i),
+        lambda r, i: StartEpisode(domain.ref, "reach", models, r, seen, seed, r, i),
     )
     executor = executor or LocalExecutor(workers)
     outcomes = executor.map(run_reach_episode, tasks)
@@ -302,7 +302,7 @@ def task_table(
     def job(cell: tuple[str, int], i: int) -> TaskEpisode:
         t, r = cell
         return TaskEpisode(
-            StartEpisode(domain.name, t, models, r, seen, seed, r, i, randomize),
+            StartEpisode(domain.ref, t, models, r, seen, seed, r, i, randomize),
             t,
             budgets,
             filter_gain,

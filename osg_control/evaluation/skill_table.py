@@ -127,7 +127,7 @@ def learned_rates(
         name, k, noise = cell
         seen = replace(perception, tcp_noise=noise)  # Table I's column k
         return SkillEpisode(
-            domain.name, name, str(policy_dir), seen, seed, first_cell + k, i, filter_gain,
+            domain.ref, name, str(policy_dir), seen, seed, first_cell + k, i, filter_gain,
             randomize, filter_motion,
         )  # fmt: skip
 
@@ -178,7 +178,7 @@ def skill_table(
         domain, policy_dir, names, noise_levels, episodes, seed, executor, perception,
         filter_gain, randomize, filter_motion, progress=progress,
     )  # fmt: skip
-    scripted_tasks = grid(names, scripted_episodes, lambda n, i: (domain.name, n, seed + 1, i))
+    scripted_tasks = grid(names, scripted_episodes, lambda n, i: (domain.ref, n, seed + 1, i))
     scripted = executor.map(_scripted_success, scripted_tasks)
     scripted_rates = cell_means(scripted, len(names), scripted_episodes, "scripted", progress)
     return {
