@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from typing import Any
+
 import numpy as np
 from scipy.spatial.transform import Rotation
 
@@ -11,9 +13,11 @@ _TOP_DOWN = np.array(TOP_DOWN_QUAT)
 _TOP_DOWN_ROT = Rotation.from_quat(np.roll(_TOP_DOWN, -1))
 
 
-def canonical_quat(quat_wxyz: np.ndarray) -> np.ndarray:
-    """Flip a quaternion's sign into the hemisphere of ``TOP_DOWN_QUAT``."""
-    return -quat_wxyz if float(np.dot(quat_wxyz, _TOP_DOWN)) < 0 else quat_wxyz
+def canonical_quat(quat_wxyz: np.ndarray, reference: Any = _TOP_DOWN) -> np.ndarray:
+    """Flip a quaternion's sign into the hemisphere of ``reference`` (``w, x, y, z``;
+    default ``TOP_DOWN_QUAT``): the state's orientation is one of the two signs, always the
+    same for nearby orientations."""
+    return -quat_wxyz if float(np.dot(quat_wxyz, reference)) < 0 else quat_wxyz
 
 
 def quat_rotation(quat_wxyz: tuple[float, float, float, float]) -> Rotation:

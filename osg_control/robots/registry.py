@@ -23,6 +23,7 @@ ENTRY_POINT_GROUP = "osg_control.robots"
 BUILTIN: dict[str, str] = {
     "panda": "osg_control.robots.panda:PANDA",
     "ur5": "osg_control.robots.ur5:ur5_description",
+    "franka-kitchen-panda": "osg_control.robots.franka_kitchen_panda:kitchen_panda_description",
 }
 """The robots this package ships: name -> ``module:attribute``."""
 
