@@ -47,7 +47,7 @@ from osg_control.domain.spaces import (
     observation_bounds,
 )
 from osg_control.domain.spec import Node, SkillSpec
-from osg_control.environment.actions import checked_action
+from osg_control.environment.actions import checked_action, latched_gripper
 from osg_control.environment.camera_sensing import CameraSensing
 from osg_control.environment.config import RESET_OPTIONS, EnvConfig, as_slice
 from osg_control.environment.joint_reset import JointReset
@@ -302,10 +302,7 @@ class ArmEnv(Perceiving, StartPlacement, gym.Env):
         action = self.check_action(action)
         failure = non_finite_state(self.data, ("qpos",))  # MuJoCo answers a bad qvel itself
         if failure is None:
-            if action[6] < -0.5:
-                self._gripper_cmd = GRIPPER_CLOSED_CMD
-            elif action[6] > 0.5:
-                self._gripper_cmd = GRIPPER_OPEN_CMD
+            self._gripper_cmd = latched_gripper(self._gripper_cmd, action[6])
             # The controller reads the encoders: the perceived joints.
             q_target = self.ik.relative_step(self.percept().joints, action[:6])
             self.data.ctrl[self._gripper_act] = (

@@ -46,10 +46,11 @@ from osg_control.control.divergence import DivergenceWatch, non_finite_state
 from osg_control.control.rotations import rotation_step
 from osg_control.domain.spaces import ACTION_DIM, OBS_DIM, unbounded_observation
 from osg_control.domain.spec import Node, SkillSpec
-from osg_control.environment.actions import checked_action
+from osg_control.environment.actions import checked_action, latched_gripper
 from osg_control.environment.options import check_env_arguments, check_facts_hold
 from osg_control.environment.poses import quat_rotation, sample_start_pose
 from osg_control.environment.success import GRIPPER_CLOSED_CMD, GRIPPER_OPEN_CMD, success_holds
+from osg_control.environment.truth import truth_info
 from osg_control.errors import DomainError
 from osg_control.franka import poses, setup
 from osg_control.franka.arm import (
@@ -263,14 +264,9 @@ class FrankaKitchenAdapter(gym.Env):
         return q, pos, rot, self.command.bias(q, self._observation[ROBOT_QVEL][:7])
 
     def _info(self, world: np.ndarray) -> dict[str, Any]:
-        return {
-            "world": world,
-            "world_facts": sorted(self.facts_of(world)),
-            "steps": self._steps,
-            "success": self._succeeded,
-            "arm_q": self.arm_q,
-            "episode_task_completions": self.completed_tasks(),
-        }
+        info = truth_info(world, self.facts_of(world), self._steps, self._succeeded, self.arm_q)
+        info["episode_task_completions"] = self.completed_tasks()
+        return info
 
     # ----------------------------------------------------------------- reset / step
     def reset(
@@ -376,10 +372,7 @@ class FrankaKitchenAdapter(gym.Env):
         non-finite joint position (set from outside since the last step) ends the episode
         as a divergence (``info["failure"]`` naming the joint), the env not stepped."""
         action = self.check_action(action)
-        if action[6] < -0.5:
-            self._gripper_cmd = GRIPPER_CLOSED_CMD
-        elif action[6] > 0.5:
-            self._gripper_cmd = GRIPPER_OPEN_CMD
+        self._gripper_cmd = latched_gripper(self._gripper_cmd, action[6])
         if non_finite_state(self.data, ("qpos",)) is not None:
             return self._env_step(None, action)
         return self._env_step(self.env_action(action), action)

@@ -43,7 +43,7 @@ import mujoco
 import numpy as np
 
 from osg_control.control.description import RobotDescription
-from osg_control.environment.poses import canonical_quat as hemisphere
+from osg_control.environment.sensing import tcp_state
 from osg_control.environment.success import GRIPPER_CLOSED_CMD
 from osg_control.errors import DomainError
 from osg_control.perception.percept import Percept
@@ -94,13 +94,6 @@ def observation_vector(observation: Any) -> np.ndarray:
             f"{getattr(array, 'shape', None)}"
         )
     return array
-
-
-def canonical_quat(rotation: np.ndarray) -> np.ndarray:
-    """A rotation matrix's quaternion (w, x, y, z), in the hemisphere of ``REFERENCE_QUAT``."""
-    quat = np.zeros(4)
-    mujoco.mju_mat2Quat(quat, np.asarray(rotation, dtype=float).reshape(9))
-    return hemisphere(quat, REFERENCE_QUAT)
 
 
 def contact_grasp(finger_forces: tuple[float, float]) -> bool:
@@ -203,7 +196,7 @@ class FrankaSensors:
         pos, rot = self.true_tcp()
         fingers = float(self.data.qpos[self.finger_qpos].sum())
         force = float(min(self.finger_forces()))
-        return np.concatenate([pos, canonical_quat(rot), [gripper_cmd, force, fingers]])
+        return tcp_state(pos, rot, gripper_cmd, force, fingers, REFERENCE_QUAT)
 
     def true_world(self) -> np.ndarray:
         """Truth: the world vector of the true object qpos and the contact grasp."""
@@ -246,12 +239,7 @@ class FrankaSensors:
         pos, rot = self.fk(joints)
         grasped = width_grasp(gripper_cmd, fingers, observation[FINGER_QVEL], self._held)
         self._held = grasped
-        state = np.concatenate(
-            [
-                pos,
-                canonical_quat(rot),
-                [gripper_cmd, servo_effort(fingers, grasped, self.finger_kp), float(fingers.sum())],
-            ]
-        )
+        effort = servo_effort(fingers, grasped, self.finger_kp)
+        state = tcp_state(pos, rot, gripper_cmd, effort, float(fingers.sum()), REFERENCE_QUAT)
         world = np.asarray(self._world_of(observation[OBJECT_QPOS].copy(), grasped), dtype=float)
         return state, joints, world

@@ -131,9 +131,7 @@ def kitchen_arm_spec() -> mujoco.MjSpec:
         joint.limited = mujoco.mjtLimited.mjLIMITED_TRUE
     for name in (*ARM_JOINTS, *FINGER_JOINTS):
         spec.joint(name).damping = [0.0, 0.0, 0.0]  # the description's servo kv holds it
-    spec.add_equality(
-        type=mujoco.mjtEq.mjEQ_JOINT, name1=FINGER_JOINTS[1], name2=FINGER_JOINTS[0]
-    )
+    spec.add_equality(type=mujoco.mjtEq.mjEQ_JOINT, name1=FINGER_JOINTS[1], name2=FINGER_JOINTS[0])
     return spec
 
 
