@@ -46,7 +46,8 @@ from osg_control.control.divergence import DivergenceWatch, non_finite_state
 from osg_control.control.rotations import rotation_step
 from osg_control.domain.spaces import ACTION_DIM, OBS_DIM, unbounded_observation
 from osg_control.domain.spec import Node, SkillSpec
-from osg_control.environment.actions import checked_action, latched_gripper
+from osg_control.environment.actions import latched_gripper
+from osg_control.environment.episode import EpisodeState
 from osg_control.environment.options import check_env_arguments, check_facts_hold
 from osg_control.environment.poses import quat_rotation, sample_start_pose
 from osg_control.environment.success import GRIPPER_CLOSED_CMD, GRIPPER_OPEN_CMD, success_holds
@@ -93,7 +94,7 @@ def check_kitchen(env: Any) -> Any:
     return kitchen
 
 
-class FrankaKitchenAdapter(gym.Env):
+class FrankaKitchenAdapter(EpisodeState, gym.Env):
     """A FrankaKitchen-v1 driven by relative TCP commands (see module docstring).
 
     Args:
@@ -230,17 +231,6 @@ class FrankaKitchenAdapter(gym.Env):
         )
 
     # ----------------------------------------------------------------- percepts
-    def percept(self) -> Percept:
-        """What the robot perceived at the last reset, step or joint reset: the only input
-        of whatever decides."""
-        if self._percept is None:
-            raise RuntimeError("the env has not been reset")
-        return self._percept
-
-    def observe(self) -> np.ndarray:
-        """The latest percept's 10-D state (a copy)."""
-        return self.percept().state.copy()
-
     def env_observation(self) -> np.ndarray:
         """The env's latest 59-D ``observation`` array, as the caller's env returned it."""
         if self._observation is None:
@@ -337,24 +327,10 @@ class FrankaKitchenAdapter(gym.Env):
         """Steps taken since the start (the end of ``reset``)."""
         return self._steps
 
-    @property
-    def episode_over(self) -> bool:
-        """Whether a step since the start came back terminated (the env's tasks done, or a
-        divergence) or truncated: by Gymnasium's protocol the episode takes no more steps."""
-        return self._episode_over
-
     def completed_tasks(self) -> list[str]:
         """The env's own record of the tasks completed this episode
         (``info["episode_task_completions"]``)."""
         return list(self.last_env_info.get("episode_task_completions", []))
-
-    def check_action(self, action: np.ndarray) -> np.ndarray:
-        """Validate (shape (7,), finite) and clip to ``action_bounds``.
-
-        Raises:
-            ValueError: wrong shape or NaN/inf; nothing reaches the env.
-        """
-        return checked_action(action, self.action_bounds)
 
     def env_action(self, action: np.ndarray) -> np.ndarray:
         """The env's 9-D action for a (clipped) 7-D TCP action at the perceived state."""
