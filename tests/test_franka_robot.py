@@ -17,7 +17,9 @@ import qpsolvers  # noqa: E402
 from osg_control import cli  # noqa: E402
 from osg_control.control.ik import DiffIKController, IKConfig  # noqa: E402
 from osg_control.control.rotations import rotation_step  # noqa: E402
+from osg_control.errors import ModelNotFoundError  # noqa: E402
 from osg_control.franka.envs import make_franka_env  # noqa: E402
+from osg_control.robots import registry  # noqa: E402
 from osg_control.robots.franka_kitchen_panda import RESET_Q  # noqa: E402
 from osg_control.robots.registry import get_robot  # noqa: E402
 
@@ -41,6 +43,18 @@ def test_osg_robots_lists_the_kitchen_panda(capsys: pytest.CaptureFixture[str]) 
     assert entry["mount"]["position"] == [0.0, 0.0, 1.8]
     assert entry["sensors"] == ["encoders", "finger_width"] and entry["control_hz"] == 12.5
     assert entry["lower"][5] == 0.0 and entry["upper"][3] == pytest.approx(-0.4)
+
+
+def test_without_gymnasium_robotics_it_is_not_listed_and_names_the_extra(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """Its models are the library's files: where the ``franka`` extra is not installed,
+    ``osg robots`` leaves it out and asking for it names the extra."""
+    monkeypatch.setattr(registry, "_installed", lambda package: False)
+    monkeypatch.setattr(registry, "_LOADED", {})
+    assert NAME not in registry.robot_names() and "panda" in registry.robot_names()
+    with pytest.raises(ModelNotFoundError, match=r"pip install 'osg-control\[franka\]'"):
+        get_robot(NAME)
 
 
 def test_the_description_is_the_envs_arm(adapter) -> None:
