@@ -1,23 +1,13 @@
-"""TCP poses of the env: the canonical quaternion sign and random starts around a node."""
+"""TCP poses of the env: random starts around a node."""
 
 from __future__ import annotations
-
-from typing import Any
 
 import numpy as np
 from scipy.spatial.transform import Rotation
 
 from osg_control.domain.spec import TOP_DOWN_QUAT
 
-_TOP_DOWN = np.array(TOP_DOWN_QUAT)
-_TOP_DOWN_ROT = Rotation.from_quat(np.roll(_TOP_DOWN, -1))
-
-
-def canonical_quat(quat_wxyz: np.ndarray, reference: Any = _TOP_DOWN) -> np.ndarray:
-    """Flip a quaternion's sign into the hemisphere of ``reference`` (``w, x, y, z``;
-    default ``TOP_DOWN_QUAT``): the state's orientation is one of the two signs, always the
-    same for nearby orientations."""
-    return -quat_wxyz if float(np.dot(quat_wxyz, reference)) < 0 else quat_wxyz
+_TOP_DOWN_ROT = Rotation.from_quat(np.roll(np.array(TOP_DOWN_QUAT), -1))
 
 
 def quat_rotation(quat_wxyz: tuple[float, float, float, float]) -> Rotation:

@@ -14,7 +14,7 @@ from typing import Any
 import mujoco
 import numpy as np
 
-from osg_control.environment.poses import canonical_quat
+from osg_control.domain.spec import TOP_DOWN_QUAT
 from osg_control.perception.spec import PerceptionSpec
 
 
@@ -114,8 +114,18 @@ def tcp_state(
     """The 10-D state ``[x, y, z, qw, qx, qy, qz, gripper command, grip force, finger
     width]`` of a TCP at ``position`` [m] with ``rotation`` (a 3x3 matrix, or its 9 values),
     the quaternion in the hemisphere of ``reference`` (``w, x, y, z``; default
-    ``TOP_DOWN_QUAT``: ``poses.canonical_quat``)."""
+    ``TOP_DOWN_QUAT``: ``canonical_quat``)."""
     quat = np.zeros(4)
     mujoco.mju_mat2Quat(quat, np.asarray(rotation, dtype=float).reshape(9))
     quat = canonical_quat(quat) if reference is None else canonical_quat(quat, reference)
     return np.concatenate([position, quat, [gripper_cmd, force, width]])
+
+
+_TOP_DOWN = np.array(TOP_DOWN_QUAT)
+
+
+def canonical_quat(quat_wxyz: np.ndarray, reference: Any = _TOP_DOWN) -> np.ndarray:
+    """Flip a quaternion's sign into the hemisphere of ``reference`` (``w, x, y, z``;
+    default ``TOP_DOWN_QUAT``): the state's orientation is one of the two signs, always the
+    same for nearby orientations."""
+    return -quat_wxyz if float(np.dot(quat_wxyz, reference)) < 0 else quat_wxyz

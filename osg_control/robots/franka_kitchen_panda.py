@@ -55,6 +55,9 @@ RESET_Q = (
 """The arm at the env's reset (``KitchenEnv.__init__``'s ``init_qpos[:7]``). Its joint 2 lies
 5.7 mrad past the MJCF's range (-1.7628): the description's home is this posture held
 within the limits; the adapter's IK is drawn to the env's own reset posture."""
+CONTROL_HZ = 12.5
+"""The env's control rate [Hz]: its robot env steps 40 physics steps of 2 ms per action
+(``check_kitchen_robot`` holds a wrapped env to it)."""
 ACTION_SPEED = 2.0
 """The joint speed [rad/s] an action of 1 commands (``FrankaRobot.act_rng``): the env's
 servo target is ``observed q + ACTION_SPEED * a * dt``, ``a`` in [-1, 1]."""
@@ -282,7 +285,7 @@ def kitchen_panda_description() -> rd.RobotDescription:
             armature=facts.finger_armature,
         ),
         home_q=tuple(float(v) for v in np.clip(RESET_Q, facts.lower, facts.upper)),
-        control_hz=12.5,
+        control_hz=CONTROL_HZ,
         # The env's observation: joint encoders and finger joints, no force sensor.
         sensors=("encoders", "finger_width"),
         gravity_compensation=False,
