@@ -25,7 +25,6 @@ from osg_control.domain.registry import get_domain
 from osg_control.errors import DatasetError, UsageError
 from osg_control.franka.d4rl_import import import_d4rl
 from osg_control.franka.envs import make_franka_env
-from osg_control.franka.perception import FINGER_KP
 from osg_control.pipeline.train import train_skills
 
 minari = pytest.importorskip("minari")
@@ -178,7 +177,7 @@ def test_states_are_the_env_percept_and_actions_in_bounds(
             closed = CLOSE_STEP < t <= OPEN_STEP
             assert state[7] == (-1.0 if closed else 1.0), t
             assert state[8] == pytest.approx(
-                FINGER_KP * obs[t, 7:9].min() if closed else 0.0, abs=1e-4
+                adapter.robot.gripper.kp * obs[t, 7:9].min() if closed else 0.0, abs=1e-4
             )
             assert state[9] == pytest.approx(obs[t, 7:9].sum(), abs=1e-6)
     finally:

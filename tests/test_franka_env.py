@@ -10,7 +10,7 @@ pytest.importorskip("gymnasium_robotics")
 import gymnasium as gym  # noqa: E402
 
 from osg_control.errors import DomainError  # noqa: E402
-from osg_control.franka.arm import env_joint_limits, scale_to_action  # noqa: E402
+from osg_control.franka.arm import check_kitchen_robot, scale_to_action  # noqa: E402
 from osg_control.franka.compat import prepare  # noqa: E402
 from osg_control.franka.domain import make_franka_env  # noqa: E402
 from osg_control.franka.env import FrankaKitchenAdapter  # noqa: E402
@@ -44,17 +44,34 @@ def test_the_domains_control_rate_is_the_envs(adapter) -> None:
 
 
 def test_arm_model_matches_the_env(adapter) -> None:
+    """The robot description's arm (the core IK's model) is the env's: the same TCP at the
+    same joints, the limits the env enforces (``check_kitchen_robot`` passed at
+    construction)."""
     adapter.reset(seed=0)
     pos, rot = adapter.ik.tcp_pose(adapter.arm_q)
     env_pos, env_rot = adapter.tcp_pose()
     np.testing.assert_allclose(pos, env_pos, atol=1e-9)
     np.testing.assert_allclose(rot, env_rot, atol=1e-9)
-    lower, upper = env_joint_limits(adapter.kitchen)
-    np.testing.assert_allclose(adapter.arm_model.jnt_range[:, 0], lower)
-    np.testing.assert_allclose(adapter.arm_model.jnt_range[:, 1], upper)
+    lower, upper = np.array(adapter.robot.arm.lower), np.array(adapter.robot.arm.upper)
+    np.testing.assert_allclose(adapter.ik.backend.lower, lower)
+    np.testing.assert_allclose(adapter.ik.backend.upper, upper)
     # The env's joint 6 is bounded to [0, 2.1127] (MJCF range, franka_config pos_bound).
     assert lower[5] == 0.0 and upper[5] == pytest.approx(2.1127)
     assert upper[3] == pytest.approx(-0.4)
+
+
+def test_an_env_that_differs_from_the_description_is_refused(adapter) -> None:
+    """The adapter holds the env it wraps against the robot description: a joint bound the
+    env enforces differently is named."""
+    bounds = adapter.kitchen.robot_env.robot_pos_bound
+    saved = bounds.copy()
+    try:
+        bounds[5, 0] = -1.0  # joint 6's pos_bound loosened: the MJCF range binds at -1.6573
+        with pytest.raises(DomainError, match="joint lower limits"):
+            check_kitchen_robot(adapter.kitchen, adapter.robot)
+    finally:
+        bounds[:] = saved
+    check_kitchen_robot(adapter.kitchen, adapter.robot)
 
 
 @pytest.mark.parametrize(
@@ -67,7 +84,7 @@ def test_ik_reaches_targets_within_millimetres_and_limits(adapter, offset) -> No
     _go(adapter, target, rotation, 30)
     pos, _ = adapter.tcp_pose()
     assert np.linalg.norm(pos - target) < 0.003
-    lower, upper = env_joint_limits(adapter.kitchen)
+    lower, upper = np.array(adapter.robot.arm.lower), np.array(adapter.robot.arm.upper)
     assert np.all(adapter.arm_q >= lower - 1e-3) and np.all(adapter.arm_q <= upper + 1e-3)
 
 
@@ -83,10 +100,10 @@ def test_a_step_moves_along_the_commanded_direction(adapter) -> None:
 
 def test_scaling_keeps_the_direction() -> None:
     velocity = np.array([8.0, -2.0, 0.5, 0.0, 1.0, 0.0, -4.0])
-    action = scale_to_action(velocity * 0.08, 0.08)
+    action = scale_to_action(velocity * 0.08, 0.08, 2.0)
     assert np.abs(action).max() == pytest.approx(1.0)
     np.testing.assert_allclose(action / action[0], velocity / velocity[0])
-    small = scale_to_action(np.full(7, 0.01), 0.08)
+    small = scale_to_action(np.full(7, 0.01), 0.08, 2.0)
     np.testing.assert_allclose(small, np.full(7, 0.01 / 0.16))
 
 

@@ -59,7 +59,7 @@ FRANKA_RESETS: list[tuple[str, Any, str]] = [
     ("empty node", {"node": ""}, "reset option node must be one of"),
     ("facts a dict", {"facts": {"kettle-moved": False}}, "a fact mapped to False"),
     ("radius True", {"radius": True}, "reset option radius must be finite numbers"),
-    ("out of reach", {"position": [50.0, 50.0, 50.0]}, "out of its reach (0.855 m)"),
+    ("out of reach", {"position": [50.0, 50.0, 50.0]}, "out of the arm's reach (1.089 m)"),
 ]
 
 

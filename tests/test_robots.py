@@ -220,7 +220,8 @@ def test_a_six_joint_description_of_the_seven_joint_model_is_refused() -> None:
 
 # ------------------------------------------------------------------ registry and CLI
 def test_an_unknown_robot_lists_the_known_ones() -> None:
-    with pytest.raises(RobotDescriptionError, match="unknown robot 'nope'; known robots: panda"):
+    known = "known robots: franka-kitchen-panda, panda"
+    with pytest.raises(RobotDescriptionError, match=f"unknown robot 'nope'; {known}"):
         registry.get_robot("nope")
     with pytest.raises(RobotDescriptionError, match="unknown robot 'nope'"):
         KitchenEnv(robot="nope")
@@ -228,7 +229,7 @@ def test_an_unknown_robot_lists_the_known_ones() -> None:
 
 def test_registered_robots_are_found_by_name(toy_registered: RobotDescription) -> None:
     assert toy_registered is TOY
-    assert registry.robot_names() == ["panda", "toy6", "ur5"]
+    assert registry.robot_names() == ["franka-kitchen-panda", "panda", "toy6", "ur5"]
     assert registry.get_robot("panda") is PANDA
 
 
@@ -247,7 +248,7 @@ def test_osg_robots_json_lists_every_robot(
 ) -> None:
     assert cli.main(["robots", "--json"]) == 0
     listed = {entry["name"]: entry for entry in json.loads(capsys.readouterr().out)}
-    assert sorted(listed) == ["panda", "toy6", "ur5"]
+    assert sorted(listed) == ["franka-kitchen-panda", "panda", "toy6", "ur5"]
     assert listed["panda"]["joints"] == list(PANDA.arm.names)
     assert listed["panda"]["redundant"] and not listed["toy6"]["redundant"]
     assert listed["toy6"]["gripper"]["max_opening"] == pytest.approx(0.08)
@@ -258,7 +259,10 @@ def test_osg_robots_json_lists_every_robot(
 @pytest.mark.parametrize(
     "argv,message",
     [
-        (["--robot", "nope", "robots"], "--robot: unknown robot 'nope'; known robots: panda"),
+        (
+            ["--robot", "nope", "robots"],
+            "--robot: unknown robot 'nope'; known robots: franka-kitchen-panda, panda",
+        ),
         (["plan", "--goal", "door-open", "--robot=nope"], "--robot: unknown robot 'nope'"),
         (
             ["--domain", "franka-kitchen", "--robot", "panda", "plan", "--goal", "light-on"],

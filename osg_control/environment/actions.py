@@ -7,6 +7,8 @@ from typing import Any
 
 import numpy as np
 
+from osg_control.environment.success import GRIPPER_CLOSED_CMD, GRIPPER_OPEN_CMD
+
 REAL_KINDS = "iuf"
 """numpy dtype kinds an action may have: signed and unsigned integers, floats (not bool,
 complex, strings or objects)."""
@@ -35,6 +37,16 @@ def checked_action(action: Any, bounds: np.ndarray) -> np.ndarray:
 def _refusal(bounds: np.ndarray, got: str) -> str:
     """The message of a refused action."""
     return f"action must be a finite real array of shape (7,) within +-{bounds.tolist()}, got {got}"
+
+
+def latched_gripper(command: float, g: float) -> float:
+    """The gripper command after an action whose gripper component is ``g``: ``g < -0.5``
+    closes, ``g > 0.5`` opens, anything between leaves ``command`` as it was (a latch)."""
+    if g < -0.5:
+        return GRIPPER_CLOSED_CMD
+    if g > 0.5:
+        return GRIPPER_OPEN_CMD
+    return command
 
 
 def scale_into(vector: np.ndarray, bound: float) -> np.ndarray:

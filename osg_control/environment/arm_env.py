@@ -47,7 +47,7 @@ from osg_control.domain.spaces import (
     observation_bounds,
 )
 from osg_control.domain.spec import Node, SkillSpec
-from osg_control.environment.actions import checked_action
+from osg_control.environment.actions import latched_gripper
 from osg_control.environment.camera_sensing import CameraSensing
 from osg_control.environment.config import RESET_OPTIONS, EnvConfig, as_slice
 from osg_control.environment.joint_reset import JointReset
@@ -194,13 +194,6 @@ class ArmEnv(Perceiving, StartPlacement, gym.Env):
         """Each object's true displacement from its nominal place at the last reset (the
         frame the env's own skill is scored in; scoring and scripted collection only)."""
 
-    # ----------------------------------------------------------------- state
-    @property
-    def episode_over(self) -> bool:
-        """Whether a step since the last reset came back terminated or truncated: the
-        episode is over and, by Gymnasium's protocol, takes no more steps."""
-        return self._episode_over
-
     # ----------------------------------------------------------------- reset
     def reset(
         self, *, seed: int | None = None, options: dict[str, Any] | None = None
@@ -280,14 +273,6 @@ class ArmEnv(Perceiving, StartPlacement, gym.Env):
         return self.observe(), self._info(world)
 
     # ----------------------------------------------------------------- step
-    def check_action(self, action: np.ndarray) -> np.ndarray:
-        """Validate an action (shape (7,), finite) and clip it to ``action_bounds``.
-
-        Raises:
-            ValueError: wrong shape or NaN/inf; nothing reaches the actuators.
-        """
-        return checked_action(action, self.action_bounds)
-
     def step(self, action: np.ndarray) -> tuple[np.ndarray, float, bool, bool, dict[str, Any]]:
         """Apply one 50 ms control step (see module docstring).
 
@@ -302,10 +287,7 @@ class ArmEnv(Perceiving, StartPlacement, gym.Env):
         action = self.check_action(action)
         failure = non_finite_state(self.data, ("qpos",))  # MuJoCo answers a bad qvel itself
         if failure is None:
-            if action[6] < -0.5:
-                self._gripper_cmd = GRIPPER_CLOSED_CMD
-            elif action[6] > 0.5:
-                self._gripper_cmd = GRIPPER_OPEN_CMD
+            self._gripper_cmd = latched_gripper(self._gripper_cmd, action[6])
             # The controller reads the encoders: the perceived joints.
             q_target = self.ik.relative_step(self.percept().joints, action[:6])
             self.data.ctrl[self._gripper_act] = (

@@ -75,18 +75,24 @@ def node_option(options: Mapping[str, Any], default: str, nodes: Iterable[str]) 
     return str(choice_option("node", default if name is None else name, tuple(nodes)))
 
 
-def check_reach(position: np.ndarray, shoulder: Any, reach: float) -> None:
-    """Refuse a ``position`` start farther than ``reach`` from the arm's ``shoulder``: the
-    arm would stop short and the episode start from a pose nobody asked for.
+Sphere = tuple[tuple[float, float, float], float]
+"""A robot's workspace: centre [m] and radius [m] (``control.robot_model.workspace``)."""
+
+
+def check_reach(option: str, position: np.ndarray, reach: Sphere) -> None:
+    """Refuse the reset option ``option`` at ``position`` (a start, an object) outside the
+    robot's workspace ``reach``: the arm would stop short and the episode start from a pose
+    nobody asked for.
 
     Raises:
-        EnvOptionError: naming the position, the distance and the reach.
+        EnvOptionError: naming the option, the position, the distance and the reach.
     """
-    distance = float(np.linalg.norm(position - np.asarray(shoulder, dtype=float)))
-    if distance > reach:
+    centre, radius = reach
+    distance = float(np.linalg.norm(np.asarray(position) - np.asarray(centre, dtype=float)))
+    if distance > radius:
         raise EnvOptionError(
-            f"reset option position {position.tolist()} is {distance:.3f} m from the arm's "
-            f"shoulder, out of its reach ({reach} m)"
+            f"reset option {option} {np.asarray(position).tolist()} is {distance:.3f} m from "
+            f"the arm's first joint at {list(centre)}, out of the arm's reach ({radius:.3f} m)"
         )
 
 

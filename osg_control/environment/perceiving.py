@@ -9,6 +9,7 @@ import numpy as np
 
 from osg_control.environment.camera_sensing import CameraPerception, CameraSensing
 from osg_control.environment.config import EnvConfig
+from osg_control.environment.episode import EpisodeState
 from osg_control.environment.truth import TruthReadouts
 from osg_control.errors import EnvOptionError
 from osg_control.perception.percept import Percept
@@ -16,7 +17,7 @@ from osg_control.perception.sensors import noisy_world
 from osg_control.perception.spec import SIMULATED_PERCEPTIONS
 
 
-class Perceiving(TruthReadouts):
+class Perceiving(EpisodeState, TruthReadouts):
     """The percept part of ``ArmEnv`` (``ArmEnv.__init__`` sets the attributes below); the
     ``sim`` perception reads the truth (``TruthReadouts``) exactly."""
 
@@ -34,17 +35,6 @@ class Perceiving(TruthReadouts):
     def perceptions(self) -> tuple[str, ...]:
         """The perceptions it simulates: ``camera`` too where the scene declares cameras."""
         return SIMULATED_PERCEPTIONS + (("camera",) if self.camera_perception is not None else ())
-
-    def observe(self) -> np.ndarray:
-        """The perceived 10-D state of the latest percept (a copy)."""
-        return self.percept().state.copy()
-
-    def percept(self) -> Percept:
-        """What the robot perceived at the last reset, step or joint reset: the only input
-        of whatever decides (the executor, policies, classifier, fact detectors)."""
-        if self._percept is None:
-            raise RuntimeError("the env has not been reset")
-        return self._percept
 
     def sense(self) -> Percept:
         """Read the sensors now without stepping (e.g. after the scene was edited from

@@ -1,4 +1,4 @@
-"""TCP poses of the env: the canonical quaternion sign and random starts around a node."""
+"""TCP poses of the env: random starts around a node."""
 
 from __future__ import annotations
 
@@ -7,13 +7,7 @@ from scipy.spatial.transform import Rotation
 
 from osg_control.domain.spec import TOP_DOWN_QUAT
 
-_TOP_DOWN = np.array(TOP_DOWN_QUAT)
-_TOP_DOWN_ROT = Rotation.from_quat(np.roll(_TOP_DOWN, -1))
-
-
-def canonical_quat(quat_wxyz: np.ndarray) -> np.ndarray:
-    """Flip a quaternion's sign into the hemisphere of ``TOP_DOWN_QUAT``."""
-    return -quat_wxyz if float(np.dot(quat_wxyz, _TOP_DOWN)) < 0 else quat_wxyz
+_TOP_DOWN_ROT = Rotation.from_quat(np.roll(np.array(TOP_DOWN_QUAT), -1))
 
 
 def quat_rotation(quat_wxyz: tuple[float, float, float, float]) -> Rotation:

@@ -9,10 +9,12 @@ finger width (with its own noise). The world part of a percept is the domain's
 
 from __future__ import annotations
 
+from typing import Any
+
 import mujoco
 import numpy as np
 
-from osg_control.environment.poses import canonical_quat
+from osg_control.domain.spec import TOP_DOWN_QUAT
 from osg_control.perception.spec import PerceptionSpec
 
 
@@ -94,11 +96,36 @@ class ArmSensors:
         self, pose: mujoco.MjData, data: mujoco.MjData, gripper_cmd: float, fingers: float
     ) -> np.ndarray:
         """The 10-D state with the TCP of ``pose`` and the gripper of ``data``."""
-        quat = np.zeros(4)
-        mujoco.mju_mat2Quat(quat, pose.site_xmat[self.tcp_site])
         force = (
             abs(float(data.actuator_force[self.gripper_actuator])) if self.reports_force else 0.0
         )
-        return np.concatenate(
-            [pose.site_xpos[self.tcp_site], canonical_quat(quat), [gripper_cmd, force, fingers]]
-        )
+        site = self.tcp_site
+        return tcp_state(pose.site_xpos[site], pose.site_xmat[site], gripper_cmd, force, fingers)
+
+
+def tcp_state(
+    position: np.ndarray,
+    rotation: np.ndarray,
+    gripper_cmd: float,
+    force: float,
+    width: float,
+    reference: Any = None,
+) -> np.ndarray:
+    """The 10-D state ``[x, y, z, qw, qx, qy, qz, gripper command, grip force, finger
+    width]`` of a TCP at ``position`` [m] with ``rotation`` (a 3x3 matrix, or its 9 values),
+    the quaternion in the hemisphere of ``reference`` (``w, x, y, z``; default
+    ``TOP_DOWN_QUAT``: ``canonical_quat``)."""
+    quat = np.zeros(4)
+    mujoco.mju_mat2Quat(quat, np.asarray(rotation, dtype=float).reshape(9))
+    quat = canonical_quat(quat) if reference is None else canonical_quat(quat, reference)
+    return np.concatenate([position, quat, [gripper_cmd, force, width]])
+
+
+_TOP_DOWN = np.array(TOP_DOWN_QUAT)
+
+
+def canonical_quat(quat_wxyz: np.ndarray, reference: Any = _TOP_DOWN) -> np.ndarray:
+    """Flip a quaternion's sign into the hemisphere of ``reference`` (``w, x, y, z``;
+    default ``TOP_DOWN_QUAT``): the state's orientation is one of the two signs, always the
+    same for nearby orientations."""
+    return -quat_wxyz if float(np.dot(quat_wxyz, reference)) < 0 else quat_wxyz

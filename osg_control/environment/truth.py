@@ -89,10 +89,20 @@ class TruthReadouts(SceneHooks):
         for scoring and for labelling scripted data, never for deciding (``percept``);
         ``facts``: ``world``'s, if the caller has them already."""
         world = self.read_world() if world is None else world
-        return {
-            "world": world,
-            "world_facts": sorted(self.facts_of(world) if facts is None else facts),
-            "steps": self._steps,
-            "success": self._succeeded,
-            "arm_q": self.arm_q,
-        }
+        facts = self.facts_of(world) if facts is None else facts
+        return truth_info(world, facts, self._steps, self._succeeded, self.arm_q)
+
+
+def truth_info(
+    world: np.ndarray, facts: frozenset[str], steps: int, success: bool, arm_q: np.ndarray
+) -> dict[str, Any]:
+    """A step's information on the simulator's truth, every env's (``SkillEnv``): the world
+    vector and its facts, the steps since the start, whether the skill's success has held,
+    the true arm joints. For scoring and labels, never for deciding."""
+    return {
+        "world": world,
+        "world_facts": sorted(facts),
+        "steps": steps,
+        "success": success,
+        "arm_q": arm_q,
+    }

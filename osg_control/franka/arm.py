@@ -1,34 +1,31 @@
-"""The env's Panda as the adapter's IK sees it: an arm-only model compiled from the env's own
-MJCF, the joint limits the env enforces, mink's differential IK on it, and how the env's
-servos turn an action into motion.
+"""The env's Panda as the adapter drives it: its robot description
+(``robots.franka_kitchen_panda``, registered as ``franka-kitchen-panda``) checked against the
+env it wraps, the core's differential IK (``control.ik``) built from that description, and how
+the env's own servos turn the IK's joint velocity into the env's 9-D action.
 """
 
 from __future__ import annotations
 
-import os
-import warnings
-from dataclasses import dataclass, field
+import math
+from dataclasses import dataclass, field, replace
+from functools import cache
 from typing import Any, ClassVar
 
 import mujoco
 import numpy as np
 
+from osg_control.control.description import RobotDescription
+from osg_control.control.ik import DiffIKController, IKConfig
+from osg_control.control.robot_model import robot_spec
 from osg_control.environment.options import Bounds, check_fields
 from osg_control.errors import DomainError, EnvOptionError
 from osg_control.perception.spec import PerceptionSpec
 
-ARM_JOINTS = tuple(f"robot:panda0_joint{i}" for i in range(1, 8))
-FINGER_JOINTS = ("robot:panda0_finger_joint1", "robot:panda0_finger_joint2")
-TCP_SITE = "end_effector"
-ROBOT_ROOT = "panda0_link0"
-SHOULDER = (0.0, 0.0, 2.133)
-"""The arm's shoulder (``panda0_link2``, joint 2) in the env's frame: the base stands at
-(0, 0, 1.8), the shoulder 0.333 m above it."""
-REACH = 0.855
-"""The arm's reach [m] from its shoulder: no TCP target farther away can be reached."""
-ACTION_SCALE = 2.0
-"""The env's joint speed [rad/s] for an action of 1 (``FrankaRobot.act_rng``)."""
-MODEL_FILE = "envs/assets/kitchen_franka/kitchen_assets/kitchen_env_model.xml"
+ROBOT = "franka-kitchen-panda"
+"""The registered robot this domain's env drives (``robots.franka_kitchen_panda``)."""
+JOINT_RESET_POSTURE_COST = 0.05
+"""The posture task's weight in the joint reset (``franka.setup.joint_reset``): strong enough
+to pull the joints home within a few steps, under the TCP task that holds the pose."""
 
 
 @dataclass(frozen=True)
@@ -36,10 +33,10 @@ class FrankaConfig:
     """Options of the adapter.
 
     Attributes:
-        position_cost: mink frame task position weight [1/m].
+        position_cost: the IK's TCP position weight [1/m] (``control.ik.IKConfig``).
         orientation_cost: its orientation weight [1/rad].
         posture_cost: weight of the posture task toward the env's reset posture.
-        limit_gain: mink configuration-limit gain.
+        limit_gain: the IK's joint-limit gain.
         perception: what the adapter perceives (``franka.perception``): ``env`` (the
             env's own observation, the default) or ``sim`` (the simulator, an oracle);
             ``tcp_noise`` adds the paper's Gaussian noise [m] to the perceived TCP position
@@ -89,179 +86,140 @@ class FrankaConfig:
                 f"{ {**noisy, 'tcp_noise': spec.tcp_noise} }"
             )
 
+    def ik_config(self, dt: float, posture: np.ndarray) -> IKConfig:
+        """The core IK's configuration: these weights, the env's step ``dt`` [s], the env's
+        reset ``posture``, and no joint-speed box: the servo command scales the whole joint
+        vector into the action (``ServoCommand``), which keeps the TCP's direction where a
+        per-joint bound would turn it."""
+        return IKConfig(
+            dt=dt,
+            position_cost=self.position_cost,
+            orientation_cost=self.orientation_cost,
+            posture_cost=self.posture_cost,
+            limit_gain=self.limit_gain,
+            posture=tuple(float(v) for v in posture),
+            velocity_scale=math.inf,
+        )
 
-def model_path() -> str:
-    """The library's kitchen MJCF."""
-    import gymnasium_robotics
 
-    return os.path.join(os.path.dirname(gymnasium_robotics.__file__), MODEL_FILE)
+def arm_controllers(
+    robot: RobotDescription, config: FrankaConfig, dt: float, posture: np.ndarray
+) -> tuple[DiffIKController, DiffIKController]:
+    """The core IK on ``robot`` for the adapter's steps, and the same IK with the joint
+    reset's posture weight (``JOINT_RESET_POSTURE_COST``)."""
+    ik_config = config.ik_config(dt, posture)
+    reset = replace(ik_config, posture_cost=JOINT_RESET_POSTURE_COST)
+    return DiffIKController(robot, ik_config), DiffIKController(robot, reset)
 
 
-def env_joint_limits(kitchen: Any) -> tuple[np.ndarray, np.ndarray]:
-    """The arm's joint limits as the env enforces them: MJCF ``range``, actuator
-    ``ctrlrange`` and ``franka_config.xml``'s ``pos_bound``, intersected. (7,), (7,)."""
+def check_kitchen_robot(kitchen: Any, robot: RobotDescription) -> None:
+    """Hold the env the adapter wraps against ``robot``: the joint limits it enforces, its
+    servo gains and joint damping, its finger servos' gain and its control period.
+
+    Raises:
+        DomainError: naming what differs.
+    """
+    from osg_control.robots.franka_kitchen_panda import enforced_limits
+
     model = kitchen.model
-    lower, upper = [], []
-    for i, name in enumerate(ARM_JOINTS):
-        joint = model.joint(name)
-        act = next(a for a in range(model.nu) if model.actuator_trnid[a, 0] == joint.id)
-        bounds = np.array([joint.range, model.actuator_ctrlrange[act]])
-        pos_bound = kitchen.robot_env.robot_pos_bound[i]
-        lower.append(max(bounds[:, 0].max(), pos_bound[0]))
-        upper.append(min(bounds[:, 1].min(), pos_bound[1]))
-    return np.array(lower), np.array(upper)
-
-
-def build_arm_model(kitchen: Any) -> mujoco.MjModel:
-    """An arm-only model (7 joints, the ``end_effector`` site) from the env's own MJCF,
-    placed where the env's robot stands, with the env's joint limits."""
-    spec = mujoco.MjSpec.from_file(model_path())
-    root = spec.body(ROBOT_ROOT)
-    arm = mujoco.MjSpec()
-    frame = arm.worldbody.add_frame()
-    parent = int(kitchen.model.body_parentid[kitchen.model.body(ROBOT_ROOT).id])
-    placed = mujoco.MjData(kitchen.model)
-    mujoco.mj_kinematics(kitchen.model, placed)
-    frame.pos = placed.xpos[parent].copy()
-    frame.quat = placed.xquat[parent].copy()
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")
-        frame.attach_body(root, "", "")
-    for actuator in list(arm.actuators):
-        arm.delete(actuator)
-    for name in FINGER_JOINTS:
-        arm.delete(arm.joint(name))
-    lower, upper = env_joint_limits(kitchen)
-    for name, lo, hi in zip(ARM_JOINTS, lower, upper, strict=True):
-        joint = arm.joint(name)
-        joint.range = [lo, hi]
-        joint.limited = mujoco.mjtLimited.mjLIMITED_TRUE
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")
-        model = arm.compile()
-    if model.nq != 7:
-        raise DomainError(f"franka-kitchen: the arm model has {model.nq} joints, expected 7")
-    return model
-
-
-class ArmIK:
-    """mink differential IK on the arm-only model: a TCP pose target -> joint velocity."""
-
-    def __init__(self, model: mujoco.MjModel, config: FrankaConfig, posture: np.ndarray) -> None:
-        import mink
-
-        self.mink = mink
-        self.model = model
-        self.configuration = mink.Configuration(model)
-        self.frame = mink.FrameTask(
-            TCP_SITE,
-            "site",
-            position_cost=config.position_cost,
-            orientation_cost=config.orientation_cost,
-            lm_damping=1e-6,
-        )
-        self.posture = mink.PostureTask(model, cost=config.posture_cost)
-        self.posture.set_target(np.asarray(posture, dtype=float))
-        self.limits = [mink.ConfigurationLimit(model, gain=config.limit_gain)]
-        self.lower = model.jnt_range[:, 0].copy()
-        self.upper = model.jnt_range[:, 1].copy()
-        self._dynamics = mujoco.MjData(model)
-
-    def bias(self, q: np.ndarray, qvel: np.ndarray) -> np.ndarray:
-        """The arm's bias torques [N m] (gravity, Coriolis) at joints ``q`` and speeds
-        ``qvel`` on the arm model (the hand's mass included, the fingers welded)."""
-        self._dynamics.qpos[:] = q
-        self._dynamics.qvel[:] = qvel
-        mujoco.mj_forward(self.model, self._dynamics)
-        return self._dynamics.qfrc_bias.copy()
-
-    def tcp_pose(self, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """TCP position and rotation matrix at arm joints ``q``."""
-        self.configuration.update(np.asarray(q, dtype=float))
-        data = self.configuration.data
-        site = self.model.site(TCP_SITE).id
-        return data.site_xpos[site].copy(), data.site_xmat[site].reshape(3, 3).copy()
-
-    def velocity(
-        self,
-        q: np.ndarray,
-        position: np.ndarray,
-        rotation: np.ndarray,
-        dt: float,
-        posture_cost: float | None = None,
-    ) -> np.ndarray:
-        """The joint velocity [rad/s] that moves the TCP to the target pose in ``dt``."""
-        mink = self.mink
-        q = np.clip(np.asarray(q, dtype=float), self.lower + 1e-6, self.upper - 1e-6)
-        self.configuration.update(q)
-        self.frame.set_target(
-            mink.SE3.from_rotation_and_translation(mink.SO3.from_matrix(rotation), position)
-        )
-        tasks = [self.frame, self.posture]
-        if posture_cost is not None:
-            self.posture.set_cost(posture_cost)
-        try:
-            v = mink.solve_ik(
-                self.configuration, tasks, dt, "daqp", damping=1e-9, limits=self.limits
+    n = robot.n_joints
+    lower, upper = enforced_limits(model, kitchen.robot_env.robot_pos_bound[:n])
+    kp, damping = servo_gains(model, robot.arm.names)
+    fingers = [model.joint(j) for j in robot.gripper.joints]
+    finger_kp = [float(model.actuator_gainprm[_actuator(model, j.id), 0]) for j in fingers]
+    checks: dict[str, tuple[Any, Any]] = {
+        "joint lower limits": (lower, robot.arm.lower),
+        "joint upper limits": (upper, robot.arm.upper),
+        "servo kp": (kp, robot.servo.kp),
+        "joint damping": (damping, robot.servo.kv),
+        "finger servo kp": (finger_kp, [robot.gripper.kp] * len(fingers)),
+        "control rate": ([1.0 / float(kitchen.robot_env.dt)], [robot.control_hz]),
+    }
+    for what, (env_value, described) in checks.items():
+        if not np.allclose(env_value, described, rtol=0.0, atol=1e-9):
+            raise DomainError(
+                f"franka-kitchen: the env's {what} {np.asarray(env_value).tolist()} differ "
+                f"from robot {robot.name!r}'s {list(described)}"
             )
-        finally:
-            if posture_cost is not None:
-                self.posture.set_cost(FrankaConfig.posture_cost)
-        return np.asarray(v, dtype=float)
 
 
-def servo_response(kitchen: Any) -> tuple[np.ndarray, np.ndarray]:
-    """Each arm joint's servo gain ``kp`` [N m/rad] and the fraction of a step's target
-    offset it covers in one env step.
+def _actuator(model: mujoco.MjModel, joint: int) -> int:
+    return next(a for a in range(model.nu) if model.actuator_trnid[a, 0] == joint)
+
+
+def servo_gains(model: mujoco.MjModel, joints: tuple[str, ...]) -> tuple[np.ndarray, np.ndarray]:
+    """Each joint's position servo gain ``kp`` [N m/rad] and its joint damping [N m s/rad]
+    in ``model``."""
+    ids = [model.joint(name) for name in joints]
+    kp = [float(model.actuator_gainprm[_actuator(model, j.id), 0]) for j in ids]
+    damping = [float(model.dof_damping[j.dofadr[0]]) for j in ids]
+    return np.array(kp), np.array(damping)
+
+
+def servo_response(robot: RobotDescription, dt: float) -> np.ndarray:
+    """The fraction of a step's target offset each arm joint's servo covers in one env step
+    of ``dt`` [s].
 
     The env's arm servos are damping-dominated (``kp`` 870 / 120, joint damping 100 / 10,
-    no armature): ``b dq/dt = kp (ctrl - q) - bias``, a first-order lag with time constant
-    ``b / kp`` (0.115 s / 0.083 s), so within one 80 ms step a joint covers
-    ``1 - exp(-dt kp / b)`` (about 0.50 / 0.62) of its target offset. Dividing each joint's
-    offset by its fraction makes all joints arrive together (the Cartesian direction holds).
+    no armature; the description's ``servo.kp`` and ``servo.kv``): ``b dq/dt = kp (ctrl - q)
+    - bias``, a first-order lag with time constant ``b / kp`` (0.115 s / 0.083 s), so within
+    one 80 ms step a joint covers ``1 - exp(-dt kp / b)`` (about 0.50 / 0.62) of its target
+    offset. Dividing each joint's offset by its fraction makes all joints arrive together
+    (the Cartesian direction holds).
     """
-    model = kitchen.model
-    dt = float(kitchen.robot_env.dt)
-    kp, fraction = [], []
-    for name in ARM_JOINTS:
-        joint = model.joint(name)
-        act = next(a for a in range(model.nu) if model.actuator_trnid[a, 0] == joint.id)
-        gain = float(model.actuator_gainprm[act, 0])
-        damping = float(model.dof_damping[joint.dofadr[0]])
-        kp.append(gain)
-        fraction.append(1.0 - np.exp(-dt * gain / damping) if damping > 0 else 1.0)
-    return np.array(kp), np.array(fraction)
+    kp, damping = np.array(robot.servo.kp), np.array(robot.servo.kv)
+    return 1.0 - np.exp(-dt * kp / damping)
+
+
+@cache
+def dynamics_model(robot: RobotDescription) -> mujoco.MjModel:
+    """The robot's model with its fingers (``control.robot_model.robot_spec``), compiled
+    once and shared read-only: the servo command's bias torques."""
+    return robot_spec(robot).compile()
 
 
 class ServoCommand:
     """IK joint velocity -> the env's 9-D action for this robot's servos: each joint's
     step offset ``v dt`` divided by its servo's one-step response, plus the offset that
     holds the bias torques (``bias / kp``: gravity), scaled as a whole (``scale_to_action``,
-    see ``servo_response``); fingers +-1 (closing or opening at full speed)."""
+    see ``servo_response``); fingers +-1 (closing or opening at full speed).
 
-    def __init__(self, kitchen: Any) -> None:
-        self.kp, self.fraction = servo_response(kitchen)
-        self.dt = float(kitchen.robot_env.dt)
+    Args:
+        robot: the env's arm (its servo gains; its joint speed at an action of 1,
+            ``arm.velocity``).
+        dt: the env's step [s].
+    """
+
+    def __init__(self, robot: RobotDescription, dt: float) -> None:
+        self.kp = np.array(robot.servo.kp)
+        self.fraction = servo_response(robot, dt)
+        self.speed = np.array(robot.arm.velocity)
+        self.dt = dt
+        self._model = dynamics_model(robot)
+        self._dynamics = mujoco.MjData(self._model)
+        self._arm = np.array([self._model.joint(j).qposadr[0] for j in robot.arm.names])
+        self._arm_dof = np.array([self._model.joint(j).dofadr[0] for j in robot.arm.names])
+
+    def bias(self, q: np.ndarray, qvel: np.ndarray) -> np.ndarray:
+        """The arm's bias torques [N m] (gravity, Coriolis) at joints ``q`` and speeds
+        ``qvel`` on the robot's model (the hand and the fingers, at rest, included)."""
+        self._dynamics.qpos[self._arm] = q
+        self._dynamics.qvel[self._arm_dof] = qvel
+        mujoco.mj_forward(self._model, self._dynamics)
+        return self._dynamics.qfrc_bias[self._arm_dof].copy()
 
     def action(self, velocity: np.ndarray, bias: np.ndarray, closed: bool) -> np.ndarray:
         """The env's action for joint velocity ``velocity`` [rad/s] under ``bias`` [N m]."""
         offset = np.asarray(velocity) * self.dt / self.fraction + np.asarray(bias) / self.kp
         finger = -1.0 if closed else 1.0
-        return np.concatenate([scale_to_action(offset, self.dt), [finger, finger]])
+        arm = scale_to_action(offset, self.dt, self.speed)
+        return np.concatenate([arm, [finger, finger]])
 
 
-def scale_to_action(offset: np.ndarray, dt: float) -> np.ndarray:
+def scale_to_action(offset: np.ndarray, dt: float, speed: np.ndarray | float) -> np.ndarray:
     """A joint servo-target offset [rad] -> the env's arm action (the env's target is
-    ``observed q + ACTION_SCALE * a * dt``), scaled as a whole into [-1, 1]."""
-    action = np.asarray(offset, dtype=float) / (ACTION_SCALE * dt)
+    ``observed q + speed * a * dt``, ``speed`` [rad/s] the joint speed of an action of 1),
+    scaled as a whole into [-1, 1]."""
+    action = np.asarray(offset, dtype=float) / (np.asarray(speed) * dt)
     largest = float(np.abs(action).max()) if action.size else 0.0
     return action / largest if largest > 1.0 else action
-
-
-def rotation_step(rotation: np.ndarray, delta: np.ndarray) -> np.ndarray:
-    """Rotate a rotation matrix by a world-frame rotation vector ``delta``."""
-    quat = np.zeros(4)
-    mujoco.mju_axisAngle2Quat(quat, delta / (np.linalg.norm(delta) + 1e-12), np.linalg.norm(delta))
-    step = np.zeros(9)
-    mujoco.mju_quat2Mat(step, quat)
-    return step.reshape(3, 3) @ rotation

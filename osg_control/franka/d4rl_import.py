@@ -58,7 +58,6 @@ from osg_control.domain.spec import SkillSpec
 from osg_control.environment.actions import scale_into
 from osg_control.environment.success import GRIPPER_CLOSED_CMD, GRIPPER_OPEN_CMD
 from osg_control.errors import DatasetError, UsageError
-from osg_control.franka.arm import env_joint_limits
 from osg_control.franka.d4rl_source import KitchenEpisode, completions, read_source
 from osg_control.franka.domain import SUBTASK_CHAINS, TASK_FACTS
 from osg_control.franka.perception import FrankaSensors
@@ -241,7 +240,7 @@ def import_d4rl(domain: Domain, source: str | Path, out: str | Path) -> D4RLImpo
     per_skill: dict[str, list[Episode]] = {}
     counts: dict[str, Counter[str]] = {k: Counter() for k in ("skip", "start", "same", "from")}
     adapter = make_franka_env()
-    lower, upper = env_joint_limits(adapter.kitchen)
+    lower, upper = np.array(adapter.robot.arm.lower), np.array(adapter.robot.arm.upper)
     for episode in source_episodes:  # all checked before anything is converted or written
         check_joint_limits(episode, lower, upper)
     try:

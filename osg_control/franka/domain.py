@@ -40,6 +40,7 @@ from osg_control.franka.poses import (
     wp,
 )
 from osg_control.paths import PACKAGE_DIR
+from osg_control.robots.franka_kitchen_panda import CONTROL_HZ
 
 TASK_FACTS: dict[str, tuple[str, str]] = {
     "microwave": ("microwave-open", "microwave-closed"),
@@ -58,9 +59,6 @@ FACTS: tuple[str, ...] = (
 )
 OBJECT_FIELDS: tuple[str, ...] = tuple(f"qpos{i}" for i in range(9, 30))
 WORLD_FIELDS: tuple[str, ...] = (*OBJECT_FIELDS, "grasped")
-CONTROL_HZ = 12.5
-"""FrankaKitchen-v1's control rate [Hz]: its robot env steps 40 physics steps of 2 ms per
-action (the adapter checks its ``dt`` against this)."""
 _OFFSET = 9
 """The world vector's first entry is the env's qpos 9."""
 

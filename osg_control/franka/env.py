@@ -16,15 +16,17 @@ Action (7-D): ``[dx, dy, dz, da, db, dg, g]``, relative TCP position [m] and rot
 vector [rad], clipped to the domain's ``action_bounds`` (``poses.ACTION_BOUNDS``: 4 cm and
 0.2 rad per 80 ms step: 0.5 m/s, which keeps a whole kitchen-complete path of about 3 m
 within the 280-step limit; the 2 cm of the core's own kitchen is too slow here), and a
-gripper command (``g < -0.5`` closes, ``g > 0.5`` opens). mink's differential IK on an
-arm-only model compiled from the env's own MJCF (``franka.arm``), with the joint limits the
-env enforces (the intersection of the MJCF joint ranges, the actuators' control ranges and
-``franka_config.xml``'s position bounds),
-gives a joint velocity ``v`` for the commanded pose from the perceived joints (``env``: the
-observed ones, as the env's own servo target ``observed qpos + 2 a dt``; ``sim``: the true
-ones); the env's action is ``a = v / 2``, scaled as a whole vector so that ``max |a| <= 1``:
-when it saturates the TCP moves slower along the same direction, never along another one.
-Fingers: ``+1`` opens, ``-1`` closes, every step.
+gripper command (``g < -0.5`` closes, ``g > 0.5`` opens). The env's arm is the robot
+description ``franka-kitchen-panda`` (``robots.franka_kitchen_panda``: the arm compiled from
+the env's own MJCF, the joint limits the env enforces, the ``end_effector`` site as TCP),
+checked against the env at construction (``franka.arm.check_kitchen_robot``). The core's
+differential IK on that description (``control.ik``, the core's rotation convention
+``control.rotations``) gives a joint velocity ``v`` for the commanded pose from the perceived
+joints (``env``: the observed ones, as the env's own servo target ``observed qpos + 2 a
+dt``; ``sim``: the true ones); ``franka.arm.ServoCommand`` turns it into the env's action,
+scaled as a whole vector so that ``max |a| <= 1``: when it saturates the TCP moves slower
+along the same direction, never along another one. Fingers: ``+1`` opens, ``-1`` closes,
+every step.
 
 Truth (``tcp_pose``, ``arm_q``, ``world_state``, ``facts``, ``skill_success``,
 ``info["world"]``) is for scoring, the skill's reward (Algorithm 1's labels) and the reset's
@@ -41,21 +43,23 @@ import gymnasium as gym
 import numpy as np
 
 from osg_control.control.divergence import DivergenceWatch, non_finite_state
+from osg_control.control.rotations import rotation_step
 from osg_control.domain.spaces import ACTION_DIM, OBS_DIM, unbounded_observation
 from osg_control.domain.spec import Node, SkillSpec
-from osg_control.environment.actions import checked_action
+from osg_control.environment.actions import latched_gripper
+from osg_control.environment.episode import EpisodeState
 from osg_control.environment.options import check_env_arguments, check_facts_hold
 from osg_control.environment.poses import quat_rotation, sample_start_pose
 from osg_control.environment.success import GRIPPER_CLOSED_CMD, GRIPPER_OPEN_CMD, success_holds
+from osg_control.environment.truth import truth_info
 from osg_control.errors import DomainError
 from osg_control.franka import poses, setup
 from osg_control.franka.arm import (
-    ARM_JOINTS,
-    ArmIK,
+    ROBOT,
     FrankaConfig,
     ServoCommand,
-    build_arm_model,
-    rotation_step,
+    arm_controllers,
+    check_kitchen_robot,
 )
 from osg_control.franka.domain import CONTROL_HZ
 from osg_control.franka.perception import (
@@ -67,6 +71,7 @@ from osg_control.franka.perception import (
     observation_vector,
 )
 from osg_control.perception.percept import Percept
+from osg_control.robots.registry import get_robot
 
 __all__ = ["REFERENCE_QUAT", "FrankaKitchenAdapter", "check_kitchen"]
 RESET_OPTIONS = setup.RESET_OPTIONS
@@ -89,7 +94,7 @@ def check_kitchen(env: Any) -> Any:
     return kitchen
 
 
-class FrankaKitchenAdapter(gym.Env):
+class FrankaKitchenAdapter(EpisodeState, gym.Env):
     """A FrankaKitchen-v1 driven by relative TCP commands (see module docstring).
 
     Args:
@@ -144,16 +149,15 @@ class FrankaKitchenAdapter(gym.Env):
         self.perception = self.config.perception
         self.render_mode = getattr(env, "render_mode", None)
         self.dt = float(self.kitchen.robot_env.dt)
-        if not np.isclose(self.dt * CONTROL_HZ, 1.0):
-            raise DomainError(
-                f"FrankaKitchen-v1 steps every {self.dt} s, not at the declared {CONTROL_HZ} Hz"
-            )
+        self.robot = get_robot(ROBOT)
+        """The env's arm (``robots.franka_kitchen_panda``), checked against the env."""
+        check_kitchen_robot(self.kitchen, self.robot)
         self.posture = np.asarray(self.kitchen.robot_env.init_qpos[:7], dtype=float).copy()
-        self.arm_model = build_arm_model(self.kitchen)
-        self.ik = ArmIK(self.arm_model, self.config, self.posture)
-        self.command = ServoCommand(self.kitchen)
-        self._arm_dof = np.array([self.model.joint(j).dofadr[0] for j in ARM_JOINTS])
-        self.sensors = FrankaSensors(self.kitchen, self.ik.tcp_pose, world_of, facts_of)
+        self.ik, self.reset_ik = arm_controllers(self.robot, self.config, self.dt, self.posture)
+        """The core's IK on the robot: for the steps, and for the joint reset."""
+        self.command = ServoCommand(self.robot, self.dt)
+        self._arm_dof = np.array([self.model.joint(j).dofadr[0] for j in self.robot.arm.names])
+        self.sensors = FrankaSensors(self.kitchen, self.robot, self.ik.tcp_pose, world_of, facts_of)
         self._arm_qpos = self.sensors.arm_qpos
         self.observation_space = gym.spaces.Box(*unbounded_observation(), (OBS_DIM,), np.float64)
         self.action_bounds = np.array(poses.ACTION_BOUNDS)
@@ -223,17 +227,6 @@ class FrankaKitchenAdapter(gym.Env):
         )
 
     # ----------------------------------------------------------------- percepts
-    def percept(self) -> Percept:
-        """What the robot perceived at the last reset, step or joint reset: the only input
-        of whatever decides."""
-        if self._percept is None:
-            raise RuntimeError("the env has not been reset")
-        return self._percept
-
-    def observe(self) -> np.ndarray:
-        """The latest percept's 10-D state (a copy)."""
-        return self.percept().state.copy()
-
     def env_observation(self) -> np.ndarray:
         """The env's latest 59-D ``observation`` array, as the caller's env returned it."""
         if self._observation is None:
@@ -254,17 +247,12 @@ class FrankaKitchenAdapter(gym.Env):
             return self.arm_q, pos, rot, self.data.qfrc_bias[self._arm_dof].copy()
         q = self._observation[ARM].copy()
         pos, rot = self.ik.tcp_pose(q)
-        return q, pos, rot, self.ik.bias(q, self._observation[ROBOT_QVEL][:7])
+        return q, pos, rot, self.command.bias(q, self._observation[ROBOT_QVEL][:7])
 
     def _info(self, world: np.ndarray) -> dict[str, Any]:
-        return {
-            "world": world,
-            "world_facts": sorted(self.facts_of(world)),
-            "steps": self._steps,
-            "success": self._succeeded,
-            "arm_q": self.arm_q,
-            "episode_task_completions": self.completed_tasks(),
-        }
+        info = truth_info(world, self.facts_of(world), self._steps, self._succeeded, self.arm_q)
+        info["episode_task_completions"] = self.completed_tasks()
+        return info
 
     # ----------------------------------------------------------------- reset / step
     def reset(
@@ -335,29 +323,16 @@ class FrankaKitchenAdapter(gym.Env):
         """Steps taken since the start (the end of ``reset``)."""
         return self._steps
 
-    @property
-    def episode_over(self) -> bool:
-        """Whether a step since the start came back terminated (the env's tasks done, or a
-        divergence) or truncated: by Gymnasium's protocol the episode takes no more steps."""
-        return self._episode_over
-
     def completed_tasks(self) -> list[str]:
         """The env's own record of the tasks completed this episode
         (``info["episode_task_completions"]``)."""
         return list(self.last_env_info.get("episode_task_completions", []))
 
-    def check_action(self, action: np.ndarray) -> np.ndarray:
-        """Validate (shape (7,), finite) and clip to ``action_bounds``.
-
-        Raises:
-            ValueError: wrong shape or NaN/inf; nothing reaches the env.
-        """
-        return checked_action(action, self.action_bounds)
-
     def env_action(self, action: np.ndarray) -> np.ndarray:
         """The env's 9-D action for a (clipped) 7-D TCP action at the perceived state."""
         q, pos, rot, bias = self._controlled()
-        velocity = self.ik.velocity(q, pos + action[:3], rotation_step(rot, action[3:6]), self.dt)
+        target = rotation_step(rot, action[3:6])
+        velocity = self.ik.solve_velocity(q, pos + action[:3], target)
         return self.arm_action(velocity, bias)
 
     def arm_action(self, velocity: np.ndarray, bias: np.ndarray) -> np.ndarray:
@@ -369,10 +344,7 @@ class FrankaKitchenAdapter(gym.Env):
         non-finite joint position (set from outside since the last step) ends the episode
         as a divergence (``info["failure"]`` naming the joint), the env not stepped."""
         action = self.check_action(action)
-        if action[6] < -0.5:
-            self._gripper_cmd = GRIPPER_CLOSED_CMD
-        elif action[6] > 0.5:
-            self._gripper_cmd = GRIPPER_OPEN_CMD
+        self._gripper_cmd = latched_gripper(self._gripper_cmd, action[6])
         if non_finite_state(self.data, ("qpos",)) is not None:
             return self._env_step(None, action)
         return self._env_step(self.env_action(action), action)

@@ -9,8 +9,9 @@ and velocities [9:18] with the env's uniform noise (``robot_noise_ratio`` 0.01 t
 and velocities [39:59] with ``object_noise_ratio`` (0.0005 times 0.005-0.1); plus the
 robot's known kinematics and actuators:
 
-- TCP: forward kinematics of the observed arm joints on the arm model compiled from the
-  env's own MJCF (``ArmIK.tcp_pose``), optionally with the paper's Gaussian TCP noise
+- TCP: forward kinematics of the observed arm joints on the robot description's arm model
+  (``franka-kitchen-panda``, compiled from the env's own MJCF; the core IK's ``tcp_pose``),
+  optionally with the paper's Gaussian TCP noise
   (``PerceptionSpec.tcp_noise``); the quaternion in the hemisphere of ``REFERENCE_QUAT``.
 - Finger width: the sum of the two observed finger joints.
 - Grasp (the world's ``grasped``): the gripper commanded closed and the fingers at least
@@ -19,7 +20,8 @@ robot's known kinematics and actuators:
   pulled along its arc moves the fingers in their joints, 2-4 cm/s, without letting go).
 - Grip force: the observation has no force sensor. With a grasp detected, the finger
   servos' own effort on the thing held, ``kp * (observed finger - target)`` of the
-  weaker finger (the env's finger target is 0 when closing: ``FINGER_KP`` times its
+  weaker finger (the env's finger target is 0 when closing: the finger servos' gain
+  ``gripper.kp`` of the description times its
   observed position; in steady state equal to the contact force, since nothing else
   loads a finger); 0 otherwise (empty or open hand). The shipped policies were trained
   on the contact force: on the microwave's handle it reads 6-10 N here against 8-13 N;
@@ -40,9 +42,10 @@ from typing import Any
 import mujoco
 import numpy as np
 
+from osg_control.control.description import RobotDescription
+from osg_control.environment.sensing import tcp_state
 from osg_control.environment.success import GRIPPER_CLOSED_CMD
 from osg_control.errors import DomainError
-from osg_control.franka.arm import ARM_JOINTS, FINGER_JOINTS, TCP_SITE
 from osg_control.perception.percept import Percept
 from osg_control.perception.spec import PerceptionSpec
 
@@ -70,10 +73,6 @@ GRASP_SPEED = 0.02
 servos are critically damped (kp 500 N/m, damping 100 N s/m, armature 5 kg: 10 rad/s), so
 an empty hand closing at this speed has its fingers within 2 mm of closed, well under
 ``GRASP_WIDTH`` with the observation's +-2 mm."""
-FINGER_BODIES = ("panda0_leftfinger", "panda0_rightfinger")
-FINGER_KP = 500.0
-"""The finger servos' gain [N/m] (``kitchen_env_model.xml``'s finger actuators; checked
-against the env's model by the adapter)."""
 
 
 def observation_vector(observation: Any) -> np.ndarray:
@@ -97,13 +96,6 @@ def observation_vector(observation: Any) -> np.ndarray:
     return array
 
 
-def canonical_quat(rotation: np.ndarray) -> np.ndarray:
-    """A rotation matrix's quaternion (w, x, y, z), in the hemisphere of ``REFERENCE_QUAT``."""
-    quat = np.zeros(4)
-    mujoco.mju_mat2Quat(quat, np.asarray(rotation, dtype=float).reshape(9))
-    return -quat if float(np.dot(quat, REFERENCE_QUAT)) < 0 else quat
-
-
 def contact_grasp(finger_forces: tuple[float, float]) -> bool:
     """Truth: both fingers squeeze something (contact normal forces over ``GRASP_FORCE``)."""
     return bool(min(finger_forces) > GRASP_FORCE)
@@ -122,10 +114,22 @@ def width_grasp(
     return bool(closed_on_something and (held or stopped))
 
 
-def servo_effort(fingers: np.ndarray, grasped: bool) -> float:
+def servo_effort(fingers: np.ndarray, grasped: bool, kp: float) -> float:
     """Percept: the weaker finger's servo effort [N] on a grasped thing (the closing
-    target is 0), 0 without a grasp (see module docstring)."""
-    return float(max(0.0, FINGER_KP * float(np.min(fingers)))) if grasped else 0.0
+    target is 0; ``kp`` the finger servos' gain [N/m]), 0 without a grasp (see module
+    docstring)."""
+    return float(max(0.0, kp * float(np.min(fingers)))) if grasped else 0.0
+
+
+def robot_bodies(model: mujoco.MjModel, robot: RobotDescription) -> set[int]:
+    """The ids of the robot's bodies in ``model``: the subtree of its first arm joint's
+    parent body (its base), the fingers included."""
+    base = int(model.body_parentid[model.jnt_bodyid[model.joint(robot.arm.names[0]).id]])
+    bodies = {base}
+    for body in range(base + 1, model.nbody):
+        if int(model.body_parentid[body]) in bodies:
+            bodies.add(body)
+    return bodies
 
 
 class FrankaSensors:
@@ -134,6 +138,7 @@ class FrankaSensors:
 
     Args:
         kitchen: the library's unwrapped ``KitchenEnv``.
+        robot: its arm's description (joints, fingers, TCP site, finger servo gain).
         fk: arm joints -> TCP position and rotation matrix (the arm model's kinematics).
         world_of: object qpos (21,) and a grasp flag -> the domain's world vector.
         facts_of: world vector -> facts.
@@ -142,6 +147,7 @@ class FrankaSensors:
     def __init__(
         self,
         kitchen: Any,
+        robot: RobotDescription,
         fk: Callable[[np.ndarray], tuple[np.ndarray, np.ndarray]],
         world_of: Callable[[np.ndarray, bool], np.ndarray],
         facts_of: Callable[[np.ndarray], frozenset[str]],
@@ -151,20 +157,13 @@ class FrankaSensors:
         self.fk = fk
         self._world_of = world_of
         self._facts_of = facts_of
-        self.arm_qpos = np.array([model.joint(j).qposadr[0] for j in ARM_JOINTS])
-        self.finger_qpos = np.array([model.joint(j).qposadr[0] for j in FINGER_JOINTS])
-        self.tcp = model.site(TCP_SITE).id
-        self.finger_bodies = [model.body(b).id for b in FINGER_BODIES]
-        self.robot_bodies = {
-            b for b in range(model.nbody) if model.body(b).name.startswith("panda0_")
-        }
+        self.arm_qpos = np.array([model.joint(j).qposadr[0] for j in robot.arm.names])
+        self.finger_qpos = np.array([model.joint(j).qposadr[0] for j in robot.gripper.joints])
+        self.finger_kp = robot.gripper.kp
+        self.tcp = model.site(robot.tcp.site).id
+        self.finger_bodies = [model.body(b).id for b in robot.gripper.bodies]
+        self.robot_bodies = robot_bodies(model, robot)
         self._held = False
-        gains = self.model.actuator_gainprm[-2:, 0]
-        if not np.allclose(gains, FINGER_KP):
-            raise DomainError(
-                f"franka-kitchen: finger servo gains {gains.tolist()}, perception 'env' "
-                f"assumes {FINGER_KP}"
-            )
 
     # ---------------------------------------------------------------- truth
     def true_tcp(self) -> tuple[np.ndarray, np.ndarray]:
@@ -197,7 +196,7 @@ class FrankaSensors:
         pos, rot = self.true_tcp()
         fingers = float(self.data.qpos[self.finger_qpos].sum())
         force = float(min(self.finger_forces()))
-        return np.concatenate([pos, canonical_quat(rot), [gripper_cmd, force, fingers]])
+        return tcp_state(pos, rot, gripper_cmd, force, fingers, REFERENCE_QUAT)
 
     def true_world(self) -> np.ndarray:
         """Truth: the world vector of the true object qpos and the contact grasp."""
@@ -240,12 +239,7 @@ class FrankaSensors:
         pos, rot = self.fk(joints)
         grasped = width_grasp(gripper_cmd, fingers, observation[FINGER_QVEL], self._held)
         self._held = grasped
-        state = np.concatenate(
-            [
-                pos,
-                canonical_quat(rot),
-                [gripper_cmd, servo_effort(fingers, grasped), float(fingers.sum())],
-            ]
-        )
+        effort = servo_effort(fingers, grasped, self.finger_kp)
+        state = tcp_state(pos, rot, gripper_cmd, effort, float(fingers.sum()), REFERENCE_QUAT)
         world = np.asarray(self._world_of(observation[OBJECT_QPOS].copy(), grasped), dtype=float)
         return state, joints, world

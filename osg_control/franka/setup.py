@@ -15,6 +15,7 @@ from typing import Any
 
 import numpy as np
 
+from osg_control.control.robot_model import workspace
 from osg_control.domain.spec import Node, ScriptParams
 from osg_control.environment.actions import scale_into
 from osg_control.environment.options import (
@@ -30,7 +31,6 @@ from osg_control.environment.options import (
 )
 from osg_control.environment.success import GRIPPER_CLOSED_CMD, GRIPPER_OPEN_CMD, effects_hold
 from osg_control.errors import EnvOptionError, SimulationError
-from osg_control.franka.arm import REACH, SHOULDER
 
 RESET_OPTIONS = ("node", "position", "radius", "angle", "max_steps", "gripper", "facts")
 """The options ``FrankaKitchenAdapter.reset`` knows; any other name is refused."""
@@ -81,7 +81,7 @@ def start_options(adapter: Any, options: dict[str, Any] | None) -> Start:
         options.get("angle", 0.0),
     )
     if "position" in options:
-        check_reach(centre, SHOULDER, REACH)
+        check_reach("position", centre, workspace(adapter.robot))
     max_steps = options.get("max_steps", 40)
     if not DRIVE_STEPS.admits(max_steps):
         raise EnvOptionError(
@@ -166,8 +166,9 @@ def drive_to(
 
 def joint_reset(adapter: Any, max_steps: int, tolerance: float) -> int:
     """Drive the perceived joints toward the env's reset posture while the perceived TCP
-    holds its pose (a strong posture task under the frame task), through the adapter's
-    steps; stop when within ``tolerance`` [rad] or no longer improving; the steps used.
+    holds its pose (``adapter.reset_ik``: a strong posture task under the frame task),
+    through the adapter's steps; stop when within ``tolerance`` [rad] or no longer
+    improving; the steps used.
 
     Raises:
         SimulationError: the physics diverged.
@@ -184,7 +185,7 @@ def joint_reset(adapter: Any, max_steps: int, tolerance: float) -> int:
         previous = error
         action = None
         if non_finite_state(adapter.data, ("qpos",)) is None:
-            velocity = adapter.ik.velocity(q, pos, rot, adapter.dt, posture_cost=0.05)
+            velocity = adapter.reset_ik.solve_velocity(q, pos, rot)
             action = adapter.arm_action(velocity, bias)
         *_, terminated, truncated, info = adapter._env_step(action, np.zeros(7))
         if "failure" in info:

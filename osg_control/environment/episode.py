@@ -1,0 +1,47 @@
+"""``EpisodeState``: what every skill env keeps of its episode, whatever drives its arm
+(``ArmEnv``'s own MuJoCo scene, or an outside env such as FrankaKitchen-v1 behind a domain's
+adapter): the latest percept and its state, whether the episode is over, and the action's
+check against the domain's bounds. Part of the ``domain.contract.SkillEnv`` contract, kept
+once here."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from osg_control.environment.actions import checked_action
+from osg_control.perception.percept import Percept
+
+
+class EpisodeState:
+    """The episode part of a skill env (the env's ``__init__`` and ``reset`` set the
+    attributes below; ``step`` keeps them)."""
+
+    action_bounds: np.ndarray
+    _percept: Percept | None
+    _episode_over: bool
+
+    def percept(self) -> Percept:
+        """What the robot perceived at the last reset, step or joint reset: the only input
+        of whatever decides (the executor, policies, classifier, fact detectors)."""
+        if self._percept is None:
+            raise RuntimeError("the env has not been reset")
+        return self._percept
+
+    def observe(self) -> np.ndarray:
+        """The perceived 10-D state of the latest percept (a copy)."""
+        return self.percept().state.copy()
+
+    @property
+    def episode_over(self) -> bool:
+        """Whether a step since the last reset came back terminated or truncated: the
+        episode is over and, by Gymnasium's protocol, takes no more steps."""
+        return self._episode_over
+
+    def check_action(self, action: np.ndarray) -> np.ndarray:
+        """Validate an action (real numbers, shape (7,), finite) and clip it to
+        ``action_bounds``.
+
+        Raises:
+            ValueError: wrong shape or NaN/inf; nothing reaches the actuators.
+        """
+        return checked_action(action, self.action_bounds)
