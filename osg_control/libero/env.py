@@ -26,10 +26,11 @@ ENV_OPTIONS: dict[str, Any] = {
     "hard_reset": False,
 }
 CONTROLLER = "JOINT_POSITION"
-"""robosuite's controller the arm is driven through: the action is 7 joint deltas [rad]
-(at most ``JOINT_DELTA_LIMIT`` a step) and the gripper command in [-1, 1] (1 closes)."""
+"""robosuite's controller the arm is driven through: the action is 7 joint deltas divided
+by ``JOINT_DELTA_LIMIT`` (so in [-1, 1]) and the gripper command in [-1, 1] (1 closes)."""
 JOINT_DELTA_LIMIT = 0.05
-"""robosuite's JOINT_POSITION bound on a step's joint delta [rad] (its default config)."""
+"""robosuite's JOINT_POSITION scale: an action of 1 is a joint delta of this [rad] (its
+default config's ``output_max``)."""
 
 
 class LiberoEnv:

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import contextlib
+import sys
 from collections.abc import Sequence
 from functools import cache
 from pathlib import Path
@@ -17,10 +19,12 @@ from osg_control.libero.suites import INIT_STATES, base_suite
 
 @cache
 def _suite(suite: str) -> Any:
-    """LIBERO's benchmark object of a suite (checked against ``suite_names`` first)."""
+    """LIBERO's benchmark object of a suite (checked against ``suite_names`` first). What
+    LIBERO prints while making it goes to stderr: stdout is the commands' (``--json``)."""
     base_suite(suite)
     benchmark = require_libero("libero.libero.benchmark")
-    return benchmark.get_benchmark_dict()[suite]()
+    with contextlib.redirect_stdout(sys.stderr):
+        return benchmark.get_benchmark_dict()[suite]()
 
 
 def task_count(suite: str) -> int:
