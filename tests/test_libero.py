@@ -4,6 +4,7 @@ states scored by its own ``check_success()``, and the benchmark harness."""
 
 from __future__ import annotations
 
+import json
 from pathlib import Path
 
 import numpy as np
@@ -23,6 +24,8 @@ from osg_control.libero.pddl_export import (  # noqa: E402
     export_problems,
 )
 from osg_control.libero.problem import Atom, LiberoProblem  # noqa: E402
+from osg_control.libero.robot import mounted_panda  # noqa: E402
+from osg_control.libero.scripted import ScriptedPickPlace  # noqa: E402
 from osg_control.libero.suites import INIT_STATES, max_steps, suite_names  # noqa: E402
 from osg_control.libero.tasks import (  # noqa: E402
     check_task_indices,
@@ -81,6 +84,16 @@ def test_a_goal_predicate_without_operator_is_named_and_nothing_written(tmp_path
     assert not (tmp_path / "out").exists()
 
 
+def test_swap_variant_starts_the_objects_elsewhere(soup_env: LiberoEnv) -> None:
+    """LIBERO-PRO's ``_swap``: the same goal, the soup starting where another object was."""
+    swap = LiberoEnv("libero_10_swap", 0)
+    try:
+        moved = swap.reset(0)["alphabet_soup_1_pos"] - soup_env.reset(0)["alphabet_soup_1_pos"]
+        assert np.linalg.norm(moved[:2]) > 0.05 and not swap.check_success()
+    finally:
+        swap.close()
+
+
 def test_task_indices_are_checked() -> None:
     assert check_task_indices("libero_goal", None) == tuple(range(10))
     with pytest.raises(UsageError, match=r"tasks 0-9; got \[10\]"):
@@ -132,7 +145,7 @@ class HoldStill:
 
     name = "hold-still"
 
-    def start(self, problem: LiberoProblem, obs: dict[str, np.ndarray]) -> None:
+    def start(self, problem: LiberoProblem, robot: object, obs: dict[str, np.ndarray]) -> None:
         self.width = len(obs["robot0_joint_pos"]) + 1
 
     def act(self, obs: dict[str, np.ndarray]) -> np.ndarray:
@@ -148,3 +161,35 @@ def test_harness_scores_by_check_success_within_the_budget() -> None:
     assert summary["success_rate"] == 0.0 and summary["max_steps"] == max_steps("libero_spatial")
     assert summary["interval_95"][0] == 0.0 and 0.6 < summary["interval_95"][1] < 0.7
     assert summary["tasks"]["2"]["init_states"] == [0, 7] and summary["perception"] == "env"
+
+
+def test_benchmark_verb_refuses_without_a_policy(capsys) -> None:
+    argv = ["--domain", "libero", "evaluate", "benchmark", "--suite", "libero_10", "--task", "0"]
+    assert cli.main(argv) == 1
+    assert "no LIBERO skills shipped yet" in capsys.readouterr().err
+
+
+def test_scripted_oracle_puts_the_soup_in_the_basket(capsys) -> None:
+    """The scripted data collector on LIBERO-Object task 0, initial state 0, from the
+    observation only, within the suite's 280 steps; scored by check_success()."""
+    argv = ["--domain", "libero", "evaluate", "benchmark", "--suite", "libero_object", "--task",
+            "0", "--init-states", "0:1", "--policy", "scripted-oracle", "--json"]  # fmt: skip
+    assert cli.main(argv) == 0
+    summary = json.loads(capsys.readouterr().out)
+    assert summary["policy"] == "scripted-oracle" and summary["max_steps"] == 280
+    (episode,) = summary["episode_log"]
+    assert episode["success"] and episode["steps"] < 280
+
+
+def test_scripted_oracle_declines_a_fixture_goal() -> None:
+    """LIBERO-10 task 3 (bowl in the drawer, then close it): fixtures' joints and regions
+    are not in the observation, so the oracle holds still instead of guessing."""
+    drawer = LiberoEnv("libero_10", 3)
+    try:
+        obs = drawer.reset(0)
+        policy = ScriptedPickPlace()
+        policy.start(drawer.problem, mounted_panda(drawer.sim), obs)
+        assert policy.declined
+        np.testing.assert_array_equal(policy.act(obs), np.r_[np.zeros(7), -1.0])
+    finally:
+        drawer.close()

@@ -70,6 +70,7 @@ def test_suites_and_their_published_budgets() -> None:
         (["evaluate", "benchmark", "--suite", "libero_10", "--episodes", "0"], "--episodes"),
         (["evaluate", "benchmark", "--suite", "libero_10", "--workers", "0"], "--workers"),
         (["--robot", "ur5", "evaluate", "benchmark", "--suite", "libero_10"], "--robot"),
+        (["evaluate", "benchmark", "--suite", "libero_10", "--policy", "vla"], "unknown policy"),
     ],
 )
 def test_bad_input_exits_2_naming_it(argv: list[str], named: str, capsys) -> None:

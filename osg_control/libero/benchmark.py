@@ -16,10 +16,12 @@ from typing import Any, Protocol
 
 import numpy as np
 
+from osg_control.control.description import RobotDescription
 from osg_control.evaluation.benchmark import Z95
 from osg_control.evaluation.check import wilson_interval
 from osg_control.libero.env import LiberoEnv
 from osg_control.libero.problem import LiberoProblem
+from osg_control.libero.robot import mounted_panda
 from osg_control.libero.suites import max_steps
 from osg_control.parallel import LocalExecutor
 
@@ -32,8 +34,11 @@ class LiberoPolicy(Protocol):
 
     name: str
 
-    def start(self, problem: LiberoProblem, obs: dict[str, np.ndarray]) -> None:
-        """Begin an episode of ``problem`` at observation ``obs``."""
+    def start(
+        self, problem: LiberoProblem, robot: RobotDescription, obs: dict[str, np.ndarray]
+    ) -> None:
+        """Begin an episode of ``problem`` with the arm ``robot`` (where the scene stands
+        it) at observation ``obs``."""
         ...
 
     def act(self, obs: dict[str, np.ndarray]) -> np.ndarray:
@@ -72,6 +77,7 @@ def run_job(job: Job) -> list[Episode]:
     """Run a job's episodes: reset to the initial state, step the policy until the env's
     ``check_success()`` holds or the step budget is spent."""
     env = LiberoEnv(job.suite, job.task)
+    robot = mounted_panda(env.sim)
     policy = job.policy()
     episodes = []
     try:
@@ -79,7 +85,7 @@ def run_job(job: Job) -> list[Episode]:
             start = time.process_time()
             obs = env.reset(state)
             reset_s = time.process_time() - start
-            policy.start(env.problem, obs)
+            policy.start(env.problem, robot, obs)
             success = env.check_success()
             start = time.process_time()
             while not success and env.steps < job.max_steps:
