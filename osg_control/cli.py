@@ -13,9 +13,15 @@ import importlib
 import os
 import sys
 from collections.abc import Collection, Iterator, Sequence
+from types import ModuleType
 
 from osg_control import __version__
-from osg_control.commands import COMMAND_MODULES, DEFAULT_DOMAIN
+from osg_control.commands import (
+    COMMAND_MODULES,
+    DEFAULT_DOMAIN,
+    domain_verb_names,
+    domain_verbs,
+)
 from osg_control.commands.checks import check_args
 from osg_control.commands.errors import handle_errors
 from osg_control.errors import UsageError, lookup
@@ -39,12 +45,16 @@ VERBS: tuple[tuple[str, str, str], ...] = (
 (a test checks these against the modules), in ``COMMAND_MODULES`` order."""
 
 
-def build_parser(modules: Collection[str] | None = None) -> argparse.ArgumentParser:
+def build_parser(
+    modules: Collection[str] | None = None, own_verbs: ModuleType | None = None
+) -> argparse.ArgumentParser:
     """Assemble the parser.
 
     Args:
         modules: the command modules to import and register in full; the verbs of the
             others get a bare parser with their help (enough to list them). None: all.
+        own_verbs: the verbs module of a domain that brings its own (``domain_verbs``):
+            its verbs replace the core's.
     """
     parser = argparse.ArgumentParser(
         prog="osg",
@@ -64,6 +74,9 @@ def build_parser(modules: Collection[str] | None = None) -> argparse.ArgumentPar
     )
     parser.add_argument("--debug", action="store_true", help="show tracebacks of errors")
     subparsers = parser.add_subparsers(dest="command", metavar="COMMAND")
+    if own_verbs is not None:
+        own_verbs.register(subparsers)
+        return parser
     for module_name in COMMAND_MODULES:
         if modules is None or module_name in modules:
             importlib.import_module(f"osg_control.commands.{module_name}").register(subparsers)
@@ -90,6 +103,18 @@ def _modules_for(argv: Sequence[str]) -> list[str]:
             verb = word
             break
     return [module for name, module, _ in VERBS if name == verb]
+
+
+def _domain_in(argv: Sequence[str]) -> str:
+    """The ``--domain`` value of ``argv`` (either form; the last one wins), else the
+    default."""
+    name = DEFAULT_DOMAIN
+    for k, word in enumerate(argv):
+        if word == "--domain" and k + 1 < len(argv):
+            name = argv[k + 1]
+        elif word.startswith("--domain="):
+            name = word.split("=", 1)[1]
+    return name
 
 
 def hoist_global_options(argv: Sequence[str]) -> list[str]:
@@ -119,7 +144,8 @@ def check_domain_name(name: str) -> None:
     """
     from osg_control.domain.registry import domain_names
 
-    lookup(dict.fromkeys(domain_names()), name, "domain", lambda m: UsageError(f"--domain: {m}"))
+    known = dict.fromkeys(sorted({*domain_names(), *domain_verb_names()}))
+    lookup(known, name, "domain", lambda m: UsageError(f"--domain: {m}"))
 
 
 def check_robot_name(name: str | None) -> None:
@@ -153,15 +179,22 @@ def main(argv: Sequence[str] | None = None) -> int:
     osg-control error, 2 a bad command-line value, 3 no plan, 4 no answer within the
     planner's limits, 5 malformed PDDL, 130 interrupted)."""
     argv = hoist_global_options(sys.argv[1:] if argv is None else argv)
-    parser = build_parser(_modules_for(argv))
+    own_verbs = domain_verbs(_domain_in(argv))
+    if own_verbs is None:
+        parser = build_parser(_modules_for(argv))
+    else:
+        parser = build_parser(own_verbs=own_verbs)
     args = parser.parse_args(argv)
     with handle_errors(debug=args.debug or bool(os.environ.get("OSG_DEBUG"))) as outcome:
         if not getattr(args, "func", None):
             parser.print_help()
             return 0
-        check_domain_name(args.domain)
+        if own_verbs is None:
+            check_domain_name(args.domain)
+        elif args.robot is not None:
+            raise UsageError(f"--robot: domain {args.domain!r} drives its own arm")
         check_robot_name(args.robot)
-        check_args(args)
+        check_args(args, domain_values=own_verbs is None)
         with selected_robot(args):
             outcome.code = int(args.func(args) or 0)
     return outcome.code

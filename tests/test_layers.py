@@ -14,7 +14,7 @@ from osg_control.domain.registry import get_domain
 from osg_control.robots.registry import robot_names
 
 PACKAGE = Path(__file__).resolve().parents[1] / "osg_control"
-DOMAIN_PACKAGES = ("kitchen", "franka")
+DOMAIN_PACKAGES = ("kitchen", "franka", "libero")
 """Sub-packages that are domains (the only places that may name their things)."""
 ROBOT_PACKAGE = "robots"
 """The sub-package of robot modules: with the domains, the only place that names a robot;

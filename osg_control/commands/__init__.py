@@ -7,6 +7,7 @@ returning the exit code). Add a module here to expose it.
 from __future__ import annotations
 
 import argparse
+from types import ModuleType
 from typing import TYPE_CHECKING, Any
 
 if TYPE_CHECKING:
@@ -29,6 +30,40 @@ COMMAND_MODULES: tuple[str, ...] = (
     "domains",
     "robots",
 )
+
+
+DOMAIN_VERBS_GROUP = "osg_control.domain_verbs"
+"""Entry points of domains that bring their own verbs instead of the core's: the name is the
+domain's (``osg --domain NAME``), the object a module with ``register(subparsers)``, as a
+command module. For a domain that is not (yet) a ``Domain`` (e.g. an outside benchmark whose
+skills are not shipped yet); ``register_domain_verbs`` adds one at run time."""
+
+_DOMAIN_VERBS: dict[str, str] = {}
+
+
+def register_domain_verbs(name: str, module: str) -> None:
+    """Make ``osg --domain NAME`` use the verbs of ``module`` (imported when used)."""
+    _DOMAIN_VERBS[name] = module
+
+
+def domain_verbs(name: str) -> ModuleType | None:
+    """The verbs module of a domain that brings its own (``DOMAIN_VERBS_GROUP``), else None.
+    The module is imported only when its domain is selected."""
+    import importlib
+    from importlib.metadata import entry_points
+
+    module = _DOMAIN_VERBS.get(name)
+    if module is None:
+        points = {p.name: p.value for p in entry_points(group=DOMAIN_VERBS_GROUP)}
+        module = points.get(name)
+    return None if module is None else importlib.import_module(module)
+
+
+def domain_verb_names() -> list[str]:
+    """The domains that bring their own verbs, sorted."""
+    from importlib.metadata import entry_points
+
+    return sorted({*_DOMAIN_VERBS, *(p.name for p in entry_points(group=DOMAIN_VERBS_GROUP))})
 
 
 def domain_of(args: argparse.Namespace) -> Domain:

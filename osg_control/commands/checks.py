@@ -233,8 +233,13 @@ def _models(args: argparse.Namespace, domain: Domain) -> None:
         require_skills(models / "skills", list(domain.skills_by_name))
 
 
-def check_args(args: argparse.Namespace) -> None:
+def check_args(args: argparse.Namespace, domain_values: bool = True) -> None:
     """Run every applicable check on parsed arguments.
+
+    Args:
+        args: the parsed arguments.
+        domain_values: also check the values that name a ``Domain``'s things (off for a
+            domain that brings its own verbs, which check their own values).
 
     Raises:
         UsageError: the first value out of its domain, naming the option.
@@ -243,4 +248,5 @@ def check_args(args: argparse.Namespace) -> None:
         value = getattr(args, dest, None)
         if value is not None:
             check(dest, value)
-    _domain_values(args)
+    if domain_values:
+        _domain_values(args)

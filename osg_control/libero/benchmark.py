@@ -1,0 +1,146 @@
+"""The LIBERO benchmark's protocol: an episode is one of a task's fixed initial states, run
+for at most the suite's published step budget, scored by the env's own ``check_success()``.
+
+A policy (``LiberoPolicy``) decides each step from the env's observation; the harness reads
+the simulator's verdict only to score. The summary (``summarise``) is what ``osg --domain
+libero evaluate benchmark --json`` prints: per-task success, the overall rate and its 95 %
+Wilson interval, the suite, the perception and the step budget.
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Callable, Sequence
+from dataclasses import asdict, dataclass
+from typing import Any, Protocol
+
+import numpy as np
+
+from osg_control.control.description import RobotDescription
+from osg_control.evaluation.benchmark import Z95
+from osg_control.evaluation.check import wilson_interval
+from osg_control.libero.env import LiberoEnv
+from osg_control.libero.problem import LiberoProblem
+from osg_control.libero.robot import mounted_panda
+from osg_control.libero.suites import max_steps
+from osg_control.parallel import LocalExecutor
+
+PERCEPTION = "env"
+"""What the policies decide from: the env's observation (robot proprio, object poses)."""
+
+
+class LiberoPolicy(Protocol):
+    """Decides a LIBERO env's actions from its observations."""
+
+    name: str
+
+    def start(
+        self, problem: LiberoProblem, robot: RobotDescription, obs: dict[str, np.ndarray]
+    ) -> None:
+        """Begin an episode of ``problem`` with the arm ``robot`` (where the scene stands
+        it) at observation ``obs``."""
+        ...
+
+    def act(self, obs: dict[str, np.ndarray]) -> np.ndarray:
+        """The next action (the env's controller's; ``env.CONTROLLER``)."""
+        ...
+
+
+PolicyFactory = Callable[[], LiberoPolicy]
+"""Builds a policy in the worker that runs the episodes (a module-level function)."""
+
+
+@dataclass(frozen=True)
+class Episode:
+    """One episode's outcome."""
+
+    task: int
+    init_state: int
+    success: bool
+    steps: int
+    reset_s: float
+    step_s: float
+
+
+@dataclass(frozen=True)
+class Job:
+    """The episodes of one task run in one worker (one env built)."""
+
+    suite: str
+    task: int
+    init_states: tuple[int, ...]
+    policy: PolicyFactory
+    max_steps: int
+
+
+def run_job(job: Job) -> list[Episode]:
+    """Run a job's episodes: reset to the initial state, step the policy until the env's
+    ``check_success()`` holds or the step budget is spent."""
+    env = LiberoEnv(job.suite, job.task)
+    robot = mounted_panda(env.sim)
+    policy = job.policy()
+    episodes = []
+    try:
+        for state in job.init_states:
+            start = time.process_time()
+            obs = env.reset(state)
+            reset_s = time.process_time() - start
+            policy.start(env.problem, robot, obs)
+            success = env.check_success()
+            start = time.process_time()
+            while not success and env.steps < job.max_steps:
+                obs = env.step(policy.act(obs))
+                success = env.check_success()
+            step_s = (time.process_time() - start) / max(env.steps, 1)
+            episodes.append(Episode(job.task, state, success, env.steps, reset_s, step_s))
+    finally:
+        env.close()
+    return episodes
+
+
+def run_suite(
+    suite: str,
+    tasks: Sequence[int],
+    init_states: Sequence[int],
+    policy: PolicyFactory,
+    workers: int = 1,
+) -> list[Episode]:
+    """Every (task, initial state) episode, a task's episodes in one worker (arguments
+    checked by the caller: ``tasks.check_task_indices``, ``suites.parse_init_states``)."""
+    jobs = [Job(suite, t, tuple(init_states), policy, max_steps(suite)) for t in tasks]
+    episodes: list[Episode] = []
+    for done in LocalExecutor(workers).map(run_job, jobs):
+        episodes += done
+    return episodes
+
+
+def summarise(suite: str, policy_name: str, episodes: Sequence[Episode]) -> dict[str, Any]:
+    """The JSON summary: per-task and overall success with 95 % Wilson intervals."""
+    per_task: dict[str, Any] = {}
+    for task in sorted({e.task for e in episodes}):
+        mine = [e for e in episodes if e.task == task]
+        wins = sum(e.success for e in mine)
+        per_task[str(task)] = {
+            "episodes": len(mine),
+            "successes": wins,
+            "success_rate": wins / len(mine),
+            "init_states": [e.init_state for e in mine],
+        }
+    wins = sum(e.success for e in episodes)
+    rate = wins / len(episodes) if episodes else 0.0
+    low, high = wilson_interval(rate, len(episodes), Z95)
+    return {
+        "suite": suite,
+        "policy": policy_name,
+        "perception": PERCEPTION,
+        "max_steps": max_steps(suite),
+        "episodes": len(episodes),
+        "success_rate": rate,
+        "interval_95": [low, high],
+        "tasks": per_task,
+        "timing": {
+            "reset_s_mean": float(np.mean([e.reset_s for e in episodes])) if episodes else None,
+            "step_s_mean": float(np.mean([e.step_s for e in episodes])) if episodes else None,
+        },
+        "episode_log": [asdict(e) for e in episodes],
+    }

@@ -1,0 +1,104 @@
+"""LIBERO's env as the package ships it, state only: a task's scene, reset to one of its
+fixed initial states, stepped by its own controller, scored by its own ``check_success()``.
+
+Options (``ENV_OPTIONS``): no renderer and no cameras (``has_offscreen_renderer=False,
+use_camera_obs=False``: no GL needed, about 200 ms a step saved), and ``hard_reset=False``
+(a reset reuses the compiled model: 0.06 s instead of several). The arm's controller is
+robosuite's ``JOINT_POSITION`` (joint deltas, ``CONTROLLER``), which our IK drives.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+
+from osg_control.errors import ControllerError, UsageError
+from osg_control.libero.extra import require_libero
+from osg_control.libero.problem import LiberoProblem
+from osg_control.libero.suites import INIT_STATES
+from osg_control.libero.tasks import init_states, task_file, task_problem
+
+ENV_OPTIONS: dict[str, Any] = {
+    "has_renderer": False,
+    "has_offscreen_renderer": False,
+    "use_camera_obs": False,
+    "hard_reset": False,
+}
+CONTROLLER = "JOINT_POSITION"
+"""robosuite's controller the arm is driven through: the action is 7 joint deltas divided
+by ``JOINT_DELTA_LIMIT`` (so in [-1, 1]) and the gripper command in [-1, 1] (1 closes)."""
+JOINT_KP = 300.0
+"""The JOINT_POSITION controller's stiffness set after each reset: the top of robosuite's own
+kp range (its default 50 lets the arm cover only a small part of a commanded 0.05 rad per
+step: a 20 cm reach took 38-54 steps at 50, 17-24 at 300; docs/libero.md). The controller is
+the agent's side of the benchmark; the env, its states and its scoring are untouched."""
+JOINT_DELTA_LIMIT = 0.05
+"""robosuite's JOINT_POSITION scale: an action of 1 is a joint delta of this [rad] (its
+default config's ``output_max``)."""
+
+
+class LiberoEnv:
+    """One LIBERO task's env (``ControlEnv``) with its fixed initial states.
+
+    Attributes:
+        problem: the task file as a typed problem.
+        steps: steps taken since the last ``reset``.
+    """
+
+    def __init__(self, suite: str, index: int, controller: str = CONTROLLER) -> None:
+        wrapper = require_libero("libero.libero.envs.env_wrapper")
+        self.problem: LiberoProblem = task_problem(suite, index)
+        self._states = init_states(suite, index)
+        self.env = wrapper.ControlEnv(
+            bddl_file_name=str(task_file(suite, index)), controller=controller, **ENV_OPTIONS
+        )
+        self.controller = controller
+        low, high = self.env.env.action_spec
+        self.action_low, self.action_high = np.asarray(low), np.asarray(high)
+        self.steps = 0
+
+    def reset(self, init_state: int) -> dict[str, np.ndarray]:
+        """Reset to fixed initial state ``init_state`` (LIBERO's protocol: ``reset()``, then
+        ``set_init_state``); returns the observation.
+
+        Raises:
+            UsageError: ``init_state`` outside ``0 .. INIT_STATES-1``.
+        """
+        if not 0 <= init_state < INIT_STATES:
+            raise UsageError(f"initial state {init_state} is outside 0-{INIT_STATES - 1}")
+        self.env.reset()
+        controller = self.env.env.robots[0].controller  # rebuilt by every reset
+        if self.controller == CONTROLLER:
+            controller.kp = np.full_like(controller.kp, JOINT_KP)
+            controller.kd = 2.0 * np.sqrt(controller.kp)  # critically damped, as robosuite's
+        self.steps = 0
+        return dict(self.env.set_init_state(self._states[init_state]))
+
+    def step(self, action: np.ndarray) -> dict[str, np.ndarray]:
+        """One control step (20 Hz); returns the observation.
+
+        Raises:
+            ControllerError: an action of the wrong shape or not finite (never sent).
+        """
+        action = np.asarray(action, dtype=float)
+        if action.shape != self.action_low.shape or not np.isfinite(action).all():
+            raise ControllerError(
+                f"LIBERO action must be {self.action_low.shape[0]} finite values, got {action!r}"
+            )
+        obs, _, _, _ = self.env.step(np.clip(action, self.action_low, self.action_high))
+        self.steps += 1
+        return dict(obs)
+
+    def check_success(self) -> bool:
+        """The env's own verdict: the conjunction of the task file's goal atoms."""
+        return bool(self.env.check_success())
+
+    @property
+    def sim(self) -> Any:
+        """robosuite's ``MjSim`` (raw MuJoCo: ``sim.model._model``, ``sim.data._data``)."""
+        return self.env.sim
+
+    def close(self) -> None:
+        """Free the simulator."""
+        self.env.close()

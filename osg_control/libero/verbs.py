@@ -1,0 +1,155 @@
+"""``osg --domain libero VERB``: the LIBERO domain's own verbs (it is not a skill-graph
+``Domain`` yet: its lifted skills are not shipped), registered through the
+``osg_control.domain_verbs`` entry point. Importing this module imports no LIBERO code;
+each verb checks its arguments (exit 2, nothing run), then needs the ``libero`` extra.
+
+- ``pddl export --suite S [--task I ...] [--out DIR]``: one PDDL problem per task file;
+- ``evaluate benchmark --suite S [--task I ...] [--episodes N | --init-states A:B]
+  [--policy scripted-oracle] [--workers W] [--json]``: the benchmark's protocol
+  (``libero.benchmark``); without ``--policy`` it refuses (``NoPolicyError``): no skills
+  are shipped yet.
+"""
+
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+
+from osg_control.errors import OSGError, UsageError
+from osg_control.libero.suites import INIT_STATES, max_steps, parse_init_states, suite_names
+
+
+class NoPolicyError(OSGError):
+    """No LIBERO policy to evaluate is shipped yet (exit 1)."""
+
+
+NO_POLICY = (
+    "no LIBERO skills shipped yet: there is no skill graph to evaluate (docs/libero.md); "
+    "--policy scripted-oracle runs the scripted data collector instead; nothing was run"
+)
+
+
+def _suite_argument(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument("--suite", required=True, help=f"the suite: {', '.join(suite_names())}")
+    parser.add_argument(
+        "--task", type=int, nargs="+", default=None, metavar="I",
+        help="task indices in the suite (default: all)",
+    )  # fmt: skip
+
+
+def _sub_verb(
+    subparsers: argparse._SubParsersAction, group: str, group_help: str, verb: str, **kw: str
+) -> argparse.ArgumentParser:
+    """``osg --domain libero GROUP VERB``'s parser (``GROUP`` as in the core's verbs)."""
+    parser = subparsers.add_parser(group, help=group_help)
+    verbs = parser.add_subparsers(dest=f"{group}_command", metavar="VERB", required=True)
+    sub: argparse.ArgumentParser = verbs.add_parser(verb, **kw)
+    return sub
+
+
+def register(subparsers: argparse._SubParsersAction) -> None:
+    """Add ``pddl export`` and ``evaluate benchmark`` for the LIBERO domain."""
+    export = _sub_verb(
+        subparsers,
+        "pddl",
+        "export LIBERO's task files as PDDL problems",
+        "export",
+        help="write one PDDL problem per task file of a suite",
+        description="Parse each task's BDDL file and write it as a PDDL problem of the "
+        "lifted domain osg-libero (typed objects, init, goal).",
+    )
+    _suite_argument(export)
+    export.add_argument(
+        "--out", type=Path, default=None, help="output folder (default: ./domains/libero/SUITE)"
+    )
+    export.set_defaults(func=run_export)
+    bench = _sub_verb(
+        subparsers,
+        "evaluate",
+        "the LIBERO benchmark",
+        "benchmark",
+        help="episodes from the tasks' fixed initial states, scored by check_success()",
+    )
+    _suite_argument(bench)
+    episodes = bench.add_mutually_exclusive_group()
+    episodes.add_argument(
+        "--episodes", type=int, default=None,
+        help=f"the first N initial states of each task (1-{INIT_STATES}; default all)",
+    )  # fmt: skip
+    episodes.add_argument(
+        "--init-states", default=None, metavar="A:B",
+        help=f"initial states A .. B-1 of each task (0 <= A < B <= {INIT_STATES})",
+    )  # fmt: skip
+    bench.add_argument(
+        "--policy",
+        default=None,
+        metavar="NAME",
+        help="what runs the episodes: scripted-oracle (the scripted pick-and-place data "
+        "collector, told the task file's goal: not a skill graph's result). Without it the "
+        "verb refuses: no LIBERO skills are shipped yet",
+    )
+    bench.add_argument("--workers", type=int, default=1)
+    bench.add_argument("--json", action="store_true")
+    bench.set_defaults(func=run_benchmark)
+
+
+def run_export(args: argparse.Namespace) -> int:
+    """Write the suite's problems (``pddl_export.export_problems``)."""
+    max_steps(args.suite)  # an unknown suite: exit 2 before LIBERO is imported
+    from osg_control.libero.pddl_export import export_problems
+    from osg_control.libero.tasks import check_task_indices, task_problem
+
+    indices = check_task_indices(args.suite, args.task)
+    problems = [task_problem(args.suite, i) for i in indices]
+    out = args.out or Path("domains") / "libero" / args.suite
+    for path in export_problems(problems, out):
+        print(f"wrote {path}")
+    return 0
+
+
+def init_state_range(args: argparse.Namespace) -> range:
+    """The initial states ``--episodes`` or ``--init-states`` ask for (default all).
+
+    Raises:
+        UsageError: more episodes than initial states, or a range outside them.
+    """
+    if args.init_states is not None:
+        return parse_init_states(args.init_states)
+    episodes = INIT_STATES if args.episodes is None else args.episodes
+    if not 1 <= episodes <= INIT_STATES:
+        raise UsageError(f"--episodes: each task has {INIT_STATES} initial states, got {episodes}")
+    return range(episodes)
+
+
+def run_benchmark(args: argparse.Namespace) -> int:
+    """Check the arguments, then run ``--policy``'s episodes and print the summary; without
+    ``--policy``, refuse: no skills are shipped yet (``NoPolicyError``)."""
+    max_steps(args.suite)
+    states = init_state_range(args)
+    from osg_control.libero.scripted import ScriptedPickPlace
+
+    if args.policy not in (None, ScriptedPickPlace.name):
+        known = ScriptedPickPlace.name
+        raise UsageError(f"--policy: unknown policy {args.policy!r}; known: {known}")
+    from osg_control.libero.tasks import check_task_indices
+
+    tasks = check_task_indices(args.suite, args.task)
+    if args.policy is None:
+        raise NoPolicyError(NO_POLICY)
+    from osg_control.json_files import dump_json
+    from osg_control.libero.benchmark import run_suite, summarise
+
+    episodes = run_suite(args.suite, tasks, list(states), ScriptedPickPlace, args.workers)
+    summary = summarise(args.suite, ScriptedPickPlace.name, episodes)
+    if args.json:
+        print(dump_json(summary))
+        return 0
+    for task, row in summary["tasks"].items():
+        print(f"task {task}: {row['successes']}/{row['episodes']}")
+    low, high = summary["interval_95"]
+    print(
+        f"{args.suite} ({summary['policy']}, not a skill graph's result): "
+        f"{100 * summary['success_rate']:.1f} % of {summary['episodes']} episodes "
+        f"[95 % {100 * low:.1f}-{100 * high:.1f}], at most {summary['max_steps']} steps each"
+    )
+    return 0
