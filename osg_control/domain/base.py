@@ -23,6 +23,7 @@ import numpy as np
 
 from osg_control.control.description import ORIGIN, Placement, mounted
 from osg_control.domain.benchmark import Benchmark, validate_benchmark
+from osg_control.domain.lifted import FactAtom, Lifting, ObjectInstance, PredicateDecl
 from osg_control.domain.spaces import (
     ACTION_DIM,
     PAPER_ACTION_BOUNDS,
@@ -158,6 +159,12 @@ class Domain:
         mounts: where a robot's base stands in its scene, by robot name (a robot not
             named stands at the origin); ``with_robot`` builds the env around the robot so
             mounted (``description.mounted``), IK and readouts in scene coordinates.
+        types: object types, type -> parent type (``"object"`` the root).
+        instances: the objects of its scene (``lifted.ObjectInstance``).
+        predicates: predicates with typed parameters (``lifted.PredicateDecl``); a fact
+            without a ``fact_atoms`` entry is a 0-ary predicate of its own name.
+        fact_atoms: each fact's ground atom (``lifted.FactAtom``: ``cube-lifted`` is
+            ``(lifted cube-1)``). ``lifting`` derives the lifted operators from these.
     """
 
     name: str
@@ -187,11 +194,30 @@ class Domain:
     robot: str | None = None
     robot_is_default: bool = True
     mounts: Mapping[str, Placement] = field(default_factory=dict)
+    types: Mapping[str, str] = field(default_factory=dict)
+    instances: tuple[ObjectInstance, ...] = ()
+    predicates: tuple[PredicateDecl, ...] = ()
+    fact_atoms: tuple[FactAtom, ...] = ()
     skills_by_name: dict[str, SkillSpec] = field(init=False, repr=False, compare=False)
+    lifting: Lifting = field(init=False, repr=False, compare=False)
+    """The lifted view of its declarations (``domain.lifted``)."""
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "skills_by_name", {s.name: s for s in self.skills})
         validate_domain(self)
+        try:
+            lifting = Lifting(
+                self.types,
+                self.instances,
+                self.predicates,
+                self.fact_atoms,
+                self.facts,
+                self.nodes,
+                self.skills,
+            )
+        except DomainError as err:
+            raise DomainError(f"domain {self.name!r}: {err}") from None
+        object.__setattr__(self, "lifting", lifting)
         factory = self.make_env  # replace() passes the checked one: re-wrapped, not nested
         if isinstance(factory, CheckedEnvFactory):
             factory = factory.factory
@@ -439,6 +465,12 @@ def _check_objects(where: str, domain: Domain, facts: set[str]) -> None:
             raise DomainError(
                 f"{where}: node {node.name!r} field 'anchor' names unknown object "
                 f"{node.anchor!r}; objects: {sorted(objects)}"
+            )
+    for instance in domain.instances:
+        if instance.frame is not None and instance.frame not in objects:
+            raise DomainError(
+                f"{where}: instance {instance.name!r} field 'frame' names unknown object "
+                f"{instance.frame!r}; objects: {sorted(objects)}"
             )
     for frame in domain.objects:
         unknown = sorted(set(frame.position_fields) - set(domain.world_fields))
