@@ -20,6 +20,7 @@ import statistics
 import tempfile
 import time
 from pathlib import Path
+from typing import Any
 
 from osg_control.domain.registry import get_domain
 from osg_control.planning.api import graph_domain, solve
@@ -95,18 +96,20 @@ def main() -> None:
         "fast_downward_cost": fd_cost,
         "plan": list(result.actions) if result else [],
     }
-    if args.json:
-        print(json.dumps(report, indent=2))
-        return
-    print(f"{domain.name}: {len(objects)} x {args.type}; goal {goal}")
-    for row in rows:
-        print(
-            f"  {row['planner']:<11} {row['status']:<8} cost {row['cost']} in {row['steps']} "
-            f"steps; {row['ground_operators']} ground operators; grounding "
-            f"{row['grounding_ms']} ms + search {row['search_ms']} ms = {row['total_ms']} ms "
-            f"({row['ratio_to_target']} x the {TARGET_S * 1000:g} ms target)"
-        )
-    print(f"  Fast Downward cost: {fd_cost}")
+    print(json.dumps(report, indent=2) if args.json else "\n".join(_lines(report, args.type)))
+
+
+def _lines(report: dict[str, Any], kind: str) -> list[str]:
+    """The report for humans: one line per planner, then Fast Downward's cost."""
+    lines = [f"{report['domain']}: {len(report['objects'])} x {kind}; goal {report['goal']}"]
+    lines += [
+        f"  {row['planner']:<11} {row['status']:<8} cost {row['cost']} in {row['steps']} "
+        f"steps; {row['ground_operators']} ground operators; grounding "
+        f"{row['grounding_ms']} ms + search {row['search_ms']} ms = {row['total_ms']} ms "
+        f"({row['ratio_to_target']} x the {TARGET_S * 1000:g} ms target)"
+        for row in report["planners"]
+    ]
+    return [*lines, f"  Fast Downward cost: {report['fast_downward_cost']}"]
 
 
 if __name__ == "__main__":

@@ -350,9 +350,13 @@ class Domain:
                     "preconditions": sorted(s.preconditions),
                     "add_effects": sorted(s.add_effects),
                     "del_effects": sorted(s.del_effects),
+                    "parameters": [f"?{var} - {kind}" for var, kind in s.parameters],
                 }
                 for s in self.skills
             ],
+            "types": dict(self.types),
+            "instances": {i.name: i.type for i in self.instances},
+            "fact_atoms": {f.name: "(" + " ".join(f.atom) + ")" for f in self.fact_atoms},
             "tasks": [
                 {
                     "name": t.name,
