@@ -7,16 +7,24 @@ import dataclasses
 import json
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 from osg_control.cli import main
 from osg_control.domain.binding import bind, bind_step, recorded
 from osg_control.domain.lifted import FactAtom, ObjectInstance, PredicateDecl
 from osg_control.domain.registry import get_domain
+from osg_control.domain.spec import TOP_DOWN_QUAT
+from osg_control.environment.success import GRIPPER_OPEN_CMD
 from osg_control.errors import DomainError, PlanningError
+from osg_control.execution.defaults import load_defaults
+from osg_control.execution.executor import Executor
 from osg_control.execution.goals import parse_goal
+from osg_control.execution.objects import ObjectTracker
+from osg_control.perception.percept import Percept
 from osg_control.planning.api import graph_domain, plan_files, plan_for_goal, solve
 from osg_control.planning.fast_downward import find_fast_downward
+from osg_control.planning.graph import graph_from_specs
 from osg_control.planning.pddl_io import build_problem, write_pddl
 from osg_control.planning.synthetic import with_instances
 
@@ -30,7 +38,9 @@ def _three_cubes():  # type: ignore[no-untyped-def]
     of their own (planning and binding only: the env has one cube)."""
     domain = with_instances(KITCHEN, "cube", 3)
     cube = KITCHEN.objects[0]
-    frames = tuple(dataclasses.replace(cube, name=f"cube-{i}") for i in (2, 3))
+    frames = tuple(
+        dataclasses.replace(cube, name=f"cube-{i}", held_fact=f"(holding cube-{i})") for i in (2, 3)
+    )
     instances = tuple(
         dataclasses.replace(i, frame=i.name) if i.name in ("cube-2", "cube-3") else i
         for i in domain.instances
@@ -107,6 +117,10 @@ def test_skills_are_lifted_over_their_parameters() -> None:
         (
             {"instances": (ObjectInstance("cube-1", "cube", "lid"), *KITCHEN.instances[1:])},
             "names unknown object 'lid'",
+        ),
+        (
+            {"objects": (dataclasses.replace(KITCHEN.objects[0], held_fact="(holding cube-5)"),)},
+            "object 'cube' names unknown fact '\\(holding cube-5\\)'",
         ),
     ],
 )
@@ -200,3 +214,34 @@ def test_a_problem_file_naming_an_unknown_object_exits_5(
     domain = REPO / "domains" / "kitchen" / "osg-kitchen.pddl"
     assert main(["plan", str(domain), str(broken)]) == 5
     assert f"{broken}:{line}: undeclared object 'cube-9'" in capsys.readouterr().err
+
+
+def test_the_executor_plans_steps_bound_to_another_cube() -> None:
+    defaults = load_defaults(KITCHEN)  # one policy per lifted skill: the shipped ones
+    executor = Executor(THREE, defaults.policies, defaults.classifier, graph_from_specs(THREE))
+    obs = np.zeros(10)
+    obs[:3], obs[3:7], obs[7] = THREE.nodes["home"].position, TOP_DOWN_QUAT, GRIPPER_OPEN_CMD
+    entry, plan, _ = executor.plan(["(lifted cube-2)"], obs, set(WORLD))
+    assert entry is None
+    assert plan == ["move-home-to-cube cube-2", "grab-cube cube-2", "pick-up-cube cube-2"]
+    steps = [bind_step(THREE.lifting, THREE.skills_by_name, step) for step in plan]
+    assert steps[-1].fact("holding-cube") == "(holding cube-2)"  # what run_skill watches
+    assert all(step.frames == {"cube": "cube-2"} for step in steps)
+
+
+def test_the_object_tracker_follows_which_cube_is_held() -> None:
+    tracker = ObjectTracker(THREE)
+    index = {name: i for i, name in enumerate(THREE.world_fields)}
+    state = np.zeros(10)
+
+    def seen(dx: float, facts: set[str]) -> Percept:
+        world = np.zeros(len(THREE.world_fields))
+        world[index["cube_x"]] = KITCHEN.objects[0].nominal[0] + dx
+        world[index["cube_y"]] = KITCHEN.objects[0].nominal[1]
+        return Percept(state=state, joints=np.zeros(7), world=world, facts=frozenset(facts))
+
+    tracker.update(seen(0.05, {"hand-empty"}))
+    tracker.update(seen(0.10, {"(holding cube-2)"}))  # cube-2 in the hand: frozen
+    offsets = tracker.offsets()
+    assert offsets["cube"][0] == pytest.approx(0.10)  # not held: it moved
+    assert offsets["cube-2"][0] == pytest.approx(0.05)  # held: where it was picked up

@@ -32,7 +32,7 @@ from osg_control.domain.spaces import (
     unbounded_observation,
 )
 from osg_control.domain.spec import Node, ObjectFrame, SkillSpec, check_skill_fields
-from osg_control.errors import DomainError, SkillSpecError, lookup
+from osg_control.errors import DomainError, PlanningError, SkillSpecError, lookup
 from osg_control.perception.spec import SIMULATED_PERCEPTIONS
 
 
@@ -217,6 +217,14 @@ class Domain:
             )
         except DomainError as err:
             raise DomainError(f"domain {self.name!r}: {err}") from None
+        for frame in self.objects:  # a fact, or an atom over its objects: (holding cube-2)
+            try:
+                lifting.ground_fact(frame.held_fact)
+            except PlanningError:
+                raise DomainError(
+                    f"domain {self.name!r}: object {frame.name!r} names unknown fact "
+                    f"{frame.held_fact!r}"
+                ) from None
         object.__setattr__(self, "lifting", lifting)
         factory = self.make_env  # replace() passes the checked one: re-wrapped, not nested
         if isinstance(factory, CheckedEnvFactory):
@@ -428,7 +436,7 @@ def validate_domain(domain: Domain) -> None:
         unknown = sorted(skill.facts - facts)
         if unknown:
             raise DomainError(f"{where}: skill {skill.name!r} names unknown facts {unknown}")
-    _check_objects(where, domain, facts)
+    _check_objects(where, domain)
     _check_facts(where, "start_world", domain.start_world, facts)
     _check_facts(where, "watched_facts", domain.watched_facts, facts)
     _check_facts(where, "hand_empty", (domain.hand_empty,), facts)
@@ -461,8 +469,9 @@ def _check_facts(where: str, field_name: str, named: Any, facts: set[str]) -> No
         raise DomainError(f"{where}: field {field_name!r} names unknown facts {unknown}")
 
 
-def _check_objects(where: str, domain: Domain, facts: set[str]) -> None:
-    """Anchors name declared objects; an object's fields and fact are the domain's."""
+def _check_objects(where: str, domain: Domain) -> None:
+    """Anchors and instances name declared objects; an object's fields are the domain's
+    (its held fact is checked against the lifted view, ``Domain.__post_init__``)."""
     objects = {o.name: o for o in domain.objects}
     for node in domain.nodes.values():
         if node.anchor is not None and node.anchor not in objects:
@@ -481,10 +490,6 @@ def _check_objects(where: str, domain: Domain, facts: set[str]) -> None:
         if unknown:
             raise DomainError(
                 f"{where}: object {frame.name!r} names unknown world fields {unknown}"
-            )
-        if frame.held_fact not in facts:
-            raise DomainError(
-                f"{where}: object {frame.name!r} names unknown fact {frame.held_fact!r}"
             )
         if not all(lo <= hi for lo, hi in zip(frame.region_low, frame.region_high, strict=True)):
             raise DomainError(f"{where}: object {frame.name!r} has an empty placement region")

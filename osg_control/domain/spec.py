@@ -64,7 +64,8 @@ class ObjectFrame:
         region_low, region_high: the (x, y) corners of its placement region [m] (Algorithm
             1's random placements and ``--randomize-objects``).
         held_fact: the fact that holds while the robot holds it (its frame is then frozen
-            where it was picked up).
+            where it was picked up): a fact name, or an atom over the domain's objects
+            (``(holding cube-2)``), so each object's grasp is tracked on its own.
     """
 
     name: str
