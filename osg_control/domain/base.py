@@ -116,7 +116,8 @@ class Domain:
         name: registry key (``osg --domain NAME``), also the PDDL domain's name suffix.
         description: one line for humans.
         nodes: node name -> pose.
-        facts: the 0-ary world predicates.
+        facts: the world facts' names (each a 0-ary predicate unless ``fact_atoms``
+            declares its atom).
         skills: the skill specs (their order does not matter: seeds come from names).
         tasks: named goals.
         start_regions: random-start regions of Tables III-V.
