@@ -178,8 +178,12 @@ class SkillSpec:
         return [w.steps or per_waypoint for w in self.waypoints]
 
     def to_json(self) -> str:
-        """Serialise (for data-set attributes and checkpoint sidecars)."""
+        """Serialise (for data-set attributes and checkpoint sidecars): what the skill is
+        recorded as. ``parameters`` are left out: they are the planner's view of the same
+        recorded skill (lifting it changes no episode), so data and checkpoints recorded
+        before a skill was lifted stay that skill's (``osg collect`` keeps them)."""
         data = asdict(self)
+        del data["parameters"]
         for key in ("preconditions", "add_effects", "del_effects", "start_facts"):
             data[key] = sorted(data[key])
         return json.dumps(data, sort_keys=True)
