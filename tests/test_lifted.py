@@ -11,6 +11,7 @@ import numpy as np
 import pytest
 
 from osg_control.cli import main
+from osg_control.domain.base import Task
 from osg_control.domain.binding import bind, bind_step, recorded
 from osg_control.domain.lifted import FactAtom, ObjectInstance, PredicateDecl
 from osg_control.domain.registry import get_domain
@@ -25,7 +26,7 @@ from osg_control.perception.percept import Percept
 from osg_control.planning.api import graph_domain, plan_files, plan_for_goal, solve
 from osg_control.planning.fast_downward import find_fast_downward
 from osg_control.planning.graph import graph_from_specs
-from osg_control.planning.pddl_io import build_problem, write_pddl
+from osg_control.planning.pddl_io import build_problem, export_pddl, write_pddl
 from osg_control.planning.synthetic import with_instances
 
 KITCHEN = get_domain("kitchen")
@@ -120,7 +121,7 @@ def test_skills_are_lifted_over_their_parameters() -> None:
         ),
         (
             {"objects": (dataclasses.replace(KITCHEN.objects[0], held_fact="(holding cube-5)"),)},
-            "object 'cube' names unknown fact '\\(holding cube-5\\)'",
+            r"field 'objects\[cube\].held_fact' names unknown fact '\(holding cube-5\)'",
         ),
     ],
 )
@@ -245,3 +246,17 @@ def test_the_object_tracker_follows_which_cube_is_held() -> None:
     offsets = tracker.offsets()
     assert offsets["cube"][0] == pytest.approx(0.10)  # not held: it moved
     assert offsets["cube-2"][0] == pytest.approx(0.05)  # held: where it was picked up
+
+
+def test_a_task_may_name_atoms_over_the_domains_objects(tmp_path: Path) -> None:
+    two = Task("two-cubes-in-cabinet", ("door-open", "cube-in-cabinet", "(in-cabinet cube-2)"),
+               world=tuple(WORLD), node="home")  # fmt: skip
+    domain = dataclasses.replace(THREE, tasks=(two,))
+    paths = export_pddl(domain, tmp_path)
+    problem = paths[1].read_text()
+    assert "(:goal (and (door-open door-1) (in-cabinet cube-1) (in-cabinet cube-2)))" in problem
+    assert "(:objects cube-1 cube-2 cube-3 - cube valve-1 - valve)" in problem
+    assert plan_files(*paths[:2]).cost == plan_for_goal(domain, two.goal, "home", WORLD).cost
+    bad = Task("lost", ("(in-cabinet cube-9)",))
+    with pytest.raises(DomainError, match=r"tasks\[lost\].goal' names unknown fact .*cube-9"):
+        dataclasses.replace(THREE, tasks=(bad,))

@@ -13,7 +13,7 @@ them by name.
 from __future__ import annotations
 
 import math
-from collections.abc import Callable, Mapping
+from collections.abc import Callable, Iterable, Mapping
 from dataclasses import dataclass, field, replace
 from functools import partial
 from pathlib import Path
@@ -218,14 +218,16 @@ class Domain:
             )
         except DomainError as err:
             raise DomainError(f"domain {self.name!r}: {err}") from None
-        for frame in self.objects:  # a fact, or an atom over its objects: (holding cube-2)
-            try:
-                lifting.ground_fact(frame.held_fact)
-            except PlanningError:
-                raise DomainError(
-                    f"domain {self.name!r}: object {frame.name!r} names unknown fact "
-                    f"{frame.held_fact!r}"
-                ) from None
+        atoms = [(f"objects[{o.name}].held_fact", (o.held_fact,)) for o in self.objects]
+        for field_name, named in [*_fact_fields(self), *atoms]:
+            for fact in named:  # a fact's name, or an atom over its objects: (holding cube-2)
+                try:
+                    lifting.ground_fact(fact)
+                except PlanningError as err:
+                    raise DomainError(
+                        f"domain {self.name!r}: field {field_name!r} names unknown fact "
+                        f"{fact!r} ({err})"
+                    ) from None
         object.__setattr__(self, "lifting", lifting)
         factory = self.make_env  # replace() passes the checked one: re-wrapped, not nested
         if isinstance(factory, CheckedEnvFactory):
@@ -438,20 +440,17 @@ def validate_domain(domain: Domain) -> None:
         if unknown:
             raise DomainError(f"{where}: skill {skill.name!r} names unknown facts {unknown}")
     _check_objects(where, domain)
-    _check_facts(where, "start_world", domain.start_world, facts)
-    _check_facts(where, "watched_facts", domain.watched_facts, facts)
-    _check_facts(where, "hand_empty", (domain.hand_empty,), facts)
+    for field_name, named in _fact_fields(domain):
+        unknown = sorted({f for f in named if not f.startswith("(")} - facts)
+        if unknown:  # atoms over objects, (in-cabinet cube-2), are checked once lifted
+            raise DomainError(f"{where}: field {field_name!r} names unknown facts {unknown}")
     if domain.home not in domain.nodes:
         raise DomainError(f"{where}: field 'home' names unknown node {domain.home!r}")
     for task in domain.tasks:
         if not task.goal:
             raise DomainError(f"{where}: task {task.name!r} has an empty goal")
-        _check_facts(where, f"tasks[{task.name}].goal", task.goal, facts)
-        _check_facts(where, f"tasks[{task.name}].world", task.world, facts)
         if task.node and task.node not in domain.nodes:
             raise DomainError(f"{where}: task {task.name!r} names unknown node {task.node!r}")
-    for region in domain.start_regions:
-        _check_facts(where, f"start_regions[{region.name}].facts", region.facts, facts)
     bounds = np.asarray(domain.action_bounds, dtype=float)
     if bounds.shape != (ACTION_DIM,) or not (np.all(np.isfinite(bounds)) and np.all(bounds > 0)):
         raise DomainError(
@@ -464,10 +463,20 @@ def validate_domain(domain: Domain) -> None:
         validate_benchmark(domain.benchmark, domain.facts, where)
 
 
-def _check_facts(where: str, field_name: str, named: Any, facts: set[str]) -> None:
-    unknown = sorted(set(named) - facts)
-    if unknown:
-        raise DomainError(f"{where}: field {field_name!r} names unknown facts {unknown}")
+def _fact_fields(domain: Domain) -> list[tuple[str, Iterable[str]]]:
+    """Every field that names facts (by name, or as atoms over the domain's objects)."""
+    fields: list[tuple[str, Iterable[str]]] = [
+        ("start_world", domain.start_world),
+        ("watched_facts", domain.watched_facts),
+        ("hand_empty", (domain.hand_empty,)),
+    ]
+    for task in domain.tasks:
+        fields += [
+            (f"tasks[{task.name}].goal", task.goal),
+            (f"tasks[{task.name}].world", task.world),
+        ]
+    fields += [(f"start_regions[{r.name}].facts", r.facts) for r in domain.start_regions]
+    return fields
 
 
 def _check_objects(where: str, domain: Domain) -> None:
