@@ -20,12 +20,11 @@ from osg_control.planning.pddl_io import (
     build_problem,
     export_pddl,
     parse_atoms,
-    read_domain,
-    read_problem,
     skill_cost,
     task_problem,
     write_pddl,
 )
+from osg_control.planning.pddl_parse import read_domain, read_problem
 
 REPO = Path(__file__).resolve().parents[1]
 COMMITTED = REPO / "domains" / "kitchen"

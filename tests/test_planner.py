@@ -33,10 +33,9 @@ from osg_control.planning.memo import PlanMemo
 from osg_control.planning.pddl_io import (
     build_domain,
     build_problem,
-    read_domain,
-    read_problem,
     skill_cost,
 )
+from osg_control.planning.pddl_parse import read_domain, read_problem
 from osg_control.planning.synthetic import random_goal, random_skill_graph
 from osg_control.planning.task import State, Task
 
