@@ -105,6 +105,7 @@ def test_randomize_objects_on_a_domain_without_objects_is_a_usage_error(
         name="bare",
         objects=(),
         nodes={n: dataclasses.replace(v, anchor=None) for n, v in KITCHEN.nodes.items()},
+        instances=tuple(dataclasses.replace(i, frame=None) for i in KITCHEN.instances),
     )
     monkeypatch.setattr(registry, "_FACTORIES", dict(registry._FACTORIES))  # kept to this test
     register_domain("bare", lambda: bare)

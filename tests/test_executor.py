@@ -76,7 +76,9 @@ def test_three_stage_task_from_a_random_start(defaults: tuple[dict, object]) -> 
     assert result["success"], result
     world = env.world()
     assert world.door_open and world.cube_in_cabinet and not world.cube_grasped
-    assert result["plan"][-3:] == ["move-cube-to-cabinet", "place-cube-in-cabinet", "release-cube"]
+    assert result["plan"][-3:] == [
+        "move-cube-to-cabinet cube-1", "place-cube-in-cabinet cube-1", "release-cube cube-1"
+    ]  # fmt: skip
     assert all(outcome["success"] for outcome in result["outcomes"])
 
 
@@ -103,8 +105,9 @@ def test_pick_up_from_a_random_start(defaults: tuple[dict, object]) -> None:
     assert env.world().cube_lifted
     entry = SKILLS_BY_NAME[result["entry_skill"]]  # off the graph: a movement skill enters
     assert entry.kind == "movement"
-    assert SKILLS_BY_NAME[result["plan"][0]].start == entry.end  # the plan starts where it ends
-    assert result["plan"][-2:] == ["grab-cube", "pick-up-cube"]
+    first = SKILLS_BY_NAME[result["plan"][0].split()[0]]
+    assert first.start == entry.end  # the plan starts where it ends
+    assert result["plan"][-2:] == ["grab-cube cube-1", "pick-up-cube cube-1"]
     assert all(outcome["success"] for outcome in result["outcomes"])
 
 
@@ -116,10 +119,11 @@ def test_three_stage_plan_is_the_ten_skill_chain(defaults: tuple[dict, object]) 
         ["door-open", "cube-in-cabinet"], obs, {"hand-empty", "door-closed", "cube-on-counter"}
     )
     assert entry is None
-    assert plan == [
-        "move-home-to-door", "grab-handle", "slide-door-open", "release-handle",
-        "move-cabinet-to-cube", "grab-cube", "pick-up-cube", "move-cube-to-cabinet",
-        "place-cube-in-cabinet", "release-cube",
+    assert plan == [  # plan steps: each skill bound to its object
+        "move-home-to-door door-1", "grab-handle door-1", "slide-door-open door-1",
+        "release-handle door-1", "move-cabinet-to-cube cube-1", "grab-cube cube-1",
+        "pick-up-cube cube-1", "move-cube-to-cabinet cube-1", "place-cube-in-cabinet cube-1",
+        "release-cube cube-1",
     ]  # fmt: skip
 
 
@@ -243,7 +247,7 @@ def test_a_start_part_way_down_to_the_cube_enters_at_grab_cube(
     env = KitchenEnv(config=EnvConfig(perception=PerceptionSpec(tcp_noise=0.0)))
     obs, _ = env.reset(seed=0, options={"position": (0.50, -0.20, 0.08), "radius": 0.01})
     result = Executor(policies, classifier, max_replans=0).execute(["cube-lifted"], env, obs)
-    assert result.entry_skill == "grab-cube" and result.plan == ["pick-up-cube"]
+    assert result.entry_skill == "grab-cube" and result.plan == ["pick-up-cube cube-1"]
     assert result.success, result.to_dict()
     assert env.world().cube_lifted
 

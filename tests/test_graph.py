@@ -253,4 +253,4 @@ def test_cli_graph(data_dir: Path, tmp_path: Path, capsys: pytest.CaptureFixture
     assert f"{len(NODES)} nodes, {len(SKILLS)} skills" in capsys.readouterr().out
     assert main(["plan", "--goal", "cube-lifted", "--graph", str(out), "--json"]) == 0
     costs = {s["action"]: s["cost"] for s in json.loads(capsys.readouterr().out)["steps"]}
-    assert costs["grab-cube"] == 288  # round(-ln 0.75 * 1000)
+    assert costs["grab-cube cube-1"] == 288  # round(-ln 0.75 * 1000)

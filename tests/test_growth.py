@@ -70,12 +70,12 @@ def test_measured_rates_choose_the_likelier_of_two_plans() -> None:
     goal, node = "(at above-cube)", "cabinet-front"
     world = ("door-open", "cube-on-counter", "hand-empty", "valve-closed")
     uniform = plan_for_goal(KITCHEN, goal, node, world)
-    assert uniform.actions == ("move-cabinet-to-cube",)
+    assert uniform.actions == ("move-cabinet-to-cube cube-1",)  # above cube-1
     rates = {"move-cabinet-to-cube": 0.6, "move-cabinet-to-home": 0.95, "move-home-to-cube": 0.95}
     measured = plan_for_goal(
         KITCHEN, goal, node, world, graph=graph_from_specs(KITCHEN, success_rates=rates)
     )
-    assert measured.actions == ("move-cabinet-to-home", "move-home-to-cube")
+    assert measured.actions == ("move-cabinet-to-home", "move-home-to-cube cube-1")
     assert 0.95 * 0.95 > 0.6  # the two-skill path is the likelier one ...
     assert measured.cost == 2 * skill_cost(0.95) == 2 * round(-math.log(0.95) * 1000)
 
@@ -85,5 +85,7 @@ def test_costs_are_the_same_in_every_planner(planner: str) -> None:
     rates = {s.name: 0.9 for s in KITCHEN.skills}
     graph = graph_from_specs(KITCHEN, success_rates=rates)
     result = plan_for_goal(KITCHEN, "valve-open", planner=planner, graph=graph)
-    assert result.actions == ("move-home-to-valve", "lower-to-valve", "push-valve-open")
+    assert result.actions == (
+        "move-home-to-valve valve-1", "lower-to-valve valve-1", "push-valve-open valve-1"
+    )  # fmt: skip
     assert result.cost == 3 * skill_cost(0.9)

@@ -28,7 +28,8 @@ from osg_control.learning.policy import load_policies
 from osg_control.planning.api import plan_for_goal
 from osg_control.planning.graph import graph_from_specs
 from osg_control.planning.graph_data import graph_from_datasets
-from osg_control.planning.pddl_io import export_pddl, read_domain, read_problem
+from osg_control.planning.pddl_io import export_pddl
+from osg_control.planning.pddl_parse import read_domain, read_problem
 
 EPISODES = 24
 """Scripted episodes per skill (under a second each skill)."""

@@ -96,7 +96,7 @@ def test_the_executor_runs_a_task_on_percepts_alone(executor: Executor, percepti
     executor.filter_gain = 0.2 if perception.tcp_noise else None
     result = executor.execute(["cube-lifted"], env, obs)
     assert result.success, result.failure
-    assert result.plan[-2:] == ["grab-cube", "pick-up-cube"]
+    assert result.plan[-2:] == ["grab-cube cube-1", "pick-up-cube cube-1"]
     assert any(outcome.reset_steps for outcome in result.outcomes)  # joint resets ran, guarded
     env.scoring = True
     assert "cube-lifted" in env.facts()  # scored on the simulator's truth

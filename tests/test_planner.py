@@ -12,6 +12,7 @@ from pddl.core import Domain, Problem
 from osg_control.cli import main
 from osg_control.commands.plan import PLANNER_NAMES
 from osg_control.domain.base import Task as KitchenTask
+from osg_control.domain.binding import recorded
 from osg_control.domain.registry import get_domain
 from osg_control.errors import PDDLError, PlanningError
 from osg_control.kitchen.tasks import DEFAULT_WORLD, KITCHEN_TASKS
@@ -32,10 +33,9 @@ from osg_control.planning.memo import PlanMemo
 from osg_control.planning.pddl_io import (
     build_domain,
     build_problem,
-    read_domain,
-    read_problem,
     skill_cost,
 )
+from osg_control.planning.pddl_parse import read_domain, read_problem
 from osg_control.planning.synthetic import random_goal, random_skill_graph
 from osg_control.planning.task import State, Task
 
@@ -48,22 +48,26 @@ needs_fd = pytest.mark.skipif(
     reason="Fast Downward driver (up_fast_downward/downward/fast-downward.py) not installed",
 )
 
-OPEN = ("move-home-to-door", "grab-handle", "slide-door-open", "release-handle")
-PICK = ("grab-cube", "pick-up-cube")
-PLACE = ("move-cube-to-cabinet", "place-cube-in-cabinet", "release-cube")
+
+def _bound(*names: str) -> tuple[str, ...]:
+    """Kitchen skills as plan steps: each bound to the kitchen's one object of its type."""
+    return tuple(recorded(KITCHEN.lifting, KITCHEN.skill(name)).label for name in names)
+
+
+OPEN = _bound("move-home-to-door", "grab-handle", "slide-door-open", "release-handle")
+PICK = _bound("grab-cube", "pick-up-cube")
+PLACE = _bound("move-cube-to-cabinet", "place-cube-in-cabinet", "release-cube")
 EXPECTED_FROM_HOME = {
-    "pick-up": ("move-home-to-cube", *PICK),
+    "pick-up": (*_bound("move-home-to-cube"), *PICK),
     "open-door": OPEN,
-    "open-pick-up": (*OPEN, "move-cabinet-to-cube", *PICK),
-    "pick-up-place": ("move-home-to-cube", *PICK, *PLACE),
-    "open-pick-up-place": (*OPEN, "move-cabinet-to-cube", *PICK, *PLACE),
-    "turn-valve": ("move-home-to-valve", "lower-to-valve", "push-valve-open"),
+    "open-pick-up": (*OPEN, *_bound("move-cabinet-to-cube"), *PICK),
+    "pick-up-place": (*_bound("move-home-to-cube"), *PICK, *PLACE),
+    "open-pick-up-place": (*OPEN, *_bound("move-cabinet-to-cube"), *PICK, *PLACE),
+    "turn-valve": _bound("move-home-to-valve", "lower-to-valve", "push-valve-open"),
     "open-door-turn-valve": (
         *OPEN,
-        "move-cabinet-to-home",
-        "move-home-to-valve",
-        "lower-to-valve",
-        "push-valve-open",
+        *_bound("move-cabinet-to-home", "move-home-to-valve", "lower-to-valve"),
+        *_bound("push-valve-open"),
     ),
 }
 """The kitchen's tasks from home: the unique cheapest plans (all skills cost the same)."""
@@ -85,8 +89,8 @@ def test_kitchen_tasks_from_home(task: KitchenTask) -> None:
 
 
 def _kitchen_task(node: str, world: tuple[str, ...], goal: tuple[str, ...]) -> Task:
-    domain = build_domain(graph_from_specs(KITCHEN), "osg-kitchen")
-    return ground(domain, build_problem(domain, node, world, goal))
+    pddl = build_domain(graph_from_specs(KITCHEN), "osg-kitchen", KITCHEN.lifting)
+    return ground(pddl.domain, build_problem(pddl, node, world, goal))
 
 
 @pytest.mark.parametrize("node", ["door-front", "above-cube", "cabinet-front", "handle"])
@@ -141,8 +145,9 @@ def test_plan_simulated_step_by_step() -> None:
         state = op.apply(state)
     assert task.goal <= state
     assert "(at cabinet-front)" in state and "(hand-empty)" in state
+    assert "(in-cabinet cube-1)" in state and "(door-open door-1)" in state
     with pytest.raises(PlanningError, match="preconditions"):
-        task.simulate(["grab-cube"])
+        task.simulate(["grab-cube cube-1"])
 
 
 def test_unreachable_goal_gives_no_plan_naming_the_facts() -> None:
@@ -151,14 +156,14 @@ def test_unreachable_goal_gives_no_plan_naming_the_facts() -> None:
             KITCHEN, "cube-in-cabinet", world=("door-closed", "hand-empty"), planner=planner
         )
         assert not result.solved and result.cost is None
-        assert result.unreached == ("(cube-in-cabinet)",)
+        assert result.unreached == ("(in-cabinet cube-1)",)
 
 
 def test_goal_blocked_by_deletes_lists_unmet_facts() -> None:
     # Both facts are reachable when deletes are ignored, never together.
     result = plan_for_goal(KITCHEN, "door-open door-closed")
     assert not result.solved
-    assert result.unreached == ("(door-open)",)
+    assert result.unreached == ("(door-open door-1)",)
 
 
 def test_success_rates_steer_the_plan() -> None:
@@ -169,7 +174,7 @@ def test_success_rates_steer_the_plan() -> None:
         node="home",
         graph=graph_from_specs(KITCHEN, success_rates=rates),
     )
-    assert result.actions == ("move-home-to-door",)
+    assert result.actions == ("move-home-to-door door-1",)
     assert result.cost == round(-math.log(0.5) * 1000)
 
 
@@ -197,8 +202,8 @@ def _brute_force_cost(task: Task, depth: int) -> float:
 def test_astar_matches_exhaustive_search_on_random_graphs(seed: int) -> None:
     graph = random_skill_graph(12, num_facts=2, seed=seed)
     goal = random_goal(graph, seed=seed, num_goal_facts=1 + seed % 2)
-    domain = build_domain(graph)
-    problem = build_problem(domain, goal.node, goal.world, goal.goal)
+    pddl = build_domain(graph)
+    domain, problem = pddl.domain, build_problem(pddl, goal.node, goal.world, goal.goal)
     astar, ucs = solve(domain, problem, "astar"), solve(domain, problem, "ucs")
     depth = 7
     expected = _brute_force_cost(ground(domain, problem), depth)
@@ -213,8 +218,8 @@ def test_astar_matches_exhaustive_search_on_random_graphs(seed: int) -> None:
 def test_hmax_is_admissible(seed: int) -> None:
     graph = random_skill_graph(40, seed=seed)
     goal = random_goal(graph, seed=seed, num_goal_facts=2)
-    domain = build_domain(graph)
-    problem = build_problem(domain, goal.node, goal.world, goal.goal)
+    pddl = build_domain(graph)
+    domain, problem = pddl.domain, build_problem(pddl, goal.node, goal.world, goal.goal)
     task = ground(domain, problem)
     result = solve(domain, problem, "ucs")
     h = HMax(task)(task.init)
@@ -357,11 +362,12 @@ def test_cli_plan_json_and_exit_codes(capsys: pytest.CaptureFixture[str]) -> Non
     assert [s["action"] for s in payload["steps"]] == list(EXPECTED_FROM_HOME["open-pick-up-place"])
     rates = read_manifest(KITCHEN.defaults_dir)["success_rates"]  # the shipped costs
     assert payload["solved"]
-    assert payload["cost"] == sum(skill_cost(rates[s["action"]]) for s in payload["steps"])
+    skills = [s["action"].split()[0] for s in payload["steps"]]
+    assert payload["cost"] == sum(skill_cost(rates[name]) for name in skills)
     assert main(["plan", "--goal", "cube-lifted", "--facts", "door-closed hand-empty"]) == 3
-    assert "goal facts unreached: (cube-lifted)" in capsys.readouterr().out
+    assert "goal facts unreached: (lifted cube-1)" in capsys.readouterr().out
     assert main(["plan", "--goal", "door-ajar"]) == 2  # refused before planning: a usage error
-    assert "unknown facts ['door-ajar']" in capsys.readouterr().err
+    assert "unknown predicate 'door-ajar'" in capsys.readouterr().err
     assert main(["plan", str(DOMAIN), str(PROBLEMS[0]), "--planner", "ucs"]) == 0
     assert "plan for" in capsys.readouterr().out
     assert main(["plan", str(DOMAIN)]) == 1

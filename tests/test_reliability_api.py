@@ -109,7 +109,13 @@ EXECUTE: list[tuple[str, Callable[[Any, Any, Any], Any], str]] = [
     ("obs of 3", lambda ex, env, obs: ex.execute(["door-open"], env, np.zeros(3)), "shape (10,)"),
     ("obs NaN", lambda ex, env, obs: ex.execute(["door-open"], env, obs * np.nan), "non-finite"),
     ("goal a number", lambda ex, env, obs: ex.execute(5, env, obs), "collection"),
-    ("goal atom", lambda ex, env, obs: ex.execute("(on a b)", env, obs), "facts or one (at NODE)"),
+    ("goal atom", lambda ex, env, obs: ex.execute("(on a b)", env, obs), "unknown predicate 'on'"),
+    (
+        "goal object",
+        lambda ex, env, obs: ex.execute("(lifted cube-7)", env, obs),
+        "unknown object 'cube-7'",
+    ),
+    ("goal arity", lambda ex, env, obs: ex.execute("(lifted)", env, obs), "takes 1 argument"),
     ("unknown node", lambda ex, env, obs: ex.execute("(at nowhere)", env, obs), "unknown node"),
     ("goal nested", lambda ex, env, obs: ex.execute([["door-open"]], env, obs), "fact names"),
 ]
@@ -131,7 +137,7 @@ def test_an_at_node_goal_is_reached_and_scored(kitchen_env: Any) -> None:
     executor = load_executor(KITCHEN)
     obs, _ = kitchen_env.reset(seed=0)
     result = executor.execute("(at above-valve)", kitchen_env, obs)
-    assert result.success and result.plan == ["move-home-to-valve"]
+    assert result.success and result.plan == ["move-home-to-valve valve-1"]
     assert result.goal == ["(at above-valve)"]
     obs, _ = kitchen_env.reset(seed=0)
     both = executor.execute(["door-open", "(at home)"], kitchen_env, obs)

@@ -90,4 +90,4 @@ def test_an_at_node_goal_is_run_and_scored_on_the_truth(
     out = json.loads(capsys.readouterr().out)
     assert out["success_rate"] == 1.0 and out["episodes"][0]["scored_success"] is True
     assert cli.main(["run", "--goal", "(at nowhere)"]) == EXIT_CODES["usage"]
-    assert "--goal: goal (at nowhere): unknown node" in capsys.readouterr().err
+    assert "--goal: unknown node 'nowhere' in (at nowhere)" in capsys.readouterr().err

@@ -46,3 +46,11 @@ def test_bench_control_reports_its_targets() -> None:
     env = report["env"]
     assert env["physics_median_us"] > 0 and env["n_substeps"] == 25
     assert set(report["targets"]) >= {"overhead_le_25pct"}
+
+
+def test_bench_lifted_plans_three_cubes_alike_in_every_planner() -> None:
+    report = _report("tools/bench_lifted.py", "--count", "3", "--repeats", "1")
+    assert report["objects"] == ["cube-1", "cube-2", "cube-3"]
+    costs = {row["planner"]: row["cost"] for row in report["planners"]}
+    assert len(set(costs.values())) == 1 and all(r["steps"] == 22 for r in report["planners"])
+    assert report["fast_downward_cost"] in (None, costs["auto"])  # None: not installed

@@ -15,7 +15,7 @@ import math
 from collections.abc import Callable
 from typing import TYPE_CHECKING, Any
 
-from osg_control.errors import UsageError
+from osg_control.errors import PlanningError, UsageError
 from osg_control.execution import MAX_REPLANS
 from osg_control.perception.spec import MAX_NOISE
 from osg_control.planning.task import MAX_STATES, MAX_TIME_S
@@ -176,21 +176,42 @@ def _domain_values(args: argparse.Namespace) -> None:
             f"of {list(domain.nodes)}"
         )
     for dest in ("facts", "goal"):
-        words = str(getattr(args, dest, None) or "").split()
-        if dest == "goal" and (getattr(args, "files", None) or "(" in " ".join(words)):
+        value = getattr(args, dest, None)
+        if value is None or (dest == "goal" and getattr(args, "files", None)):
             continue
-        unknown = sorted(set(words) - set(domain.facts))
-        if unknown:
-            raise UsageError(
-                f"{_option(dest)}: unknown facts {unknown} in domain {domain.name!r}; its facts: "
-                f"{', '.join(domain.facts)}"
-            )
+        try:
+            fact_atoms(domain, value, goal=dest == "goal")
+        except PlanningError as err:
+            raise UsageError(f"{_option(dest)}: {err} (domain {domain.name!r})") from None
     if getattr(args, "randomize_objects", False) and not domain.objects:
         raise UsageError(
             f"--randomize-objects: domain {domain.name!r} has no object with a placement "
             "region (its Domain.objects is empty), so there is nothing to place"
         )
     _models(args, domain)
+
+
+def fact_atoms(domain: Domain, text: str, goal: bool = False) -> list[str]:
+    """Facts written on the command line (``door-open``, ``(door-open)``, ``(in-cabinet
+    cube-1)``; a goal may also name one ``(at NODE)``) as the domain's fact names.
+
+    Raises:
+        PlanningError: an unreadable atom, an unknown predicate, object or node, a wrong
+            arity, or ``(at NODE)`` outside a goal.
+    """
+    from osg_control.domain.lifted import AT
+    from osg_control.planning.pddl_io import parse_atoms
+
+    facts = []
+    for atom in parse_atoms(text):
+        if atom[0] == AT and len(atom) == 2:
+            if not goal:
+                raise PlanningError(f"(at {atom[1]}) is not a world fact; use --from-node")
+            domain.lifting.check_atom(atom)
+            facts.append(f"(at {atom[1]})")
+            continue
+        facts.append(domain.lifting.ground_fact("(" + " ".join(atom) + ")"))
+    return facts
 
 
 def _robot(args: argparse.Namespace, domain: Domain) -> None:

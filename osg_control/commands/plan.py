@@ -106,8 +106,9 @@ def _plan(args: argparse.Namespace) -> PlanResult:
         )
     if args.goal is None:
         raise PlanningError(
-            'give a goal (--goal "door-open cube-in-cabinet") or DOMAIN PROBLEM files'
+            'give a goal (--goal "(door-open) (in-cabinet cube-1)") or DOMAIN PROBLEM files'
         )
+    from osg_control.commands.checks import fact_atoms
     from osg_control.planning.costs import measured_graph
     from osg_control.planning.graph import load_graph
 
@@ -115,7 +116,7 @@ def _plan(args: argparse.Namespace) -> PlanResult:
     if args.graph and args.models:
         raise UsageError("--graph and --models both give the plan costs: give one")
     graph = load_graph(args.graph) if args.graph else measured_graph(domain, args.models)
-    facts = None if args.facts is None else args.facts.split()
+    facts = None if args.facts is None else fact_atoms(domain, args.facts)
     return plan_for_goal(
         domain, args.goal, args.from_node, facts, args.planner, graph, limits=limits
     )
@@ -139,13 +140,17 @@ def register(subparsers: Verbs) -> None:
         help="PDDL domain and problem files (instead of --goal)",
     )
     parser.add_argument(
-        "--goal", help='facts to reach, e.g. "door-open cube-in-cabinet" or "(at home)"'
+        "--goal",
+        help='atoms to reach, e.g. "(door-open) (in-cabinet cube-1)", the fact names '
+        '"door-open cube-in-cabinet", or "(at home)"',
     )
     parser.add_argument(
         "--from-node", default=None, help="start node (default: the domain's home node)"
     )
     parser.add_argument(
-        "--facts", default=None, help="world facts true at the start (default: the domain's)"
+        "--facts",
+        default=None,
+        help="world facts (names or atoms) true at the start (default: the domain's)",
     )
     parser.add_argument(
         "--graph",

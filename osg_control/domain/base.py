@@ -13,7 +13,7 @@ them by name.
 from __future__ import annotations
 
 import math
-from collections.abc import Callable, Mapping
+from collections.abc import Callable, Iterable, Mapping
 from dataclasses import dataclass, field, replace
 from functools import partial
 from pathlib import Path
@@ -23,6 +23,7 @@ import numpy as np
 
 from osg_control.control.description import ORIGIN, Placement, mounted
 from osg_control.domain.benchmark import Benchmark, validate_benchmark
+from osg_control.domain.lifted import FactAtom, Lifting, ObjectInstance, PredicateDecl
 from osg_control.domain.spaces import (
     ACTION_DIM,
     PAPER_ACTION_BOUNDS,
@@ -31,7 +32,7 @@ from osg_control.domain.spaces import (
     unbounded_observation,
 )
 from osg_control.domain.spec import Node, ObjectFrame, SkillSpec, check_skill_fields
-from osg_control.errors import DomainError, SkillSpecError, lookup
+from osg_control.errors import DomainError, PlanningError, SkillSpecError, lookup
 from osg_control.perception.spec import SIMULATED_PERCEPTIONS
 
 
@@ -115,7 +116,8 @@ class Domain:
         name: registry key (``osg --domain NAME``), also the PDDL domain's name suffix.
         description: one line for humans.
         nodes: node name -> pose.
-        facts: the 0-ary world predicates.
+        facts: the world facts' names (each a 0-ary predicate unless ``fact_atoms``
+            declares its atom).
         skills: the skill specs (their order does not matter: seeds come from names).
         tasks: named goals.
         start_regions: random-start regions of Tables III-V.
@@ -158,6 +160,12 @@ class Domain:
         mounts: where a robot's base stands in its scene, by robot name (a robot not
             named stands at the origin); ``with_robot`` builds the env around the robot so
             mounted (``description.mounted``), IK and readouts in scene coordinates.
+        types: object types, type -> parent type (``"object"`` the root).
+        instances: the objects of its scene (``lifted.ObjectInstance``).
+        predicates: predicates with typed parameters (``lifted.PredicateDecl``); a fact
+            without a ``fact_atoms`` entry is a 0-ary predicate of its own name.
+        fact_atoms: each fact's ground atom (``lifted.FactAtom``: ``cube-lifted`` is
+            ``(lifted cube-1)``). ``lifting`` derives the lifted operators from these.
     """
 
     name: str
@@ -187,11 +195,40 @@ class Domain:
     robot: str | None = None
     robot_is_default: bool = True
     mounts: Mapping[str, Placement] = field(default_factory=dict)
+    types: Mapping[str, str] = field(default_factory=dict)
+    instances: tuple[ObjectInstance, ...] = ()
+    predicates: tuple[PredicateDecl, ...] = ()
+    fact_atoms: tuple[FactAtom, ...] = ()
     skills_by_name: dict[str, SkillSpec] = field(init=False, repr=False, compare=False)
+    lifting: Lifting = field(init=False, repr=False, compare=False)
+    """The lifted view of its declarations (``domain.lifted``)."""
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "skills_by_name", {s.name: s for s in self.skills})
         validate_domain(self)
+        try:
+            lifting = Lifting(
+                self.types,
+                self.instances,
+                self.predicates,
+                self.fact_atoms,
+                self.facts,
+                self.nodes,
+                self.skills,
+            )
+        except DomainError as err:
+            raise DomainError(f"domain {self.name!r}: {err}") from None
+        atoms = [(f"objects[{o.name}].held_fact", (o.held_fact,)) for o in self.objects]
+        for field_name, named in [*_fact_fields(self), *atoms]:
+            for fact in named:  # a fact's name, or an atom over its objects: (holding cube-2)
+                try:
+                    lifting.ground_fact(fact)
+                except PlanningError as err:
+                    raise DomainError(
+                        f"domain {self.name!r}: field {field_name!r} names unknown fact "
+                        f"{fact!r} ({err})"
+                    ) from None
+        object.__setattr__(self, "lifting", lifting)
         factory = self.make_env  # replace() passes the checked one: re-wrapped, not nested
         if isinstance(factory, CheckedEnvFactory):
             factory = factory.factory
@@ -326,9 +363,13 @@ class Domain:
                     "preconditions": sorted(s.preconditions),
                     "add_effects": sorted(s.add_effects),
                     "del_effects": sorted(s.del_effects),
+                    "parameters": [f"?{var} - {kind}" for var, kind in s.parameters],
                 }
                 for s in self.skills
             ],
+            "types": dict(self.types),
+            "instances": {i.name: i.type for i in self.instances},
+            "fact_atoms": {f.name: "(" + " ".join(f.atom) + ")" for f in self.fact_atoms},
             "tasks": [
                 {
                     "name": t.name,
@@ -400,21 +441,18 @@ def validate_domain(domain: Domain) -> None:
         unknown = sorted(skill.facts - facts)
         if unknown:
             raise DomainError(f"{where}: skill {skill.name!r} names unknown facts {unknown}")
-    _check_objects(where, domain, facts)
-    _check_facts(where, "start_world", domain.start_world, facts)
-    _check_facts(where, "watched_facts", domain.watched_facts, facts)
-    _check_facts(where, "hand_empty", (domain.hand_empty,), facts)
+    _check_objects(where, domain)
+    for field_name, named in _fact_fields(domain):
+        unknown = sorted({f for f in named if not f.startswith("(")} - facts)
+        if unknown:  # atoms over objects, (in-cabinet cube-2), are checked once lifted
+            raise DomainError(f"{where}: field {field_name!r} names unknown facts {unknown}")
     if domain.home not in domain.nodes:
         raise DomainError(f"{where}: field 'home' names unknown node {domain.home!r}")
     for task in domain.tasks:
         if not task.goal:
             raise DomainError(f"{where}: task {task.name!r} has an empty goal")
-        _check_facts(where, f"tasks[{task.name}].goal", task.goal, facts)
-        _check_facts(where, f"tasks[{task.name}].world", task.world, facts)
         if task.node and task.node not in domain.nodes:
             raise DomainError(f"{where}: task {task.name!r} names unknown node {task.node!r}")
-    for region in domain.start_regions:
-        _check_facts(where, f"start_regions[{region.name}].facts", region.facts, facts)
     bounds = np.asarray(domain.action_bounds, dtype=float)
     if bounds.shape != (ACTION_DIM,) or not (np.all(np.isfinite(bounds)) and np.all(bounds > 0)):
         raise DomainError(
@@ -427,14 +465,25 @@ def validate_domain(domain: Domain) -> None:
         validate_benchmark(domain.benchmark, domain.facts, where)
 
 
-def _check_facts(where: str, field_name: str, named: Any, facts: set[str]) -> None:
-    unknown = sorted(set(named) - facts)
-    if unknown:
-        raise DomainError(f"{where}: field {field_name!r} names unknown facts {unknown}")
+def _fact_fields(domain: Domain) -> list[tuple[str, Iterable[str]]]:
+    """Every field that names facts (by name, or as atoms over the domain's objects)."""
+    fields: list[tuple[str, Iterable[str]]] = [
+        ("start_world", domain.start_world),
+        ("watched_facts", domain.watched_facts),
+        ("hand_empty", (domain.hand_empty,)),
+    ]
+    for task in domain.tasks:
+        fields += [
+            (f"tasks[{task.name}].goal", task.goal),
+            (f"tasks[{task.name}].world", task.world),
+        ]
+    fields += [(f"start_regions[{r.name}].facts", r.facts) for r in domain.start_regions]
+    return fields
 
 
-def _check_objects(where: str, domain: Domain, facts: set[str]) -> None:
-    """Anchors name declared objects; an object's fields and fact are the domain's."""
+def _check_objects(where: str, domain: Domain) -> None:
+    """Anchors and instances name declared objects; an object's fields are the domain's
+    (its held fact is checked against the lifted view, ``Domain.__post_init__``)."""
     objects = {o.name: o for o in domain.objects}
     for node in domain.nodes.values():
         if node.anchor is not None and node.anchor not in objects:
@@ -442,15 +491,17 @@ def _check_objects(where: str, domain: Domain, facts: set[str]) -> None:
                 f"{where}: node {node.name!r} field 'anchor' names unknown object "
                 f"{node.anchor!r}; objects: {sorted(objects)}"
             )
+    for instance in domain.instances:
+        if instance.frame is not None and instance.frame not in objects:
+            raise DomainError(
+                f"{where}: instance {instance.name!r} field 'frame' names unknown object "
+                f"{instance.frame!r}; objects: {sorted(objects)}"
+            )
     for frame in domain.objects:
         unknown = sorted(set(frame.position_fields) - set(domain.world_fields))
         if unknown:
             raise DomainError(
                 f"{where}: object {frame.name!r} names unknown world fields {unknown}"
-            )
-        if frame.held_fact not in facts:
-            raise DomainError(
-                f"{where}: object {frame.name!r} names unknown fact {frame.held_fact!r}"
             )
         if not all(lo <= hi for lo, hi in zip(frame.region_low, frame.region_high, strict=True)):
             raise DomainError(f"{where}: object {frame.name!r} has an empty placement region")

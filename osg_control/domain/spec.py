@@ -14,6 +14,7 @@ lists its nodes, facts and skills with these types.
 from __future__ import annotations
 
 import json
+import re
 from collections.abc import Iterable, Mapping
 from dataclasses import asdict, dataclass, field
 from typing import Any, Literal
@@ -30,6 +31,8 @@ MOVEMENT = "movement"
 classifier's classes and the way onto the graph from anywhere."""
 
 Gripper = Literal["open", "closed"]
+_PDDL_NAME = re.compile(r"[a-z][a-z0-9_-]*")
+"""A PDDL name in normal form (a parameter's variable or type)."""
 Quat = tuple[float, float, float, float]
 
 
@@ -61,7 +64,8 @@ class ObjectFrame:
         region_low, region_high: the (x, y) corners of its placement region [m] (Algorithm
             1's random placements and ``--randomize-objects``).
         held_fact: the fact that holds while the robot holds it (its frame is then frozen
-            where it was picked up).
+            where it was picked up): a fact name, or an atom over the domain's objects
+            (``(holding cube-2)``), so each object's grasp is tracked on its own.
     """
 
     name: str
@@ -135,6 +139,9 @@ class SkillSpec:
         max_steps: the step budget of a learned policy's episode.
         start_radius: radius [m] of the random starts around ``start``.
         start_angle: per-axis orientation range [rad] of the random starts.
+        parameters: its typed parameters as a lifted operator, ``(variable, type)`` (e.g.
+            ``(("c", "cube"),)`` for ``grab-cube(?c - cube)``); its facts are written for
+            the first instance of each type (``domain.lifted``).
     """
 
     name: str
@@ -152,6 +159,7 @@ class SkillSpec:
     max_steps: int = 80
     start_radius: float = 0.02
     start_angle: float = 0.05
+    parameters: tuple[tuple[str, str], ...] = ()
 
     @property
     def is_movement(self) -> bool:
@@ -170,8 +178,12 @@ class SkillSpec:
         return [w.steps or per_waypoint for w in self.waypoints]
 
     def to_json(self) -> str:
-        """Serialise (for data-set attributes and checkpoint sidecars)."""
+        """Serialise (for data-set attributes and checkpoint sidecars): what the skill is
+        recorded as. ``parameters`` are left out: they are the planner's view of the same
+        recorded skill (lifting it changes no episode), so data and checkpoints recorded
+        before a skill was lifted stay that skill's (``osg collect`` keeps them)."""
         data = asdict(self)
+        del data["parameters"]
         for key in ("preconditions", "add_effects", "del_effects", "start_facts"):
             data[key] = sorted(data[key])
         return json.dumps(data, sort_keys=True)
@@ -207,6 +219,16 @@ def check_skill_fields(skill: SkillSpec) -> None:
             raise SkillSpecError(f"skill {skill.name!r}: field {name!r} must be >= 0, got {value}")
     if skill.max_steps < 1:
         raise SkillSpecError(f"skill {skill.name!r}: field 'max_steps' must be >= 1")
+    well_formed = all(
+        isinstance(p, tuple) and len(p) == 2 and all(_PDDL_NAME.fullmatch(str(v)) for v in p)
+        for p in skill.parameters
+    )
+    variables = [p[0] for p in skill.parameters] if well_formed else []
+    if not well_formed or len(set(variables)) != len(variables):
+        raise SkillSpecError(
+            f"skill {skill.name!r}: field 'parameters' must be distinct (variable, type) "
+            f"names, got {skill.parameters!r}"
+        )
 
 
 def skill_from_json(text: str | Mapping[str, Any]) -> SkillSpec:
@@ -234,6 +256,7 @@ def skill_from_json(text: str | Mapping[str, Any]) -> SkillSpec:
         script = ScriptParams(**data.pop("script"))
         for key in ("preconditions", "add_effects", "del_effects", "start_facts"):
             data[key] = frozenset(data.get(key, ()))
+        data["parameters"] = tuple(tuple(p) for p in data.get("parameters", ()))
         skill = SkillSpec(waypoints=waypoints, script=script, **data)
     except (KeyError, TypeError, ValueError) as err:
         raise SkillSpecError(f"skill {name!r}: missing or malformed field: {err}") from err

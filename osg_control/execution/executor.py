@@ -38,6 +38,7 @@ from osg_control.control.estimator import (
     check_motion_model,
 )
 from osg_control.domain.base import Domain
+from osg_control.domain.binding import BoundSkill, bind_step, recorded
 from osg_control.domain.contract import SkillEnv
 from osg_control.domain.frames import (
     Offsets,
@@ -190,7 +191,8 @@ class Executor:
         the objects are (anchored nodes move with them).
 
         Returns:
-            ``(entry skill or None, plan, planner result)``.
+            ``(entry skill or None, plan, planner result)``; the plan's steps are ground
+            operators, ``skill obj1 ...`` (``lifted.Lifting.bind_step``).
         """
         facts = set(facts)
         goal = list(goal)
@@ -209,7 +211,7 @@ class Executor:
     def run_skill(
         self,
         env: SkillEnv,
-        skill: SkillSpec,
+        skill: SkillSpec | BoundSkill,
         obs: np.ndarray,
         tracker: TcpTracker | None = None,
         objects: ObjectTracker | None = None,
@@ -217,23 +219,29 @@ class Executor:
         """Run one option until beta holds on the percepts, its step budget runs out or it
         loses a watched precondition (``Domain.watched_facts``) from the perceived facts.
 
+        ``skill``: a spec (run as written: its recorded binding) or a plan step's bound
+        skill: the lifted skill's policy in its bound object's frame, its facts and
+        watched preconditions those of its objects (which cube is held).
         ``tracker``, if given, turns each observation into the policy's input and into the
         TCP position beta is checked on; it reads every observation and is told every
         action of the skill. ``objects`` estimates where the objects are from every percept
         (default: a new one); a skill acting in an object's frame sees the TCP relative to
         it and ends where it is (``domain.frames``).
         """
+        bound = skill if isinstance(skill, BoundSkill) else BoundSkill(skill)
+        recorded, skill = self.skills[bound.skill.name], bound.skill
         policy = self.policies[skill.name]
         end = self.domain.nodes[skill.end]
         if objects is None:
             objects = ObjectTracker(self.domain)
             objects.update(env.percept())
-        watched = (skill.preconditions - skill.del_effects) & self.domain.watched_facts
+        kept = (recorded.preconditions - recorded.del_effects) & self.domain.watched_facts
+        watched = {bound.fact(fact) for fact in kept}
         started = time.perf_counter()
         lost_steps = 0
         for step in range(1, skill.max_steps + 1):
             seen = obs if tracker is None else tracker.read(obs)
-            offset = skill_offset(self.domain, skill, objects.offsets())
+            offset = skill_offset(self.domain, skill, bound.offsets(objects.offsets()))
             action = policy(in_skill_frame(seen, offset))
             if tracker is not None:
                 tracker.acted(action)
@@ -248,7 +256,7 @@ class Executor:
             percept = env.percept()
             objects.update(percept)
             position = (percept.state if tracker is None else tracker.read(obs))[:3]
-            goal = node_position(self.domain.nodes, end.name, objects.offsets())
+            goal = node_position(self.domain.nodes, end.name, bound.offsets(objects.offsets()))
             if success_holds(skill, end, position, percept.state[7], percept.facts, goal):
                 return SkillOutcome(skill.name, True, step, time.perf_counter() - started), obs
             ended = _episode_end(terminated, truncated)
@@ -327,9 +335,8 @@ class Executor:
             if not planned.solved:
                 result.failure = f"no plan: unreachable goal facts {list(planned.unreached)}"
                 break
-            obs, failed = self._run_sequence(
-                env, ([entry] if entry else []) + plan, obs, result, tracker, objects
-            )
+            entered = [recorded(self.domain.lifting, self.skills[entry]).label] if entry else []
+            obs, failed = self._run_sequence(env, entered + plan, obs, result, tracker, objects)
             facts = env.percept().facts
             if after_attempt is not None:
                 after_attempt(attempt, result)
@@ -374,10 +381,11 @@ class Executor:
     ) -> tuple[np.ndarray, str | None]:
         """Run skills in order; stop at the first failure and return its reason."""
         for index, name in enumerate(sequence):
-            skill = self.skills[name]
-            target = node_position(self.domain.nodes, skill.end, objects.offsets())
+            bound = bind_step(self.domain.lifting, self.skills, name)
+            skill = bound.skill
+            target = node_position(self.domain.nodes, skill.end, bound.offsets(objects.offsets()))
             self._emit("skill", name=name, target=skill.end, position=target)
-            outcome, obs = self.run_skill(env, skill, obs, tracker, objects)
+            outcome, obs = self.run_skill(env, bound, obs, tracker, objects)
             facts = env.percept().facts
             if outcome.success and not (skill.add_effects <= facts):
                 outcome.success = False

@@ -15,6 +15,7 @@ from typing import Any
 import numpy as np
 
 from osg_control.domain.base import Domain
+from osg_control.domain.lifted import AT
 from osg_control.errors import PlanningError
 from osg_control.execution.locate import node_at
 from osg_control.planning.pddl_io import parse_atoms
@@ -59,9 +60,12 @@ class Goal:
 def parse_goal(goal: Any, domain: Domain) -> Goal:
     """A goal given as a string of atoms (``"door-open (at home)"``) or a collection of them.
 
+    Atoms over the domain's objects (``(in-cabinet cube-1)``) are read as its facts
+    (``cube-in-cabinet``); a declared fact's name may be written bare or as ``(name)``.
+
     Raises:
-        ValueError: not strings, unreadable atoms, an atom other than a fact or
-            ``(at NODE)``, an unknown node, or two nodes.
+        ValueError: not strings, unreadable atoms, an unknown predicate, object or node, a
+            wrong arity, or two nodes.
     """
     if not isinstance(goal, str):
         if not isinstance(goal, Iterable):
@@ -73,13 +77,17 @@ def parse_goal(goal: Any, domain: Domain) -> Goal:
         atoms = parse_atoms(goal)
     except PlanningError as err:
         raise ValueError(f"goal: {err}") from None
-    facts = {atom[0] for atom in atoms if len(atom) == 1}
-    nodes = [atom[1] for atom in atoms if len(atom) == 2 and atom[0] == "at"]
-    other = [atom for atom in atoms if not (len(atom) == 1 or len(atom) == 2 and atom[0] == "at")]
-    if other or len(nodes) > 1:
-        raise ValueError(
-            f"goal atoms must be facts or one (at NODE), got {' '.join(map(str, other or nodes))}"
-        )
+    nodes = [atom[1] for atom in atoms if len(atom) == 2 and atom[0] == AT]
+    if len(nodes) > 1:
+        raise ValueError(f"goal atoms may name one (at NODE), got {len(nodes)}")
     if nodes and nodes[0] not in domain.nodes:
         raise ValueError(f"goal (at {nodes[0]}): unknown node; the nodes: {list(domain.nodes)}")
+    facts = set()
+    for atom in atoms:
+        if len(atom) == 2 and atom[0] == AT:
+            continue
+        try:
+            facts.add(domain.lifting.ground_fact("(" + " ".join(atom) + ")"))
+        except PlanningError as err:
+            raise ValueError(f"goal: {err}") from None
     return Goal(frozenset(facts), nodes[0] if nodes else None)

@@ -7,6 +7,7 @@ from typing import Any
 import numpy as np
 
 from osg_control.domain.base import Domain, StartRegion
+from osg_control.kitchen.objects import FACT_ATOMS, INSTANCES, PREDICATES, TYPES
 from osg_control.kitchen.paper import PUBLISHED
 from osg_control.kitchen.scene import ROBOT_MOUNTS
 from osg_control.kitchen.skills import CUBE, NODES, SKILLS, WORLD_FACTS
@@ -87,4 +88,8 @@ def kitchen_domain() -> Domain:
         published=PUBLISHED,
         robot=DEFAULT_ROBOT,
         mounts=ROBOT_MOUNTS,
+        types=TYPES,
+        instances=INSTANCES,
+        predicates=PREDICATES,
+        fact_atoms=FACT_ATOMS,
     )

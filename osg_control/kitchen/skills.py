@@ -29,6 +29,7 @@ from osg_control.domain.spec import (
 )
 from osg_control.domain.spec import nearest_start as _nearest_start
 from osg_control.errors import SkillSpecError, lookup
+from osg_control.kitchen.objects import SKILL_PARAMETERS, WORLD_FACTS
 
 __all__ = ["NODES", "SKILLS", "TOP_DOWN_QUAT", "WORLD_FACTS", "Node", "SkillSpec", "get_skill"]
 
@@ -94,21 +95,6 @@ CUBE = ObjectFrame(
 )
 """The cube: its nodes are given for it at (0.50, -0.20); it is placed anywhere in the 20 x
 20 cm square around that on the counter (clear of the valve and the cabinet's plinth)."""
-
-
-WORLD_FACTS: tuple[str, ...] = (
-    "hand-empty",
-    "holding-handle",
-    "holding-cube",
-    "door-closed",
-    "door-open",
-    "cube-on-counter",
-    "cube-lifted",
-    "cube-in-cabinet",
-    "valve-closed",
-    "valve-open",
-)
-"""The 0-ary world predicates of the kitchen domain."""
 
 
 def _wp(node: str) -> Waypoint:
@@ -351,7 +337,12 @@ def _held(skill: SkillSpec) -> str | None:
 
 
 SKILLS: tuple[SkillSpec, ...] = tuple(
-    replace(skill, script=SCRIPT_PARAMS[skill.name], holding=_held(skill))
+    replace(
+        skill,
+        script=SCRIPT_PARAMS[skill.name],
+        holding=_held(skill),
+        parameters=SKILL_PARAMETERS.get(skill.name, ()),
+    )
     for skill in _UNTUNED_SKILLS
 )
 """The kitchen's skills in the paper's order (movement, door, cube): its twelve, with the

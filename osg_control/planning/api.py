@@ -17,6 +17,7 @@ from osg_control.planning.grounding import ground
 from osg_control.planning.heuristics import HMax, blind
 from osg_control.planning.lmcut import LMCut
 from osg_control.planning.pddl_io import (
+    SkillPDDL,
     build_domain,
     build_problem,
     pddl_domain_name,
@@ -185,17 +186,17 @@ def plan_files(
     return solve(pair.domain, pair.problem, planner, files, limits)
 
 
-_SPEC_DOMAINS: dict[str, Domain] = {}
+_SPEC_DOMAINS: dict[str, SkillPDDL] = {}
 
 
-def graph_domain(domain: OSGDomain, graph: SkillGraph | None = None) -> Domain:
-    """The PDDL domain of a skill graph (default: the domain's specs, uniform costs; that
-    one is built once per domain, it never changes)."""
+def graph_domain(domain: OSGDomain, graph: SkillGraph | None = None) -> SkillPDDL:
+    """The lifted PDDL domain of a skill graph (default: the domain's specs, uniform costs;
+    that one is built once per domain, it never changes)."""
     if graph is not None:
-        return build_domain(graph, pddl_domain_name(domain))
+        return build_domain(graph, pddl_domain_name(domain), domain.lifting)
     if domain.name not in _SPEC_DOMAINS:
         _SPEC_DOMAINS[domain.name] = build_domain(
-            graph_from_specs(domain), pddl_domain_name(domain)
+            graph_from_specs(domain), pddl_domain_name(domain), domain.lifting
         )
     return _SPEC_DOMAINS[domain.name]
 
@@ -207,15 +208,15 @@ def plan_for_goal(
     world: Iterable[str] | None = None,
     planner: str = "auto",
     graph: SkillGraph | None = None,
-    pddl: Domain | None = None,
+    pddl: SkillPDDL | None = None,
     limits: SearchLimits = NO_LIMITS,
 ) -> PlanResult:
     """Plan a skill sequence for a goal of a domain.
 
     Args:
         domain: the domain.
-        goal: facts to reach (e.g. two of the domain's facts separated by a space), or an
-            ``(at NODE)`` atom.
+        goal: atoms to reach: the domain's fact names (``"door-open cube-in-cabinet"``),
+            atoms over its objects (``"(in-cabinet cube-1)"``) or ``(at NODE)``.
         node: the node the robot starts at (default: the domain's ``home``).
         world: the world facts true at the start, all others false (default: the domain's
             ``start_world``).
@@ -225,11 +226,12 @@ def plan_for_goal(
         limits: the bounds of the search.
 
     Returns:
-        The plan or a "no plan" result.
+        The plan or a "no plan" result; its steps name ground operators
+        (``grab-cube cube-1``: the skill and its objects, ``lifted.Lifting.bind_step``).
 
     Raises:
-        PlanningError: an unknown goal fact, node or planner (the known ones listed), or the
-            backend failed.
+        PlanningError: an unknown goal predicate, object, node or planner (the known ones
+            listed), a wrong arity, or the backend failed.
     """
     pddl = pddl if pddl is not None else graph_domain(domain, graph)
     node = domain.home if node is None else node
@@ -238,7 +240,7 @@ def plan_for_goal(
 
 
 def plan_on_graph(
-    graph: SkillGraph | Domain,
+    graph: SkillGraph | SkillPDDL,
     goal: str | Iterable[str],
     node: str,
     world: Iterable[str],
@@ -248,8 +250,9 @@ def plan_on_graph(
     """Plan over a skill graph (or its PDDL domain) from ``node`` with ``world`` true.
 
     Raises:
-        PlanningError: an unknown goal fact, node or planner, or the backend failed.
+        PlanningError: an unknown goal atom, node or planner, or the backend failed.
     """
     get_planner(planner)
     pddl = build_domain(graph) if isinstance(graph, SkillGraph) else graph
-    return solve(pddl, build_problem(pddl, node, world, goal, name="goal"), planner, limits=limits)
+    problem = build_problem(pddl, node, world, goal, name="goal")
+    return solve(pddl.domain, problem, planner, limits=limits)

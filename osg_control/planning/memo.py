@@ -6,10 +6,9 @@ from __future__ import annotations
 from collections.abc import Iterable
 from functools import lru_cache
 
-from pddl.core import Domain
-
 from osg_control.domain.base import Domain as OSGDomain
 from osg_control.planning.api import plan_for_goal
+from osg_control.planning.pddl_io import SkillPDDL
 from osg_control.planning.task import PlanResult
 
 PLAN_MEMO_SIZE = 4096
@@ -31,7 +30,7 @@ class PlanMemo:
         size: how many answers to keep (``PLAN_MEMO_SIZE``).
     """
 
-    def __init__(self, domain: OSGDomain, pddl: Domain, size: int = PLAN_MEMO_SIZE) -> None:
+    def __init__(self, domain: OSGDomain, pddl: SkillPDDL, size: int = PLAN_MEMO_SIZE) -> None:
         self.domain = domain
         self.pddl = pddl
         self._answer = lru_cache(maxsize=size)(self._search)

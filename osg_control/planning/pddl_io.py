@@ -1,4 +1,5 @@
-"""PDDL in and out: the skill graph as a domain, a world state plus goal as a problem, parse errors.
+"""PDDL out: the skill graph as a typed lifted domain, a world state plus goal as a problem
+(reading files with named errors: ``planning.pddl_parse``).
 
 Built on the ``pddl`` package's object model, so everything written here parses back with
 ``pddl.parse_domain``/``parse_problem`` and with Fast Downward. Operator costs are integers
@@ -11,9 +12,9 @@ from __future__ import annotations
 
 import math
 import re
-from collections.abc import Callable, Iterable
+from collections.abc import Iterable
+from dataclasses import dataclass
 from pathlib import Path
-from typing import TypeVar
 
 from pddl.action import Action
 from pddl.core import Domain, Problem
@@ -21,13 +22,20 @@ from pddl.formatter import domain_to_string, problem_to_string
 from pddl.logic import Constant, Predicate, Variable
 from pddl.logic.base import And, Formula, Not
 from pddl.logic.functions import EqualTo, Increase, Metric, NumericFunction, NumericValue
-from pddl.parser.domain import DomainParser
-from pddl.parser.problem import ProblemParser
 from pddl.requirements import Requirements
 
 from osg_control.domain.base import Domain as OSGDomain
 from osg_control.domain.base import Task
-from osg_control.errors import PDDLError, PlanningError
+from osg_control.domain.lifted import (
+    AT,
+    AT_OBJECT,
+    NODE_TYPE,
+    OBJECT_TYPE,
+    Atom,
+    Lifting,
+)
+from osg_control.domain.spec import Node
+from osg_control.errors import PlanningError
 from osg_control.io_safety import atomic_write
 from osg_control.planning.graph import SkillGraph, graph_from_specs
 
@@ -35,8 +43,6 @@ DOMAIN_PREFIX = "osg-"
 """A domain ``NAME`` is exported as the PDDL domain ``osg-NAME``."""
 GRAPH_DOMAIN = "osg-graph"
 """The PDDL name of a skill graph that belongs to no registered domain."""
-NODE_TYPE = "node"
-AT = "at"
 COST_SCALE = 1000
 """Cost units per nat of failure: a skill that succeeds with rate p costs -ln(p) * 1000."""
 DEFAULT_COST = 100
@@ -44,9 +50,6 @@ DEFAULT_COST = 100
 MIN_SUCCESS_RATE = 1e-3
 """Rates below this are clamped (cost 6908), so a never-successful skill stays finite."""
 TOTAL_COST = NumericFunction("total-cost")
-
-Atom = tuple[str, ...]
-"""A ground atom as names: ``("door-open",)`` or ``("at", "home")``."""
 
 
 def skill_cost(success_rate: float | None) -> int:
@@ -70,42 +73,127 @@ def pddl_domain_name(domain: OSGDomain) -> str:
     return f"{DOMAIN_PREFIX}{domain.name}"
 
 
-def build_domain(graph: SkillGraph, name: str = GRAPH_DOMAIN) -> Domain:
-    """Export a skill graph as a STRIPS domain with typing and action costs.
+@dataclass(frozen=True)
+class SkillPDDL:
+    """A skill graph's PDDL domain and the lifted view it was written from (which the
+    problems over it need to name their objects and atoms)."""
 
-    Nodes become constants of type ``node``; each skill becomes a parameterless operator named
-    after it: pre ``(at start)`` plus its world preconditions, effects ``(at end)``,
-    ``(not (at start))``, its add/delete facts and ``(increase (total-cost) C)``.
+    domain: Domain
+    lifting: Lifting
+
+
+def graph_lifting(graph: SkillGraph) -> Lifting:
+    """The lifting of a graph without a domain's declarations: 0-ary facts, fixed nodes."""
+    nodes = {n.name: Node(n.name, n.position) for n in graph.nodes}
+    return Lifting({}, (), (), (), graph.facts, nodes, ())
+
+
+def _term(arg: str, lifting: Lifting, variables: dict[str, Variable]) -> Variable | Constant:
+    if arg in variables:
+        return variables[arg]
+    if arg in lifting.instances:
+        return Constant(arg, type_tag=lifting.instances[arg].type)
+    return Constant(arg, type_tag=NODE_TYPE)
+
+
+def _predicate(atom: Atom, lifting: Lifting, variables: dict[str, Variable]) -> Predicate:
+    return Predicate(atom[0], *(_term(a, lifting, variables) for a in atom[1:]))
+
+
+def _declared_predicates(lifting: Lifting, used: set[str]) -> list[Predicate]:
+    """``(at ?n - node)``, ``(at-object ?n - node ?o - object)`` where an operator uses it,
+    then the domain's predicates with their typed parameters."""
+    found = [Predicate(AT, Variable("n", [NODE_TYPE]))]
+    if AT_OBJECT in used:
+        found.append(Predicate(AT_OBJECT, Variable("n", [NODE_TYPE]), _variable("o", OBJECT_TYPE)))
+    for decl in lifting.predicates.values():
+        found.append(Predicate(decl.name, *(_variable(v, t) for v, t in decl.parameters)))
+    return found
+
+
+def _variable(name: str, kind: str) -> Variable:
+    """A typed variable; ``object`` (the root type) is written untyped, as PDDL reads it."""
+    return Variable(name, [] if kind == OBJECT_TYPE else [kind])
+
+
+def build_domain(
+    graph: SkillGraph, name: str = GRAPH_DOMAIN, lifting: Lifting | None = None
+) -> SkillPDDL:
+    """Export a skill graph as a typed STRIPS domain with action costs.
+
+    Nodes become constants of type ``node``; each skill becomes an operator named after it,
+    with the typed parameters of its spec (``lifting``: the domain's lifted view; without
+    one every fact is a 0-ary predicate and no operator has parameters): pre ``(at start)``
+    (``(at-object start ?o)`` for a node anchored to an object) plus its world
+    preconditions, effects the end's atom, ``(not start)``, its add/delete atoms and
+    ``(increase (total-cost) C)``. Instances an operator names directly are ``:constants``.
 
     Args:
-        graph: the skill graph.
+        graph: the skill graph (costs from its success rates).
         name: the PDDL domain name.
+        lifting: the domain's lifted view (``Domain.lifting``), or None.
 
     Returns:
-        The domain object (write it with ``write_pddl``).
+        The domain and its lifting (write the domain with ``write_pddl``).
     """
-    nodes = {n: Constant(n, type_tag=NODE_TYPE) for n in graph.node_names}
-    at = {n: Predicate(AT, node) for n, node in nodes.items()}
-    facts = {f: Predicate(f) for f in graph.facts}
-    actions = []
+    lifting = lifting if lifting is not None else graph_lifting(graph)
+    actions, used = [], set()
     for edge in graph.edges:
-        effects: list[Formula] = [facts[f] for f in edge.add_effects]
-        effects += [Not(facts[f]) for f in edge.del_effects]
+        spec = lifting.skills.get(edge.name)
+        lifted = lifting.lift(
+            edge.name,
+            [(v[1:], t) for v, t in spec.parameters] if spec is not None else (),
+            edge.start,
+            edge.end,
+            edge.preconditions,
+            edge.add_effects,
+            edge.del_effects,
+        )
+        variables = {v: _variable(v[1:], t) for v, t in lifted.parameters}
+
+        def term(atom: Atom, variables: dict[str, Variable] = variables) -> Predicate:
+            return _predicate(atom, lifting, variables)
+
+        used |= {atom[0] for atom in lifted.atoms}
+        effects: list[Formula] = [term(a) for a in lifted.add]
+        effects += [Not(term(a)) for a in lifted.delete]
         # Also for a self-loop: add wins over delete, and the effect stays an (and ...).
-        effects += [at[edge.end], Not(at[edge.start])]
+        effects += [term(lifted.end), Not(term(lifted.start))]
         cost = skill_cost(edge.success_rate) + edge.step_cost
         effects.append(Increase(TOTAL_COST, NumericValue(cost)))
-        pre = And(at[edge.start], *(facts[f] for f in edge.preconditions))
-        actions.append(Action(edge.name, [], precondition=pre, effect=And(*effects)))
-    return Domain(
+        pre = And(term(lifted.start), *(term(a) for a in lifted.pre))
+        actions.append(
+            Action(edge.name, list(variables.values()), precondition=pre, effect=And(*effects))
+        )
+    constants = [Constant(n, type_tag=NODE_TYPE) for n in graph.node_names]
+    named = {arg for action in actions for arg in _constant_names(action)}
+    constants += [
+        Constant(i.name, type_tag=i.type) for i in lifting.instances.values() if i.name in named
+    ]
+    types: dict[str, str | None] = {NODE_TYPE: None}
+    types.update({t: (None if p == OBJECT_TYPE else p) for t, p in lifting.types.items()})
+    pddl = Domain(
         name,
         requirements=[Requirements.STRIPS, Requirements.TYPING, Requirements.ACTION_COSTS],
-        types={NODE_TYPE: None},
-        constants=list(nodes.values()),
-        predicates=[Predicate(AT, Variable("n", [NODE_TYPE])), *facts.values()],
+        types=types,
+        constants=constants,
+        predicates=_declared_predicates(lifting, used),
         functions={TOTAL_COST: None},
         actions=actions,
     )
+    return SkillPDDL(pddl, lifting)
+
+
+def _constant_names(action: Action) -> set[str]:
+    """The objects an action's formulas name (not through its parameters)."""
+    found = set()
+    for formula in (action.precondition, action.effect):
+        for part in getattr(formula, "operands", ()):
+            atom = part.argument if isinstance(part, Not) else part
+            for t in getattr(atom, "terms", ()):
+                if isinstance(t, Constant):
+                    found.add(str(t.name))
+    return found
 
 
 _ATOM = re.compile(r"\(([^()]*)\)|([^\s()]+)")
@@ -140,81 +228,73 @@ def parse_atoms(text: str | Iterable[str]) -> tuple[Atom, ...]:
     return tuple(atoms)
 
 
-def check_atoms(atoms: Iterable[Atom], domain: Domain) -> None:
-    """Check atoms against the domain's predicates (name and arity) and constants (the nodes).
-
-    Args:
-        atoms: the atoms to check.
-        domain: the domain that declares the predicates and constants.
+def _atoms(atoms: Iterable[Atom], lifting: Lifting) -> list[Atom]:
+    """Atoms as a user writes them, resolved (declared fact names, anchored nodes) and
+    checked.
 
     Raises:
-        PlanningError: naming the unknown predicate or object and listing the known ones.
+        PlanningError: an unknown predicate, node or object, or a wrong arity (named).
     """
-    arity = {p.name: p.arity for p in domain.predicates}
-    known_objects = {c.name for c in domain.constants}
-    for atom in atoms:
-        name, args = atom[0], atom[1:]
-        if name not in arity:
-            raise PlanningError(
-                f"unknown predicate {name!r}; known predicates: {', '.join(sorted(arity))}"
-            )
-        if len(args) != arity[name]:
-            raise PlanningError(
-                f"predicate {name!r} takes {arity[name]} argument(s), got {len(args)} in "
-                f"({' '.join(atom)})"
-            )
-        for arg in args:
-            if arg not in known_objects:
-                raise PlanningError(
-                    f"unknown object {arg!r} in ({' '.join(atom)}); known objects: "
-                    f"{', '.join(sorted(known_objects))}"
-                )
-
-
-def _predicates(atoms: Iterable[Atom], domain: Domain) -> list[Predicate]:
-    constants = {c.name: c for c in domain.constants}
-    return [Predicate(atom[0], *(constants[a] for a in atom[1:])) for atom in atoms]
+    resolved = [lifting.resolve(atom) for atom in atoms]
+    for atom in resolved:
+        lifting.check_atom(atom)
+    return resolved
 
 
 def build_problem(
-    domain: Domain,
+    pddl: SkillPDDL,
     node: str,
     world: Iterable[str],
     goal: str | Iterable[str],
     name: str = "task",
 ) -> Problem:
-    """A problem over ``domain``: the robot at ``node``, the world facts true, a goal.
+    """A problem over ``pddl``: the robot at ``node``, the world facts true, a goal.
 
     Args:
-        domain: the domain (its constants are the nodes).
+        pddl: the domain (its constants are the nodes) and its lifting.
         node: the node the robot is at.
-        world: the world facts that hold (names of 0-ary predicates); all others are false.
-        goal: atoms to reach, e.g. ``"door-open cube-in-cabinet"`` or ``"(at home)"``.
+        world: the world facts that hold (the domain's fact names, or atoms such as
+            ``(lifted cube-2)``); all others are false.
+        goal: atoms to reach, e.g. ``"door-open (in-cabinet cube-1)"`` or ``"(at home)"``.
         name: the problem name.
 
     Returns:
-        The problem, minimising total cost.
+        The problem, minimising total cost; its ``:objects`` are the instances that are
+        not the domain's constants.
 
     Raises:
-        PlanningError: an unknown node, fact or goal atom (listing the known ones), or an
-            empty goal.
+        PlanningError: an unknown node, predicate or object, a wrong arity (listing the
+            known ones), or an empty goal.
     """
-    init_atoms = ((AT, node), *((fact,) for fact in world))
+    lifting = pddl.lifting
     goal_atoms = parse_atoms(goal)
     if not goal_atoms:
         raise PlanningError("empty goal: name at least one fact to reach")
-    check_atoms(init_atoms, domain)
-    check_atoms(goal_atoms, domain)
+    if node not in lifting.nodes:
+        raise PlanningError(f"unknown node {node!r}; nodes: {', '.join(sorted(lifting.nodes))}")
+    init_atoms = _atoms([(AT, node), *(lifting.atom(fact) for fact in world)], lifting)
+    goal_resolved = _atoms(goal_atoms, lifting)
+    constants = {str(c.name) for c in pddl.domain.constants}
+    objects = [
+        Constant(i.name, type_tag=i.type)
+        for i in lifting.instances.values()
+        if i.name not in constants
+    ]
+    no_variables: dict[str, Variable] = {}
     return Problem(
         name,
-        domain=domain,
-        init=[EqualTo(TOTAL_COST, NumericValue(0)), *_predicates(init_atoms, domain)],
-        goal=And(*_predicates(goal_atoms, domain)),
+        domain=pddl.domain,
+        objects=objects,
+        init=[
+            EqualTo(TOTAL_COST, NumericValue(0)),
+            *(_predicate(a, lifting, no_variables) for a in init_atoms),
+        ],
+        goal=And(*(_predicate(a, lifting, no_variables) for a in goal_resolved)),
         metric=Metric(TOTAL_COST, Metric.MINIMIZE),
     )
 
 
-def task_problem(pddl: Domain, domain: OSGDomain, task: Task) -> Problem:
+def task_problem(pddl: SkillPDDL, domain: OSGDomain, task: Task) -> Problem:
     """The problem of one of a domain's tasks over its PDDL domain ``pddl``."""
     return build_problem(
         pddl, domain.task_node(task), domain.task_world(task), task.goal, name=task.name
@@ -262,8 +342,10 @@ def export_pddl(
     """
     out = Path(out_dir)
     name = pddl_domain_name(domain)
-    pddl = build_domain(graph if graph is not None else graph_from_specs(domain), name)
-    paths = [write_pddl(pddl, out / f"{name}.pddl", domain_comment(domain))]
+    pddl = build_domain(
+        graph if graph is not None else graph_from_specs(domain), name, domain.lifting
+    )
+    paths = [write_pddl(pddl.domain, out / f"{name}.pddl", domain_comment(domain))]
     for task in domain.tasks:
         comment = (
             f"{task.description}; from {domain.task_node(task)} with "
@@ -275,80 +357,3 @@ def export_pddl(
             )
         )
     return paths
-
-
-_TERMINALS = {
-    "LPAR": "'('",
-    "RPAR": "')'",
-    "NAME": "a name",
-    "QMARK": "'?'",
-    **{k.upper(): f"':{k}'" for k in ("action", "derived", "parameters", "precondition")},
-    "EFFECT": "':effect'",
-}
-"""Readable names of the grammar's terminals, for "expected ..." in error messages."""
-
-
-def _line_of(text: str, message: str) -> int | None:
-    """The first line naming a quoted word of ``message`` (for errors lark gives no line)."""
-    for word in re.findall(r"'([^'\s]+)'", message):
-        pattern = re.compile(rf"(?<![\w-]){re.escape(word)}(?![\w-])")
-        for number, line in enumerate(text.splitlines(), start=1):
-            if pattern.search(line.split(";", 1)[0]):
-                return number
-    return None
-
-
-def _describe(path: Path, text: str, err: Exception) -> str:
-    """``path:line:column: what; expected what`` from a lark error, else the line guessed."""
-    line = getattr(err, "line", None)
-    expected = getattr(err, "expected", None) or getattr(err, "allowed", None) or ()
-    names = ", ".join(sorted(_TERMINALS.get(str(e), str(e)) for e in expected))
-    token = getattr(err, "token", None)
-    if getattr(token, "type", "") == "$END":
-        return f"{path}:{line}: unexpected end of file; expected {names} (unbalanced parentheses?)"
-    if isinstance(line, int) and line > 0 and names:
-        found = repr(str(token)) if token is not None else repr(getattr(err, "char", "?"))
-        where = f"{path}:{line}:{getattr(err, 'column', '?')}"
-        source = text.splitlines()[line - 1].strip()
-        return f"{where}: unexpected {found}; expected {names}\n    {source}"
-    message = str(err).strip().splitlines()[0] if str(err).strip() else type(err).__name__
-    number = _line_of(text, message)
-    return f"{path}:{number}: {message}" if number is not None else f"{path}: {message}"
-
-
-T = TypeVar("T")
-
-
-def _read(path: str | Path, parse: Callable[[str], T], what: str) -> T:
-    """Read and parse a file; callers pass a fresh parser (pddl's keep state between files)."""
-    path = Path(path)
-    try:
-        text = path.read_text()
-    except FileNotFoundError:
-        raise PDDLError(f"{path}: {what} file not found") from None
-    except (OSError, UnicodeDecodeError) as err:
-        raise PDDLError(f"{path}: cannot read {what} file ({err})") from err
-    try:
-        return parse(text)
-    except Exception as err:  # lark, pddl and builtin errors alike: all mean a bad file
-        raise PDDLError(_describe(path, text, err)) from err
-
-
-def read_domain(path: str | Path) -> Domain:
-    """Parse a PDDL domain file.
-
-    Raises:
-        PDDLError: the file is missing or malformed; names the file, the line and what was
-            expected there where the parser says.
-    """
-    return _read(path, DomainParser(), "domain")
-
-
-def read_problem(path: str | Path) -> Problem:
-    """Parse a PDDL problem file.
-
-    Raises:
-        PDDLError: the file is missing or malformed; names the file, the line and what was
-            expected there where the parser says.
-    """
-    return _read(path, ProblemParser(), "problem")

@@ -29,7 +29,7 @@ from osg_control.planning.checks import (
     FormulaChecker,
     sections,
 )
-from osg_control.planning.pddl_io import _describe
+from osg_control.planning.pddl_parse import _describe
 from osg_control.planning.sexpr import Atom, List, lower_ascii, parse
 
 

@@ -3,8 +3,11 @@
 from __future__ import annotations
 
 import random
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
+from osg_control.domain.base import Domain
+from osg_control.domain.lifted import ObjectInstance
+from osg_control.errors import DomainError
 from osg_control.planning.graph import GraphNode, SkillEdge, SkillGraph
 
 
@@ -73,3 +76,22 @@ def random_goal(graph: SkillGraph, seed: int = 0, num_goal_facts: int = 1) -> Ra
     false = [f for f in graph.facts if f not in world]
     wanted = rng.sample(false, min(num_goal_facts, len(false)))
     return RandomGoal(start, world, (f"(at {target})", *wanted))
+
+
+def with_instances(domain: Domain, kind: str, count: int) -> Domain:
+    """The domain with ``count`` instances of type ``kind`` (``KIND-1`` ... added to the
+    ones it declares; the extra ones carry no frame): a synthetic N-object problem of its
+    lifted skills, for planning only (its env still has its own objects).
+
+    Raises:
+        DomainError: ``kind`` is not one of its types.
+        ValueError: ``count`` below the instances it already has of that type.
+    """
+    if kind not in domain.types:
+        raise DomainError(f"domain {domain.name!r} has no type {kind!r}")
+    have = domain.lifting.of_type(kind)
+    if count < len(have):
+        raise ValueError(f"domain {domain.name!r} already has {len(have)} {kind} instances")
+    names = [f"{kind}-{i}" for i in range(1, count + 1) if f"{kind}-{i}" not in have]
+    extra = tuple(ObjectInstance(name, kind) for name in names[: count - len(have)])
+    return replace(domain, name=f"{domain.name}-{count}-{kind}", instances=domain.instances + extra)
