@@ -10,7 +10,6 @@ import sys
 import time
 from pathlib import Path
 
-import mujoco
 import pytest
 
 from osg_control import cli
@@ -44,13 +43,10 @@ BAD_VALUES = [
 
 
 @pytest.mark.parametrize(("argv", "option"), BAD_VALUES)
-def test_bad_values_are_refused_before_any_work(argv, option, capsys, tmp_path, monkeypatch):
+def test_bad_values_are_refused_before_any_work(
+    argv, option, capsys, tmp_path, monkeypatch, no_physics
+):
     monkeypatch.setenv("OSG_CACHE_DIR", str(tmp_path))
-
-    def no_physics(*_: object) -> None:
-        raise AssertionError("a physics step ran before the value was checked")
-
-    monkeypatch.setattr(mujoco, "mj_step", no_physics)  # refused up front, not after an episode
     assert cli.main(argv) == EXIT_CODES["usage"]
     err = capsys.readouterr().err
     assert err.startswith("osg: error: ") and option in err

@@ -8,7 +8,6 @@ import os
 import stat
 import subprocess
 import sys
-import time
 from pathlib import Path
 
 import pytest
@@ -75,12 +74,13 @@ def test_classifier_train_into_package_is_refused(tmp_path, monkeypatch, capsys)
         ["evaluate", "tasks", "--episodes", "100"],
     ],
 )
-def test_unwritable_output_is_refused_before_the_work(argv, tmp_path, monkeypatch, capsys):
+def test_unwritable_output_is_refused_before_the_work(
+    argv, tmp_path, monkeypatch, capsys, no_physics
+):
     monkeypatch.setenv("OSG_CACHE_DIR", str(tmp_path))
     blocker = tmp_path / "a-file"
     blocker.write_text("not a folder")
     out = blocker / "sub"  # cannot be created, even by root
-    started = time.perf_counter()
     if argv[0] == "evaluate":  # its output is the resume cache under $OSG_CACHE_DIR
         monkeypatch.setenv("OSG_CACHE_DIR", str(out))
     else:
@@ -88,7 +88,6 @@ def test_unwritable_output_is_refused_before_the_work(argv, tmp_path, monkeypatc
     assert main(argv) == EXIT_CODES["failure"]
     err = capsys.readouterr().err
     assert str(out) in err and "Traceback" not in err
-    assert time.perf_counter() - started < 10.0
 
 
 def test_atomic_write_os_error_is_named(tmp_path):

@@ -9,7 +9,6 @@ from __future__ import annotations
 import copy
 import json
 import shutil
-import time
 from collections.abc import Callable
 from pathlib import Path
 from typing import Any
@@ -173,14 +172,14 @@ def test_plan_limits_out_of_range_are_usage_errors(
     tmp_path: Path,
     monkeypatch: pytest.MonkeyPatch,
     capsys: pytest.CaptureFixture[str],
+    no_physics: None,
 ) -> None:
     monkeypatch.setenv("OSG_CACHE_DIR", str(tmp_path))
-    started = time.perf_counter()
     assert cli.main(["plan", "--goal", "door-open", *argv]) == EXIT_CODES["usage"]
     captured = capsys.readouterr()
     assert captured.err.startswith(f"osg: error: {option} must ") and "got" in captured.err
     assert captured.out == ""  # nothing planned
-    assert time.perf_counter() - started < 5.0 and not any(tmp_path.iterdir())
+    assert not any(tmp_path.iterdir())
 
 
 COSTS = {
@@ -293,19 +292,18 @@ def test_a_skill_missing_from_the_models_folder_is_named_before_any_work(
     tmp_path: Path,
     monkeypatch: pytest.MonkeyPatch,
     capsys: pytest.CaptureFixture[str],
+    no_physics: None,
 ) -> None:
     cache = tmp_path / "cache"
     monkeypatch.setenv("OSG_CACHE_DIR", str(cache))
     models = _models_folder(tmp_path, skip="grab-handle")
     before = _snapshot(tmp_path)
-    started = time.perf_counter()
     code = cli.main([arg.format(models=models) for arg in argv])
     err = capsys.readouterr().err
     assert code == EXIT_CODES["failure"], err
     assert err.startswith(
         f"osg: error: {models / 'skills'}: no checkpoint of skill(s) grab-handle "
     )
-    assert time.perf_counter() - started < 5.0  # refused up front
     assert _snapshot(tmp_path) == before and not cache.exists()
 
 
