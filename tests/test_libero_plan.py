@@ -7,6 +7,7 @@ achieves named."""
 from __future__ import annotations
 
 import json
+import os
 import statistics
 import time
 from concurrent.futures import ThreadPoolExecutor
@@ -38,7 +39,7 @@ def test_every_task_file_is_planned_and_fast_downward_agrees() -> None:
     if find_fast_downward() is None:
         pytest.skip("Fast Downward (up-fast-downward) is not installed")
     problems = [task_problem(s, i) for s in suite_names() for i in range(task_count(s))]
-    with ThreadPoolExecutor(max_workers=2) as pool:
+    with ThreadPoolExecutor(max_workers=os.cpu_count() or 2) as pool:
         downward = [pool.submit(plan_task, p, "fast-downward") for p in problems]
         built_in, seconds = [], []
         for problem in problems:

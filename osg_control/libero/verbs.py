@@ -33,6 +33,12 @@ NO_POLICY = (
 )
 
 
+PLAN_HELP = (
+    "plan one task's goal, read from its task file, over the lifted domain osg-libero "
+    "(planned only: no skill runs its operators yet)"
+)
+
+
 def _suite_argument(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--suite", required=True, help=f"the suite: {', '.join(suite_names())}")
     parser.add_argument(
@@ -68,14 +74,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
         "--out", type=Path, default=None, help="output folder (default: ./domains/libero/SUITE)"
     )
     export.set_defaults(func=run_export)
-    plan = subparsers.add_parser(
-        "plan",
-        help="plan one LIBERO task's goal over the lifted domain osg-libero",
-        description="Read the task file, and find the cheapest sequence of osg-libero's "
-        "operators that reaches its goal (planned only: the operators' skills are not "
-        "shipped yet).",
-        epilog=EPILOG,
-    )
+    plan = subparsers.add_parser("plan", help=PLAN_HELP, description=PLAN_HELP, epilog=EPILOG)
     plan.add_argument("--suite", required=True, help=f"the suite: {', '.join(suite_names())}")
     plan.add_argument("--task", type=int, required=True, metavar="I", help="the task's index")
     plan.add_argument(
