@@ -18,7 +18,12 @@ import pytest
 pytest.importorskip("libero.libero", reason="needs the libero extra: pip install -e .[libero]")
 
 from osg_control import cli  # noqa: E402
-from osg_control.libero.articulation import implied_init  # noqa: E402
+from osg_control.libero.articulation import (  # noqa: E402
+    DOOR_REGIONS,
+    DRAWER_REGIONS,
+    KNOB_FIXTURES,
+    implied_init,
+)
 from osg_control.libero.operators import SCHEMAS, achievers  # noqa: E402
 from osg_control.libero.pddl_export import UnsupportedPredicateError  # noqa: E402
 from osg_control.libero.plan import plan_task  # noqa: E402
@@ -87,6 +92,41 @@ def test_what_the_file_leaves_unsaid_comes_from_the_articulation_table() -> None
     stove = task_problem("libero_goal_task", 7)  # "turn off the stove": it starts off
     assert Atom("turnoff", ("flat_stove_1",)) in set(implied_init(stove))
     assert plan_task(stove, BUILT_IN).actions == ()
+
+
+def _articulation(kind: str) -> tuple[tuple[str, ...], bool, bool]:
+    """LIBERO's model of a fixture category, read as its env reads it: the regions whose
+    site sits on a body with a joint (drawers: ``object_sites_dict[...].joints``), whether
+    it opens as a whole, whether it turns on. A category without an object model (the
+    tables and the floor are the scene's arena) moves nothing."""
+    from libero.libero.envs.objects import get_object_dict
+
+    if kind not in get_object_dict():
+        return (), False, False
+    fixture = get_object_dict()[kind](name=f"{kind}_1")
+    jointed: dict[str, bool] = {}
+    for part in fixture.worldbody.find("body").findall(".//body"):
+        sites = part.findall(".//site")
+        if not sites:
+            break
+        for site in sites:  # as LIBERO's problems do: the innermost body's joints win
+            jointed[site.get("name")[len(kind) + 3 :]] = bool(part.findall("./joint"))
+    ranges = fixture.object_properties.get("articulation", {})
+    drawers = tuple(name for name, moves in jointed.items() if moves)
+    opens = bool(ranges.get("default_open_ranges")) and not drawers
+    return drawers, opens, bool(ranges.get("default_turnon_ranges"))
+
+
+def test_the_articulation_table_is_libero_s_assets() -> None:
+    """Every fixture category of the 16 suites: its drawers, door and knob as declared in
+    ``articulation`` are what LIBERO's object models have."""
+    kinds = sorted({kind for s in suite_names() for i in range(task_count(s))
+                    for kind in task_problem(s, i).fixtures.values()})  # fmt: skip
+    for kind in kinds:
+        drawers, opens, turns = _articulation(kind)
+        assert set(drawers) == set(DRAWER_REGIONS.get(kind, ())), kind
+        assert opens == (kind in DOOR_REGIONS) and turns == (kind in KNOB_FIXTURES), kind
+    assert {*DRAWER_REGIONS, *DOOR_REGIONS, *KNOB_FIXTURES} <= set(kinds)
 
 
 def test_a_goal_predicate_no_operator_achieves_is_named() -> None:
