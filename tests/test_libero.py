@@ -18,11 +18,8 @@ from osg_control import cli  # noqa: E402
 from osg_control.errors import ControllerError, UsageError  # noqa: E402
 from osg_control.libero.benchmark import run_suite, summarise  # noqa: E402
 from osg_control.libero.env import LiberoEnv  # noqa: E402
-from osg_control.libero.pddl_export import (  # noqa: E402
-    GOAL_OPERATORS,
-    UnsupportedPredicateError,
-    export_problems,
-)
+from osg_control.libero.operators import achievers  # noqa: E402
+from osg_control.libero.pddl_export import UnsupportedPredicateError, export_problems  # noqa: E402
 from osg_control.libero.problem import Atom, LiberoProblem  # noqa: E402
 from osg_control.libero.robot import mounted_panda  # noqa: E402
 from osg_control.libero.scripted import ScriptedPickPlace  # noqa: E402
@@ -42,7 +39,7 @@ def test_every_suite_parses_and_its_goals_have_operators() -> None:
         assert task_count(suite) == 10, suite
         for index in range(task_count(suite)):
             problem = task_problem(suite, index)
-            assert problem.goal and {a.predicate for a in problem.goal} <= set(GOAL_OPERATORS)
+            assert problem.goal and {a.predicate for a in problem.goal} <= set(achievers())
     bowl = task_problem("libero_10", 3)
     assert bowl.objects["akita_black_bowl_1"] == "akita_black_bowl"
     assert bowl.fixtures["white_cabinet_1"] == "white_cabinet"
@@ -63,8 +60,8 @@ def test_export_writes_typed_problems_that_parse_back(tmp_path: Path, capsys) ->
     out = tmp_path / "pddl"
     assert cli.main(["--domain", "libero", "pddl", "export", "--suite", "libero_10",
                      "--out", str(out)]) == 0  # fmt: skip
-    files = sorted(out.glob("*.pddl"))
-    assert len(files) == 10 and len(capsys.readouterr().out.splitlines()) == 10
+    files = sorted(out.glob("*.pddl"))  # the ten problems, then the domain osg-libero.pddl
+    assert len(files) == 11 and len(capsys.readouterr().out.splitlines()) == 11
     parsed = ProblemParser()(files[3].read_text().split("\n", 2)[2])
     objects = {o.name: set(o.type_tags) for o in parsed.objects}
     assert objects["akita_black_bowl_1"] == {"akita_black_bowl"}

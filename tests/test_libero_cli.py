@@ -71,6 +71,8 @@ def test_suites_and_their_published_budgets() -> None:
         (["evaluate", "benchmark", "--suite", "libero_10", "--workers", "0"], "--workers"),
         (["--robot", "ur5", "evaluate", "benchmark", "--suite", "libero_10"], "--robot"),
         (["evaluate", "benchmark", "--suite", "libero_10", "--policy", "vla"], "unknown policy"),
+        (["plan", "--suite", "libero_90", "--task", "0"], "unknown suite 'libero_90'"),
+        (["plan", "--suite", "libero_10", "--task", "0", "--time-limit", "0"], "--time-limit"),
     ],
 )
 def test_bad_input_exits_2_naming_it(argv: list[str], named: str, capsys) -> None:
@@ -103,6 +105,7 @@ def test_an_unknown_domain_lists_the_libero_domain(capsys) -> None:
     [
         ["pddl", "export", "--suite", "libero_10"],
         ["evaluate", "benchmark", "--suite", "libero_10", "--task", "0"],
+        ["plan", "--suite", "libero_10", "--task", "0"],
     ],
 )
 def test_without_the_extra_the_verbs_name_the_install_command(

@@ -3,7 +3,10 @@
 ``osg_control.domain_verbs`` entry point. Importing this module imports no LIBERO code;
 each verb checks its arguments (exit 2, nothing run), then needs the ``libero`` extra.
 
-- ``pddl export --suite S [--task I ...] [--out DIR]``: one PDDL problem per task file;
+- ``pddl export --suite S [--task I ...] [--out DIR]``: the lifted domain ``osg-libero``
+  and one PDDL problem per task file;
+- ``plan --suite S --task I [--planner P] [--time-limit S] [--json]``: the plan for one
+  task's goal (exit status as ``osg plan``'s);
 - ``evaluate benchmark --suite S [--task I ...] [--episodes N | --init-states A:B]
   [--policy scripted-oracle] [--workers W] [--json]``: the benchmark's protocol
   (``libero.benchmark``); without ``--policy`` it refuses (``NoPolicyError``): no skills
@@ -15,6 +18,7 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
+from osg_control.commands.plan import EPILOG, EXIT_STATUS, PLANNER_NAMES, format_plan
 from osg_control.errors import OSGError, UsageError
 from osg_control.libero.suites import INIT_STATES, max_steps, parse_init_states, suite_names
 
@@ -26,6 +30,12 @@ class NoPolicyError(OSGError):
 NO_POLICY = (
     "no LIBERO skills shipped yet: there is no skill graph to evaluate (docs/libero.md); "
     "--policy scripted-oracle runs the scripted data collector instead; nothing was run"
+)
+
+
+PLAN_HELP = (
+    "plan one task's goal, read from its task file, over the lifted domain osg-libero "
+    "(planned only: no skill runs its operators yet)"
 )
 
 
@@ -48,21 +58,35 @@ def _sub_verb(
 
 
 def register(subparsers: argparse._SubParsersAction) -> None:
-    """Add ``pddl export`` and ``evaluate benchmark`` for the LIBERO domain."""
+    """Add ``pddl export``, ``plan`` and ``evaluate benchmark`` for the LIBERO domain."""
     export = _sub_verb(
         subparsers,
         "pddl",
         "export LIBERO's task files as PDDL problems",
         "export",
-        help="write one PDDL problem per task file of a suite",
-        description="Parse each task's BDDL file and write it as a PDDL problem of the "
-        "lifted domain osg-libero (typed objects, init, goal).",
+        help="write the lifted domain and one PDDL problem per task file of a suite",
+        description="Write the lifted domain osg-libero (our operators, typed for the "
+        "suite's categories) and each task's BDDL file as a PDDL problem of it (typed "
+        "objects, init, goal).",
     )
     _suite_argument(export)
     export.add_argument(
         "--out", type=Path, default=None, help="output folder (default: ./domains/libero/SUITE)"
     )
     export.set_defaults(func=run_export)
+    plan = subparsers.add_parser("plan", help=PLAN_HELP, description=PLAN_HELP, epilog=EPILOG)
+    plan.add_argument("--suite", required=True, help=f"the suite: {', '.join(suite_names())}")
+    plan.add_argument("--task", type=int, required=True, metavar="I", help="the task's index")
+    plan.add_argument(
+        "--planner", choices=PLANNER_NAMES, default="auto",
+        help="search (default: auto, as osg plan's)",
+    )  # fmt: skip
+    plan.add_argument(
+        "--time-limit", type=float, default=300.0, metavar="S",
+        help="stop after S seconds with the answer unknown (default: 300)",
+    )  # fmt: skip
+    plan.add_argument("--json", action="store_true", help="print the result as JSON")
+    plan.set_defaults(func=run_plan)
     bench = _sub_verb(
         subparsers,
         "evaluate",
@@ -100,11 +124,35 @@ def run_export(args: argparse.Namespace) -> int:
     from osg_control.libero.tasks import check_task_indices, task_problem
 
     indices = check_task_indices(args.suite, args.task)
-    problems = [task_problem(args.suite, i) for i in indices]
+    suite = [task_problem(args.suite, i) for i in check_task_indices(args.suite, None)]
     out = args.out or Path("domains") / "libero" / args.suite
-    for path in export_problems(problems, out):
+    for path in export_problems([suite[i] for i in indices], out, typed_for=suite):
         print(f"wrote {path}")
     return 0
+
+
+def run_plan(args: argparse.Namespace) -> int:
+    """Plan the task's goal and print the plan (``plan.plan_task``); exit status as
+    ``osg plan``'s (0 a plan, 3 none, 4 a limit), 2 for a goal predicate no operator
+    achieves (named)."""
+    max_steps(args.suite)
+    if args.time_limit <= 0:
+        raise UsageError(f"--time-limit must be positive, got {args.time_limit:g}")
+    from osg_control.json_files import dump_json
+    from osg_control.libero.plan import plan_task
+    from osg_control.libero.tasks import check_task_indices, task_problem
+    from osg_control.planning.task import SearchLimits
+
+    (index,) = check_task_indices(args.suite, [args.task])
+    problem = task_problem(args.suite, index)
+    result = plan_task(problem, args.planner, SearchLimits(time_s=args.time_limit))
+    if args.json:
+        print(dump_json({**result.to_dict(), "suite": args.suite, "task": index,
+                         "name": problem.name}))  # fmt: skip
+    else:
+        print(f"{args.suite} task {index}: {problem.name}")
+        print(format_plan(result))
+    return EXIT_STATUS[result.status]
 
 
 def init_state_range(args: argparse.Namespace) -> range:
