@@ -446,9 +446,19 @@ def _check_objects(where: str, domain: Domain, facts: set[str]) -> None:
             raise DomainError(
                 f"{where}: object {frame.name!r} names unknown world fields {unknown}"
             )
-        if frame.held_fact not in facts:
+        if len(frame.position_fields) != (1 if frame.axis is not None else 2):
+            raise DomainError(
+                f"{where}: object {frame.name!r} field 'position_fields' must name "
+                + ("its travel (one field, with 'axis')" if frame.axis else "its x and y")
+                + f", got {list(frame.position_fields)}"
+            )
+        if frame.held_fact is not None and frame.held_fact not in facts:
             raise DomainError(
                 f"{where}: object {frame.name!r} names unknown fact {frame.held_fact!r}"
             )
-        if not all(lo <= hi for lo, hi in zip(frame.region_low, frame.region_high, strict=True)):
+        if (frame.region_low is None) != (frame.region_high is None):
+            raise DomainError(f"{where}: object {frame.name!r} has one placement corner")
+        if frame.placed and not all(
+            lo <= hi for lo, hi in zip(frame.region_low or (), frame.region_high or (), strict=True)
+        ):
             raise DomainError(f"{where}: object {frame.name!r} has an empty placement region")

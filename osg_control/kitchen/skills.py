@@ -69,7 +69,7 @@ NODES: dict[str, Node] = {
         Node("above-cube", (0.50, -0.20, 0.15), anchor="cube"),
         Node("door-front", (0.42, 0.14, 0.50)),
         Node("cabinet-front", (0.38, 0.30, 0.35)),
-        Node("handle", (0.42, 0.14, 0.325), "closed"),
+        Node("handle", (0.42, 0.14, 0.325), "closed", anchor="door"),
         Node("handle-open", (0.42, 0.54, 0.325), "closed"),
         Node("cube-grasped", (0.50, -0.20, 0.03), "closed", anchor="cube"),
         Node("cube-lifted", (0.50, -0.20, 0.20), "closed", anchor="cube"),
@@ -81,7 +81,14 @@ NODES: dict[str, Node] = {
     )
 }
 """Every node of the skill graph. The first four are where the movement skills meet. The
-cube's nodes are anchored to it (``CUBE``): they move with the cube in the plane."""
+cube's nodes are anchored to it (``CUBE``): they move with the cube in the plane. The
+``handle`` node is anchored to the door (``DOOR``): it moves with the door's perceived
+travel, so a grab after a slide that lost the handle heads for the handle where the door
+now is. ``handle-open`` (the slide's goal: the handle at ``DOOR_OPENED``) and
+``door-front`` (where the movement skills meet, reached with the door open or shut) are
+places along the door's fixed track, not on the door: they stay. The valve's nodes are
+fixed because the valve is: the scene has no field for its place (it cannot be moved), so
+an anchor would never shift them."""
 
 CUBE = ObjectFrame(
     name="cube",
@@ -94,6 +101,21 @@ CUBE = ObjectFrame(
 )
 """The cube: its nodes are given for it at (0.50, -0.20); it is placed anywhere in the 20 x
 20 cm square around that on the counter (clear of the valve and the cabinet's plinth)."""
+
+DOOR = ObjectFrame(
+    name="door",
+    position_fields=("door_opening",),
+    nominal=(0.42, 0.14),
+    axis=(0.0, 1.0),
+    held_fact="holding-handle",
+)
+"""The sliding door, located by its travel along +y (the pose estimator's ``door_opening``
+reading): the ``handle`` node (its grasp, at (0.42, 0.14) with the door shut) moves with it.
+Never placed at random: the door moves only when the robot slides it. Its frame is frozen
+while the handle is held, like the cube's while the cube is (no skill that holds the handle
+acts in the door's frame: the slide heads for the fixed ``handle-open``)."""
+OBJECTS: tuple[ObjectFrame, ...] = (CUBE, DOOR)
+"""The kitchen's objects nodes are anchored to (the domain's and the env's ``objects``)."""
 
 
 WORLD_FACTS: tuple[str, ...] = (
@@ -130,14 +152,14 @@ def _movement(
     start: str,
     end: str,
     door: bool = False,
-    via: tuple[float, float, float] | None = None,
+    via: tuple[tuple[float, float, float], ...] = (),
 ) -> SkillSpec:
     return SkillSpec(
         name=name,
         kind=MOVEMENT,
         start=start,
         end=end,
-        waypoints=((_at(via, "open", VIA_STEPS),) if via else ()) + (_wp(end),),
+        waypoints=tuple(_at(point, "open", VIA_STEPS) for point in via) + (_wp(end),),
         preconditions=frozenset({"hand-empty"}),
         start_facts=frozenset({"door-open"}) if door else frozenset(),
         start_radius=0.15,
@@ -151,7 +173,7 @@ DOOR_OPENED = 0.40
 moved +y by as much."""
 VIA_STEPS = 10
 """Step budget of a movement skill's via point: it lies within about 20 cm of every start."""
-CABINET_CLEAR = (0.34, 0.20, 0.35)
+CABINET_CLEAR = ((0.34, 0.20, 0.35),)
 """Via point of ``move-cabinet-to-cube``: from starts close to the cabinet the straight path
 to the cube swept the wrist (which sits ~9 cm beyond the TCP in +x) into the cabinet's side
 wall (10 % of episodes at sigma = 0); backing off to x = 0.34 m first clears it."""
