@@ -222,3 +222,29 @@ def test_a_grab_after_the_door_was_left_part_open_heads_for_the_handle(
     assert result.success and "door-open" in env.facts(), result.failure
     grabs = [o for o in result.outcomes if o.skill == "grab-handle"]
     assert grabs and all(o.success for o in grabs)  # the first grab held
+
+
+@pytest.mark.parametrize("cube", [(0.60, -0.10), (0.60, -0.30), (0.40, -0.10), (0.40, -0.30)])
+def test_the_script_from_the_cabinet_reaches_every_corner_of_the_cubes_square(
+    cube: tuple[float, float],
+) -> None:
+    """``move-cabinet-to-cube``'s via points move with the cube; with the one via point
+    before, the noise-free script drove the wrist into the cabinet's side wall on the way
+    to the far corner (x 0.60, y -0.10) and never arrived."""
+    from dataclasses import replace
+
+    from osg_control.data.scripted import ScriptedPolicy
+    from osg_control.domain.frames import shifted_skill
+
+    skill = KITCHEN.skill("move-cabinet-to-cube")
+    quiet = replace(skill, script=replace(skill.script, noise_std=1e-9, steps_per_waypoint=60))
+    env = KitchenEnv(skill=quiet)
+    obs, _ = env.reset(seed=0, options={"world": {"cube_pos": [*cube, CUBE.rest_z]}})
+    script = shifted_skill(quiet, env.anchor_offsets["cube"])
+    policy = ScriptedPolicy(script, np.random.default_rng(0), bounds=env.action_bounds)
+    policy.reset()
+    terminated = False
+    while not policy.done and not terminated:
+        obs, _, terminated, _, info = env.step(policy(obs))
+    assert terminated and "failure" not in info
+    np.testing.assert_allclose(obs[:2], cube, atol=0.02)
