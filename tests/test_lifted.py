@@ -46,7 +46,7 @@ def _three_cubes():  # type: ignore[no-untyped-def]
         dataclasses.replace(i, frame=i.name) if i.name in ("cube-2", "cube-3") else i
         for i in domain.instances
     )
-    return dataclasses.replace(domain, objects=(cube, *frames), instances=instances)
+    return dataclasses.replace(domain, objects=(*KITCHEN.objects, *frames), instances=instances)
 
 
 THREE = _three_cubes()
@@ -120,7 +120,12 @@ def test_skills_are_lifted_over_their_parameters() -> None:
             "names unknown object 'lid'",
         ),
         (
-            {"objects": (dataclasses.replace(KITCHEN.objects[0], held_fact="(holding cube-5)"),)},
+            {
+                "objects": (
+                    dataclasses.replace(KITCHEN.objects[0], held_fact="(holding cube-5)"),
+                    *KITCHEN.objects[1:],
+                )
+            },
             r"field 'objects\[cube\].held_fact' names unknown fact '\(holding cube-5\)'",
         ),
     ],

@@ -74,9 +74,9 @@ def test_domain_has_one_typed_operator_per_skill_with_effects_and_cost() -> None
     text = domain_to_string(domain)
     assert (
         "(:action slide-door-open\n        :parameters (?d - door)\n"
-        "        :precondition (and (at handle) (door-closed ?d) (holding handle-1))\n"
+        "        :precondition (and (at-object handle ?d) (door-closed ?d) (holding handle-1))\n"
         "        :effect (and (door-open ?d) (not (door-closed ?d)) "
-        "(at handle-open) (not (at handle)) "
+        "(at handle-open) (not (at-object handle ?d)) "
         f"(increase (total-cost) {DEFAULT_COST}))"
     ) in text
     assert (

@@ -16,7 +16,7 @@
      (:action grab-handle
         :parameters (?d - door)
         :precondition (and (at door-front) (door-closed ?d) (hand-empty))
-        :effect (and (holding handle-1) (not (hand-empty)) (at handle) (not (at door-front)) (increase (total-cost) 25))
+        :effect (and (holding handle-1) (not (hand-empty)) (at-object handle ?d) (not (at door-front)) (increase (total-cost) 25))
     )
      (:action leave-valve
         :parameters (?v - valve)
@@ -100,7 +100,7 @@
     )
      (:action slide-door-open
         :parameters (?d - door)
-        :precondition (and (at handle) (door-closed ?d) (holding handle-1))
-        :effect (and (door-open ?d) (not (door-closed ?d)) (at handle-open) (not (at handle)) (increase (total-cost) 5))
+        :precondition (and (at-object handle ?d) (door-closed ?d) (holding handle-1))
+        :effect (and (door-open ?d) (not (door-closed ?d)) (at handle-open) (not (at-object handle ?d)) (increase (total-cost) 5))
     )
 )

@@ -81,14 +81,16 @@ def placed_start_options(
 
 
 def touches_objects(domain: Domain, skill: SkillSpec) -> bool:
-    """Whether a skill's data depend on where the domain's objects lie: it acts in an
-    object's frame, starts at a node anchored to one, or starts holding one. The others
-    (the kitchen's door and valve skills) are recorded with the objects where the scene has
-    them, their data the same as before objects could move."""
-    objects = {frame.name for frame in domain.objects}
+    """Whether a skill's data depend on where the domain's placed objects lie
+    (``ObjectFrame.placed``): it acts in such an object's frame, starts at a node anchored
+    to one, or starts holding one. The others (the kitchen's door and valve skills; the
+    door is an object its handle's node moves with, but Algorithm 1 never places it) are
+    recorded with the objects where the scene has them, their data the same as before
+    objects could move."""
+    objects = {frame.name for frame in domain.objects if frame.placed}
     return bool(
-        skill_frame(domain, skill) is not None
-        or domain.nodes[skill.start].anchor is not None
+        skill_frame(domain, skill) in objects
+        or domain.nodes[skill.start].anchor in objects
         or skill.holding in objects
     )
 

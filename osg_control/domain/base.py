@@ -218,7 +218,11 @@ class Domain:
             )
         except DomainError as err:
             raise DomainError(f"domain {self.name!r}: {err}") from None
-        atoms = [(f"objects[{o.name}].held_fact", (o.held_fact,)) for o in self.objects]
+        atoms = [
+            (f"objects[{o.name}].held_fact", (o.held_fact,))
+            for o in self.objects
+            if o.held_fact is not None
+        ]
         for field_name, named in [*_fact_fields(self), *atoms]:
             for fact in named:  # a fact's name, or an atom over its objects: (holding cube-2)
                 try:
@@ -503,5 +507,15 @@ def _check_objects(where: str, domain: Domain) -> None:
             raise DomainError(
                 f"{where}: object {frame.name!r} names unknown world fields {unknown}"
             )
-        if not all(lo <= hi for lo, hi in zip(frame.region_low, frame.region_high, strict=True)):
+        if len(frame.position_fields) != (1 if frame.axis is not None else 2):
+            raise DomainError(
+                f"{where}: object {frame.name!r} field 'position_fields' must name "
+                + ("its travel (one field, with 'axis')" if frame.axis else "its x and y")
+                + f", got {list(frame.position_fields)}"
+            )
+        if (frame.region_low is None) != (frame.region_high is None):
+            raise DomainError(f"{where}: object {frame.name!r} has one placement corner")
+        if frame.placed and not all(
+            lo <= hi for lo, hi in zip(frame.region_low or (), frame.region_high or (), strict=True)
+        ):
             raise DomainError(f"{where}: object {frame.name!r} has an empty placement region")

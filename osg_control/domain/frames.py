@@ -59,22 +59,33 @@ def displacement(frame: ObjectFrame, x: float, y: float) -> np.ndarray:
     return np.array([x - frame.nominal[0], y - frame.nominal[1], 0.0])
 
 
+def reading_displacement(frame: ObjectFrame, values: Sequence[float]) -> np.ndarray:
+    """An object's displacement from its values of ``frame.position_fields``: its (x, y),
+    or its travel along ``frame.axis``."""
+    if frame.axis is None:
+        return displacement(frame, float(values[0]), float(values[1]))
+    travel = float(values[0])
+    return np.array([travel * frame.axis[0], travel * frame.axis[1], 0.0])
+
+
 def offsets_of(
     objects: Sequence[ObjectFrame], world_fields: Sequence[str], world: np.ndarray
 ) -> dict[str, np.ndarray]:
     """Each object's displacement in a world vector (named by ``world_fields``)."""
     index = {name: i for i, name in enumerate(world_fields)}
-    found = {}
-    for frame in objects:
-        x, y = (float(world[index[f]]) for f in frame.position_fields)
-        found[frame.name] = displacement(frame, x, y)
-    return found
+    return {
+        frame.name: reading_displacement(frame, [world[index[f]] for f in frame.position_fields])
+        for frame in objects
+    }
 
 
 def sample_placements(domain: Domain, rng: np.random.Generator) -> dict[str, np.ndarray]:
-    """A uniform placement of every object in its region (x, y, and its resting z)."""
+    """A uniform placement of every placed object (``ObjectFrame.placed``) in its region
+    (x, y, and its resting z); the others stay where the scene has them."""
     placed = {}
     for frame in domain.objects:
+        if frame.region_low is None or frame.region_high is None:
+            continue
         xy = rng.uniform(frame.region_low, frame.region_high)
         placed[frame.name] = np.array([xy[0], xy[1], frame.rest_z])
     return placed

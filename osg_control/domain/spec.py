@@ -58,23 +58,36 @@ class ObjectFrame:
 
     Attributes:
         name: the object (as the nodes' ``anchor`` names it).
-        position_fields: the world fields of its x and y position [m].
-        nominal: the (x, y) the anchored nodes' positions are given for [m].
+        position_fields: the world fields of its x and y position [m]; or, for an object
+            that moves along a fixed track (a sliding door), the one field of its travel
+            along ``axis`` [m].
+        nominal: the (x, y) the anchored nodes' positions are given for [m] (a tracked
+            object: its place at zero travel).
         rest_z: the height of its centre when it rests where it is placed [m].
         region_low, region_high: the (x, y) corners of its placement region [m] (Algorithm
-            1's random placements and ``--randomize-objects``).
+            1's random placements and ``--randomize-objects``); None: never placed at random
+            (it moves only when the robot moves it).
         held_fact: the fact that holds while the robot holds it (its frame is then frozen
             where it was picked up): a fact name, or an atom over the domain's objects
-            (``(holding cube-2)``), so each object's grasp is tracked on its own.
+            (``(holding cube-2)``), so each object's grasp is tracked on its own; None:
+            never held.
+        axis: the unit (x, y) direction of a tracked object's travel; None: placed freely
+            in the plane (two ``position_fields``).
     """
 
     name: str
-    position_fields: tuple[str, str]
+    position_fields: tuple[str, ...]
     nominal: tuple[float, float]
-    rest_z: float
-    region_low: tuple[float, float]
-    region_high: tuple[float, float]
-    held_fact: str
+    rest_z: float = 0.0
+    region_low: tuple[float, float] | None = None
+    region_high: tuple[float, float] | None = None
+    held_fact: str | None = None
+    axis: tuple[float, float] | None = None
+
+    @property
+    def placed(self) -> bool:
+        """Whether Algorithm 1 and ``--randomize-objects`` place it at random."""
+        return self.region_low is not None and self.region_high is not None
 
 
 @dataclass(frozen=True)

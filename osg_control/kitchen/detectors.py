@@ -3,7 +3,7 @@
 A robot has no contact oracle: it believes it holds the cube when its gripper is commanded
 shut, the finger width reads the cube's width and the perceived cube lies between the
 fingers; the handle likewise with the fin's width and the handle's perceived place (the
-``handle`` node moved along the door's perceived opening).
+``handle`` node moved with the door's perceived travel, ``skills.DOOR``).
 """
 
 from __future__ import annotations
@@ -12,8 +12,9 @@ import math
 
 import numpy as np
 
+from osg_control.domain.frames import reading_displacement
 from osg_control.environment.success import GRIPPER_CLOSED_CMD
-from osg_control.kitchen.skills import NODES
+from osg_control.kitchen.skills import DOOR, NODES
 from osg_control.kitchen.world import CUBE_HALF_SIZE, WORLD_FIELDS
 from osg_control.perception.sensors import ANGLE, DETECTED, POSITION, QUATERNION
 
@@ -48,6 +49,7 @@ grasp's offset from the object's centre."""
 _FIELD = {name: i for i, name in enumerate(WORLD_FIELDS)}
 _CUBE_POSITION = slice(_FIELD["cube_x"], _FIELD["cube_z"] + 1)
 assert WORLD_FIELDS[_CUBE_POSITION] == ("cube_x", "cube_y", "cube_z")
+_DOOR_FIELD = _FIELD[DOOR.position_fields[0]]
 _HANDLE_SHUT = np.asarray(NODES["handle"].position, dtype=float)
 """The handle node with the door shut [m]."""
 
@@ -69,8 +71,7 @@ def detect_grasps(state: np.ndarray, world: np.ndarray) -> np.ndarray:
     """
     detected = np.array(world, dtype=float)
     cube = detected[_CUBE_POSITION]
-    handle = _HANDLE_SHUT.copy()
-    handle[1] += detected[_FIELD["door_opening"]]  # the door slides along y
+    handle = _HANDLE_SHUT + reading_displacement(DOOR, (detected[_DOOR_FIELD],))
     detected[_FIELD["cube_grasped"]] = float(_grips(state, CUBE_GRIP_WIDTH, cube))
     detected[_FIELD["handle_grasped"]] = float(_grips(state, HANDLE_GRIP_WIDTH, handle))
     return detected

@@ -10,7 +10,7 @@ from osg_control.domain.base import Domain, StartRegion
 from osg_control.kitchen.objects import FACT_ATOMS, INSTANCES, PREDICATES, TYPES
 from osg_control.kitchen.paper import PUBLISHED
 from osg_control.kitchen.scene import ROBOT_MOUNTS
-from osg_control.kitchen.skills import CUBE, NODES, SKILLS, WORLD_FACTS
+from osg_control.kitchen.skills import NODES, OBJECTS, SKILLS, WORLD_FACTS
 from osg_control.kitchen.tasks import DEFAULT_WORLD, KITCHEN_TASKS
 from osg_control.kitchen.world import WORLD_FIELDS, world_facts, world_state_from_array
 from osg_control.paths import PACKAGE_DIR
@@ -81,7 +81,7 @@ def kitchen_domain() -> Domain:
         make_env=make_kitchen_env,
         hand_empty="hand-empty",
         watched_facts=WATCHED_FACTS,
-        objects=(CUBE,),
+        objects=OBJECTS,
         perceptions=("paper", "robot", "sim", "camera"),
         defaults_dir=PACKAGE_DIR / "kitchen" / "defaults",
         env_id="osg/Kitchen-v0",

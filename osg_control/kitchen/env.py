@@ -17,7 +17,7 @@ import numpy as np
 
 from osg_control.control.description import RobotDescription
 from osg_control.control.robot_model import workspace
-from osg_control.domain.frames import placement_offsets
+from osg_control.domain.frames import placement_offsets, reading_displacement
 from osg_control.domain.spec import SkillSpec
 from osg_control.environment.arm_env import ArmEnv, EnvConfig
 from osg_control.errors import SkillSpecError, lookup
@@ -26,7 +26,14 @@ from osg_control.kitchen.detectors import WORLD_SENSORS, detect_grasps
 from osg_control.kitchen.domain import DEFAULT_ROBOT, facts_of
 from osg_control.kitchen.options import WORLD_OPTIONS, check_world_options
 from osg_control.kitchen.scene import SceneIndex, build_kitchen_model, kitchen_robot
-from osg_control.kitchen.skills import CUBE, DOOR_OPENED, NODES, SKILLS_BY_NAME, WORLD_FACTS
+from osg_control.kitchen.skills import (
+    DOOR,
+    DOOR_OPENED,
+    NODES,
+    OBJECTS,
+    SKILLS_BY_NAME,
+    WORLD_FACTS,
+)
 from osg_control.kitchen.world import (
     CUBE_HALF_SIZE,
     WorldState,
@@ -58,7 +65,7 @@ class KitchenEnv(ArmEnv):
     world_options = WORLD_OPTIONS
     holdable = tuple(_FINGER_ON)
     world_sensors = WORLD_SENSORS
-    objects = (CUBE,)
+    objects = OBJECTS
     camera_perception = KITCHEN_CAMERAS
 
     def __init__(
@@ -93,10 +100,15 @@ class KitchenEnv(ArmEnv):
     """The domain's ``facts_of`` (``world.world_facts`` of a world-state vector)."""
 
     def placement_offsets(self, world: dict[str, Any]) -> dict[str, np.ndarray]:
-        """The cube's displacement when ``world`` places it (``cube_pos``)."""
-        if world.get("cube_pos") is None:
-            return {}
-        return placement_offsets(self.objects, {"cube": np.asarray(world["cube_pos"], float)})
+        """The cube's displacement when ``world`` places it (``cube_pos``), the door's when
+        it slides it (``door_opening``)."""
+        offsets = {}
+        if world.get("cube_pos") is not None:
+            cube = np.asarray(world["cube_pos"], float)
+            offsets = placement_offsets(self.objects, {"cube": cube})
+        if world.get("door_opening") is not None:
+            offsets["door"] = reading_displacement(DOOR, [float(world["door_opening"])])
+        return offsets
 
     def placement_world(
         self, placements: dict[str, np.ndarray], holding: str | None

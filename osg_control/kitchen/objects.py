@@ -9,12 +9,13 @@ TYPES: dict[str, str] = {"cube": "object", "door": "object", "handle": "object",
 """Object types, each a direct subtype of ``object``."""
 INSTANCES: tuple[ObjectInstance, ...] = (
     ObjectInstance("cube-1", "cube", frame="cube"),
-    ObjectInstance("door-1", "door"),
+    ObjectInstance("door-1", "door", frame="door"),
     ObjectInstance("handle-1", "handle"),
     ObjectInstance("valve-1", "valve"),
 )
 """The scene's objects: one cube (located by the ``CUBE`` frame, which its nodes are
-anchored to), the cabinet's sliding door, its handle and the valve."""
+anchored to), the cabinet's sliding door (the ``DOOR`` frame: its travel, which the
+``handle`` node follows), its handle and the valve."""
 PREDICATES: tuple[PredicateDecl, ...] = (
     PredicateDecl("hand-empty"),
     PredicateDecl("holding", (("o", "object"),)),
