@@ -18,8 +18,8 @@ floating-point rounding only (the sum is formed in another order), and the impli
 integrator's velocity derivative is ``-kv`` in both.
 
 The arm's inertial coupling still overshoots that set-point (up to 1.2x the limit under
-full-speed commands), so the joint drive also saturates the speed, as the Franka's joint
-controllers limit their joints' velocities: after a physics substep in which a joint ran
+full-speed commands), so the joint drive also saturates the speed, as an industrial arm's
+joint controllers limit their joints' velocities: after a physics substep in which a joint ran
 faster than its limit, ``saturate_joint_speeds`` sets its velocity to the limit and its
 position to where the substep would have taken it at that speed. ``SpeedWatch`` reads every
 substep's joint speeds from MuJoCo's sensor history (``add_speed_sensors``) after substeps

@@ -14,7 +14,8 @@
 - ``sim``: the simulator's state itself, an oracle (reported as such wherever it is used).
 
 The gripper's force is the gripper motor's own effort (the actuator force the robot drives;
-the Franka Hand reports its grasp force the same way), not a fingertip sensor.
+a parallel gripper's controller reports its grasp force the same way), not a fingertip
+sensor.
 """
 
 from __future__ import annotations
