@@ -118,3 +118,14 @@ def test_the_adapters_ik_solves_minks_qp_of_the_former_arm_ik(adapter) -> None:
         ours = adapter.ik.solve_velocity(q, target, turned)
         np.testing.assert_allclose(ours, expected, rtol=0, atol=1e-5)
     assert "daqp" in qpsolvers.available_solvers
+
+
+def test_run_refuses_a_video_camera_the_env_cannot_film_from(
+    capsys: pytest.CaptureFixture[str],
+) -> None:
+    """The adapter's frames are the library env's own render: ``--video-camera`` is refused
+    (exit 2) rather than ignored."""
+    argv = ["--domain", "franka-kitchen", "run", "--goal", "microwave-open"]
+    argv += ["--video-camera", "overview", "--episodes", "1"]
+    assert cli.main(argv) == 2
+    assert "FrankaKitchenAdapter renders its own view" in capsys.readouterr().err
