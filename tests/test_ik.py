@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from dataclasses import replace
+from typing import Any
 
 import mink
 import numpy as np
@@ -118,11 +119,19 @@ def test_backends_build_the_same_qp(
         )
 
 
+AXIS_COSTS = {
+    "scalar": {},
+    "per-axis": {"position_cost": (1.0, 0.8, 1.2), "orientation_cost": (0.5, 0.5, 0.0)},
+}
+"""The frame task's weights: the defaults, and one per TCP axis with the yaw relaxed."""
+
+
+@pytest.mark.parametrize("costs", AXIS_COSTS.values(), ids=AXIS_COSTS.keys())
 @pytest.mark.parametrize("robot", [PANDA, TOY], ids=["panda", "toy6"])
-def test_qp_is_minks_build_ik(robot: RobotDescription) -> None:
+def test_qp_is_minks_build_ik(robot: RobotDescription, costs: dict[str, Any]) -> None:
     """The shared assembly reproduces ``mink.build_ik`` with mink's own tasks and limits,
-    for seven joints and for six."""
-    config = IKConfig(backend="mink")
+    for seven joints and for six, with one weight for three axes or one per axis."""
+    config = IKConfig(backend="mink", **costs)
     backend = MinkBackend(config, robot)
     controller = DiffIKController(robot, config)
     configuration = mink.Configuration(backend.model)
@@ -165,11 +174,12 @@ def test_qp_is_minks_build_ik(robot: RobotDescription) -> None:
         )
 
 
+@pytest.mark.parametrize("costs", AXIS_COSTS.values(), ids=AXIS_COSTS.keys())
 @pytest.mark.parametrize("robot", [PANDA, TOY], ids=["panda", "toy6"])
-def test_qp_is_pinks_build_ik(robot: RobotDescription) -> None:
+def test_qp_is_pinks_build_ik(robot: RobotDescription, costs: dict[str, Any]) -> None:
     """The Pinocchio backend's QP is ``pink.build_ik`` with Pink's tasks and limits, for
-    seven joints and for six."""
-    config = IKConfig(backend="pinocchio")
+    seven joints and for six, with one weight for three axes or one per axis."""
+    config = IKConfig(backend="pinocchio", **costs)
     backend = PinocchioBackend(config, robot)
     model = backend.model
     frame_task = pink.FrameTask(
@@ -457,3 +467,26 @@ def test_posture_of_another_arm_is_refused(backend: str) -> None:
     """A posture is checked against the robot's joints when the controller is built."""
     with pytest.raises(ControllerError, match="posture has 6 values, robot 'panda' has 7"):
         DiffIKController(PANDA, IKConfig(backend=backend, posture=(0.0,) * 6))
+
+
+@pytest.mark.parametrize("backend", ["mink", "pinocchio"])
+def test_a_relaxed_axis_leaves_its_error_out_of_the_qp(backend: str) -> None:
+    """With no weight on the rotation about the TCP's z axis (a six-joint arm giving up
+    yaw), a target turned only about that axis pulls as the current pose does: the QP's
+    linear term is the posture's alone (its Hessian still differs: ``Jlog6`` of the error
+    couples the other rows), where the default weights pull toward the turn."""
+    config = IKConfig(backend=backend, orientation_cost=(0.5, 0.5, 0.0))
+    controller = DiffIKController(TOY, config)
+    for q, _, _ in random_cases(controller, 10, seed=5):
+        pos, rot = controller.tcp_pose(q)
+        turned = rot @ Rotation.from_rotvec([0.0, 0.0, 0.3]).as_matrix()
+        here, yawed = (controller.backend.build_qp(q, pos, r, False) for r in (rot, turned))
+        np.testing.assert_allclose(yawed.q, here.q, rtol=0, atol=1e-12)
+        weighted = DiffIKController(TOY, IKConfig(backend=backend)).backend
+        assert np.abs(weighted.build_qp(q, pos, turned, False).q - here.q).max() > 1e-3
+
+
+@pytest.mark.parametrize("cost", [(1.0, 2.0), -0.5, float("nan"), "high", (1.0, 1.0, -1.0)])
+def test_a_frame_weight_that_is_not_one_or_three_numbers_is_refused(cost: Any) -> None:
+    with pytest.raises(ControllerError, match="IKConfig.orientation_cost must be one or three"):
+        IKConfig(orientation_cost=cost)

@@ -188,6 +188,14 @@ def test_an_inconsistent_description_is_refused_with_its_field(
             "TCP frame 'no_such_frame' not in its Pinocchio model",
         ),
         (
+            {"tcp": dataclasses.replace(PANDA.tcp, body="no_such_body")},
+            "TCP body 'no_such_body' not in the model",
+        ),
+        (
+            {"arm": _arm(names=(*PANDA.arm.names[:6], "wrist"))},
+            "joint 'wrist' is not a hinge or slide joint of its MuJoCo model",
+        ),
+        (
             {"gripper": dataclasses.replace(PANDA.gripper, joints=("finger",))},
             "joint 'finger' is not a hinge or slide joint of its MuJoCo model",
         ),

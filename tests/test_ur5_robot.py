@@ -5,6 +5,7 @@ episode run through ``osg --robot ur5``."""
 from __future__ import annotations
 
 import json
+import re
 from dataclasses import replace
 from pathlib import Path
 
@@ -15,7 +16,7 @@ import pytest
 from osg_control import cli
 from osg_control.control.robot_model import workspace
 from osg_control.domain.reach import UnreachableError, unreachable
-from osg_control.domain.registry import get_domain
+from osg_control.domain.registry import domain_override, get_domain
 from osg_control.errors import EnvOptionError
 from osg_control.kitchen.options import check_cube_position
 from osg_control.kitchen.scene import ROBOT_MOUNTS
@@ -55,6 +56,21 @@ def test_a_robot_out_of_reach_is_refused_before_any_episode() -> None:
     with pytest.raises(UnreachableError, match=r"'ur5'.*'release-handle' waypoint 1"):
         replace(kitchen, mounts={}).with_robot("ur5")
     assert unreachable(kitchen, get_robot("panda")) == []
+
+
+@pytest.mark.usefixtures("no_physics")
+def test_osg_robot_out_of_reach_exits_1_naming_it_before_any_episode(
+    capsys: pytest.CaptureFixture[str],
+) -> None:
+    """The same through the command line: ``osg --robot ur5 run`` on a kitchen that mounts
+    it at the origin exits 1 naming the waypoint it misses, no physics step run."""
+    unmounted = replace(get_domain("kitchen"), mounts={})
+    with domain_override(unmounted):
+        code = cli.main(["--robot", "ur5", "run", "--goal", "door-open", "--episodes", "1"])
+    assert code == 1
+    assert re.search(
+        r"robot 'ur5' .*cannot reach.*'release-handle' waypoint 1", capsys.readouterr().err
+    )
 
 
 def test_the_cube_option_is_checked_against_the_robots_workspace() -> None:

@@ -134,10 +134,12 @@ def _rate(value: float | None) -> str:
     return "none" if value is None else f"{value:.3f}"
 
 
-def manifest_command(domain: str, args: argparse.Namespace) -> str:
-    """The command that reproduces this run (the manifest's ``command``)."""
+def manifest_command(domain: Domain, args: argparse.Namespace) -> str:
+    """The command that reproduces this run (the manifest's ``command``): with the robot
+    ``--robot`` chose, when it is not the domain's own."""
+    robot = "" if domain.robot_is_default else f" --robot {domain.robot}"
     return (
-        f"osg --domain {domain} reproduce{' --quick' if args.quick else ''}"
+        f"osg --domain {domain.name}{robot} reproduce{' --quick' if args.quick else ''}"
         f"{' --early-stop' if args.early_stop else ''}"
         f"{'' if args.filter is None else f' --filter {args.filter}'}"
         f"{'' if args.perception is None else f' --perception {args.perception}'}"
@@ -193,10 +195,12 @@ def run(args: argparse.Namespace) -> int:
         reach_perception=perception_of(args, domain),
         filter_gain=args.filter,
         train_threads=args.threads,
-        command=manifest_command(domain.name, args),
+        command=manifest_command(domain, args),
         invocation="osg " + " ".join(map(shlex.quote, sys.argv[1:])),
     )
-    done = reproduce(config, log=lambda text: print(text, flush=True))
+    # With --json, stdout is the JSON alone: the stages' text goes to stderr.
+    text_out = sys.stderr if args.json else sys.stdout
+    done = reproduce(config, log=lambda text: print(text, file=text_out, flush=True))
     if args.json:
         print(dump_json(done.figures))
     else:

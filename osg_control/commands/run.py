@@ -210,8 +210,13 @@ def _film_from(env: Any, camera: str) -> None:
     """Point ``render`` (the video) at a scene camera.
 
     Raises:
-        UsageError: a camera the scene lacks (its cameras listed; exit 2, nothing run).
+        UsageError: an env that films from its own view (an outside env's ``render``), or
+            a camera the scene lacks (its cameras listed); exit 2, no episode run.
     """
+    if not isinstance(getattr(env, "camera", None), str):
+        raise UsageError(
+            f"--video-camera: {type(env).__name__} renders its own view; it takes no camera"
+        )
     cameras = [env.model.camera(i).name for i in range(env.model.ncam)]
     if camera not in cameras:
         raise UsageError(

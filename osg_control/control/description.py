@@ -8,7 +8,8 @@ instance of it plus the two builders of its models:
   joints, geoms, inertias, the gripper's joints and their coupling; no actuators, no TCP
   site, no keyframe: the core adds those from the description);
 - ``ModelSource.pinocchio``: a callable returning the arm-only ``pinocchio.Model`` (the
-  gripper's joints locked; ``robot_model.reduced_urdf_model`` builds one from a URDF) in
+  gripper's joints locked; ``robot_model.reduced_urdf_model`` builds one from a URDF,
+  ``mujoco_pinocchio.pinocchio_arm_from_mujoco`` from a compiled MJCF) in
   which ``TcpFrame.frame`` is the TCP.
 
 Tool convention: the TCP frame's z axis points out of the tool (the approach direction)

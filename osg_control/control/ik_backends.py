@@ -31,8 +31,11 @@ class IKConfig:
         backend: ``"mink"`` (MuJoCo model) or ``"pinocchio"`` (Pinocchio on the URDF).
         solver: the QP solver: ``"daqp"`` (default) or ``"osqp"``.
         dt: integration step of one solve [s] (the env's control period).
-        position_cost: TCP position task weight [1/m].
-        orientation_cost: TCP orientation task weight [1/rad].
+        position_cost: TCP position task weight [1/m]: one for the three axes, or one per
+            axis of the TCP frame (x, y, z), as mink's and Pink's ``FrameTask`` take it.
+        orientation_cost: TCP orientation task weight [1/rad], one or one per TCP axis: an
+            arm with fewer than six joints relaxes what it cannot hold (e.g. ``(0.5, 0.5,
+            0.0)`` frees the rotation about the approach axis).
         posture_cost: posture task weight toward ``posture`` [1/rad] (keep it low).
         gain: task gain in (0, 1]: the fraction of the error to remove in one step.
         lm_damping: Levenberg-Marquardt damping of the frame task (unitless).
@@ -46,8 +49,8 @@ class IKConfig:
     backend: str = "mink"
     solver: str = "daqp"
     dt: float = 0.05
-    position_cost: float = 1.0
-    orientation_cost: float = 0.5
+    position_cost: float | tuple[float, float, float] = 1.0
+    orientation_cost: float | tuple[float, float, float] = 0.5
     posture_cost: float = 1e-3
     gain: float = 1.0
     lm_damping: float = 1e-6
@@ -71,6 +74,31 @@ class IKConfig:
             )
         if not (0.0 < self.gain <= 1.0 and 0.0 < self.limit_gain <= 1.0 and self.dt > 0):
             raise ControllerError("IKConfig: gain and limit_gain must be in (0, 1], dt > 0")
+        for name in ("position_cost", "orientation_cost"):
+            axis_costs(name, getattr(self, name))
+
+    @property
+    def frame_cost(self) -> np.ndarray:
+        """The TCP task's six weights (position axes, then orientation axes)."""
+        position = axis_costs("position_cost", self.position_cost)
+        return np.concatenate([position, axis_costs("orientation_cost", self.orientation_cost)])
+
+
+def axis_costs(name: str, cost: float | tuple[float, ...]) -> np.ndarray:
+    """A frame task weight as its three per-axis values.
+
+    Raises:
+        ControllerError: not one or three finite numbers >= 0.
+    """
+    try:
+        values = np.atleast_1d(np.asarray(cost, dtype=float))
+    except (TypeError, ValueError):
+        values = np.array([np.nan])
+    if values.shape not in ((1,), (3,)) or not (np.isfinite(values).all() and values.min() >= 0):
+        raise ControllerError(
+            f"IKConfig.{name} must be one or three finite numbers >= 0, got {cost!r}"
+        )
+    return np.broadcast_to(values, (3,)).copy()
 
 
 class Backend:
@@ -105,7 +133,7 @@ class Backend:
         self.upper = np.array(robot.arm.upper, dtype=float)
         self.velocity_limit = np.array(robot.arm.velocity) * config.velocity_scale
         # Constants of the QP, so that build_qp does the per-step arithmetic only.
-        cost = np.array([config.position_cost] * 3 + [config.orientation_cost] * 3)
+        cost = config.frame_cost
         self._cost_column = cost[:, None]
         self._gain_cost = config.gain * cost
         self.posture = np.asarray(posture, dtype=float)

@@ -299,18 +299,12 @@ class ArmEnv(Perceiving, StartPlacement, gym.Env):
         self._steps += 1
         world = self.read_world()
         facts = self.facts_of(world)
-        reward = 0.0
-        terminated = False
-        if failure is None and self.skill is not None and not self._succeeded:
-            if self._truth_success(self.skill, facts):
-                self._succeeded = True
-                reward = 1.0
-                terminated = True
-        if failure is not None:
-            terminated = True
-        budget = self.skill.max_steps if self.skill else self.config.max_steps
-        truncated = not terminated and budget is not None and self._steps >= budget
-        self._episode_over = self._episode_over or terminated or truncated
+        skill = self.skill
+        reward, terminated, truncated = self.step_outcome(
+            failure,
+            lambda: skill is not None and self._truth_success(skill, facts),
+            skill.max_steps if skill else self.config.max_steps,
+        )
         info = self._info(world, facts)
         info["percept"] = self._perceive(world, facts, decision=False)
         if self.cameras is not None:

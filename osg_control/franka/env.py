@@ -363,15 +363,13 @@ class FrankaKitchenAdapter(EpisodeState, gym.Env):
             self._observation = observation_vector(obs)
             self.last_env_info = dict(env_info)
             failure = watch.check()
-            terminated = terminated or failure is not None
-        reward = float(env_reward)
         self._steps += 1
         world = self.world_state()
-        if self.skill is not None:
-            reward = 0.0  # with a skill, its sparse reward: 1 on the step beta first holds
-            if failure is None and not self._succeeded and self.skill_success(world=world):
-                self._succeeded = True
-                reward = 1.0
+        reward, terminated, truncated = self.step_outcome(
+            failure, lambda: self.skill_success(world=world), self.step_limit, terminated, truncated
+        )
+        if self.skill is None:
+            reward = float(env_reward)  # without a skill, the env's own reward
         info = self._info(world)
         info["env_reward"] = float(env_reward)
         info["env_info"] = self.last_env_info
@@ -379,12 +377,7 @@ class FrankaKitchenAdapter(EpisodeState, gym.Env):
         info["percept"] = self._perceive()
         if failure is not None:
             info["failure"] = failure
-        if self.skill is not None and self._succeeded:
-            terminated = True
-        if self.step_limit is not None and self._steps >= self.step_limit:
-            truncated = True
-        self._episode_over = self._episode_over or terminated or truncated
-        return self.observe(), float(reward), bool(terminated), bool(truncated), info
+        return self.observe(), reward, bool(terminated), bool(truncated), info
 
     # ----------------------------------------------------------------- joint reset
     def joint_reset(self, max_steps: int = 20, tolerance: float = 0.05) -> int:

@@ -11,9 +11,7 @@ needs (``drive.JointTargetDriver``). Needs the ``libero`` extra.
 from __future__ import annotations
 
 import math
-import tempfile
 from functools import cache
-from pathlib import Path
 from typing import Any
 
 import mujoco
@@ -29,6 +27,7 @@ from osg_control.control.description import (
     TcpFrame,
     mounted,
 )
+from osg_control.control.mujoco_pinocchio import pinocchio_arm_from_mujoco
 from osg_control.libero.extra import require_libero
 from osg_control.robots.panda import PANDA
 
@@ -42,6 +41,8 @@ TCP_FRAME = "gripper0_tcp"
 TCP_QUAT = (math.cos(-math.pi / 4), 0.0, 0.0, math.sin(-math.pi / 4))
 """The grip site's frame turned -90 deg about its z axis (the approach, pointing out of the
 hand): its y axis is then the fingers' sliding direction (the tool convention)."""
+TCP = TcpFrame(body=TCP_BODY, pos=(0.0, 0.0, 0.0), quat=TCP_QUAT, frame=TCP_FRAME)
+"""The TCP in both models."""
 
 
 @cache
@@ -72,31 +73,11 @@ def libero_panda_spec() -> mujoco.MjSpec:
 
 
 def libero_panda_pinocchio() -> Any:
-    """The arm-only Pinocchio model from the same MJCF (fingers locked), with the TCP frame
-    ``TCP_FRAME`` and the description's velocity limits (MJCF has none)."""
-    import pinocchio as pin
-
-    with tempfile.TemporaryDirectory() as folder:
-        path = Path(folder) / "panda.xml"
-        path.write_text(_mjcf())
-        full = pin.buildModelFromMJCF(str(path))
-    locked = [full.getJointId(name) for name in FINGER_JOINTS]
-    model = pin.buildReducedModel(full, locked, pin.neutral(full))
-    parent = model.getFrameId(TCP_BODY)
-    w, x, y, z = TCP_QUAT
-    placement = pin.SE3(pin.Quaternion(w, x, y, z).matrix(), np.zeros(3))
-    frame = model.frames[parent]
-    model.addFrame(
-        pin.Frame(
-            TCP_FRAME,
-            frame.parentJoint,
-            parent,
-            frame.placement * placement,
-            pin.FrameType.OP_FRAME,
-        )
-    )
-    model.velocityLimit = np.array(PANDA.arm.velocity)
-    return model
+    """The arm-only Pinocchio model of the same MJCF compiled (``control.mujoco_pinocchio``;
+    fingers welded), with the TCP frame ``TCP_FRAME`` and the description's velocity limits
+    (MJCF has none)."""
+    model = mujoco.MjSpec.from_string(_mjcf()).compile()
+    return pinocchio_arm_from_mujoco(model, ARM_JOINTS, TCP, velocity=PANDA.arm.velocity)
 
 
 def _limits() -> tuple[tuple[float, ...], tuple[float, ...], tuple[float, ...]]:
@@ -131,7 +112,7 @@ def libero_panda() -> RobotDescription:
             armature=PANDA.arm.armature,
         ),
         servo=ServoGains(kp=PANDA.servo.kp, kv=PANDA.servo.kv),
-        tcp=TcpFrame(body=TCP_BODY, pos=(0.0, 0.0, 0.0), quat=TCP_QUAT, frame=TCP_FRAME),
+        tcp=TCP,
         gripper=Gripper(
             joints=(FINGER_JOINTS[0],),
             bodies=FINGER_BODIES,

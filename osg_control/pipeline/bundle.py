@@ -163,10 +163,7 @@ class ModelBundle:
         root = Path(directory)
         manifest = read_manifest(root)
         path = root / MANIFEST
-        rates = (
-            success_rates(manifest, path, domain) if domain is not None
-            else _rates(manifest.get(RATES_KEY, {}), path)
-        )  # fmt: skip
+        rates = success_rates(manifest, path, domain)
         perception = _perception(manifest.get(PERCEPTION_KEY), path)
         noise = _number(manifest, NOISE_KEY, path)
         if noise is None and perception is not None and manifest.get(RATES_KEY):
@@ -181,15 +178,6 @@ class ModelBundle:
             rates_from=_text(manifest.get(RATES_FROM_KEY), path),
             provenance={k: v for k, v in manifest.items() if k not in _OWN_KEYS},
         )
-
-
-def _rates(rates: object, path: Path) -> dict[str, float]:
-    if not isinstance(rates, dict):
-        raise CheckpointError(f"{path}: {RATES_KEY!r} must map skill names to rates")
-    for name, rate in rates.items():
-        if not is_json_number(rate) or not math.isfinite(rate) or not 0 <= rate <= 1:
-            raise CheckpointError(f"{path}: {RATES_KEY!r}[{name!r}] = {rate!r} is not in [0, 1]")
-    return {str(k): float(v) for k, v in rates.items()}
 
 
 def _perception(value: object, path: Path) -> PerceptionSpec | None:

@@ -160,7 +160,7 @@ class ReproduceConfig:
     def describe(self) -> str:
         """``command``, else this call in words."""
         return self.command or (
-            f"osg_control.pipeline.reproduce(domain={self.domain.name!r}, seed={self.seed}, "
+            f"osg_control.pipeline.reproduce(domain={self.domain.ref!r}, seed={self.seed}, "
             f"out={str(self.out)!r}, scale={self.scale}, perception={self.perception.name!r}, "
             f"filter_gain={self.filter_gain})"
         )
@@ -275,6 +275,7 @@ def reproduce(config: ReproduceConfig, log: Log | None = None) -> Reproduction:
         motion_model=motion,
         provenance={
             "domain": domain.name,
+            "robot": domain.robot,
             "command": config.describe(),
             "seed": seed,
             "scale": scale.__dict__,

@@ -49,8 +49,9 @@ def read_manifest(directory: Path) -> dict[str, Any]:
     return read_json_object(path, "manifest", CheckpointError)
 
 
-def success_rates(manifest: dict[str, Any], path: Path, domain: Domain) -> dict[str, float]:
-    """The manifest's measured success rates, checked (known skills, rates in [0, 1]).
+def success_rates(manifest: dict[str, Any], path: Path, domain: Domain | None) -> dict[str, float]:
+    """The manifest's measured success rates, checked: rates in [0, 1], and with a
+    ``domain`` its skills only.
 
     Raises:
         CheckpointError: an unknown skill or a rate that is not a number in [0, 1].
@@ -60,7 +61,7 @@ def success_rates(manifest: dict[str, Any], path: Path, domain: Domain) -> dict[
         raise CheckpointError(f"{path}: {RATES_KEY!r} must map skill names to rates")
     checked = {}
     for name, rate in rates.items():
-        if name not in domain.skills_by_name:
+        if domain is not None and name not in domain.skills_by_name:
             raise CheckpointError(f"{path}: {RATES_KEY!r} names unknown skill {name!r}")
         if not is_json_number(rate) or not math.isfinite(rate) or not 0 <= rate <= 1:
             raise CheckpointError(f"{path}: {RATES_KEY!r}[{name!r}] = {rate!r} is not in [0, 1]")

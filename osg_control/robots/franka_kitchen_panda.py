@@ -13,8 +13,8 @@ home posture is the env's code (``KitchenEnv.__init__``'s ``init_qpos``, the res
 into ``RESET_Q``.
 
 Both models come from the same compiled MJCF: the MuJoCo spec is the robot's subtree of the
-kitchen model, the Pinocchio arm is built from that compiled subtree's bodies and joints
-(``pinocchio_from_mujoco``), so their kinematics agree (a test holds the TCP pose to 1e-9).
+kitchen model, the Pinocchio arm is built from that spec compiled
+(``control.mujoco_pinocchio``), so their kinematics agree (a test holds the TCP pose to 1e-12).
 The env's robot is driven through the env's own actuators (the adapter's servo command), not
 through ``control.servo``'s drives: the description's ``servo`` gains are the env's position
 servos' ``kp`` and the joints' damping, for the record.
@@ -31,6 +31,7 @@ import mujoco
 import numpy as np
 
 from osg_control.control import description as rd
+from osg_control.control.mujoco_pinocchio import pinocchio_arm_from_mujoco
 
 NAME = "franka-kitchen-panda"
 MODEL_FILE = "envs/assets/kitchen_franka/kitchen_assets/kitchen_env_model.xml"
@@ -138,68 +139,28 @@ def kitchen_arm_spec() -> mujoco.MjSpec:
     return spec
 
 
-def pinocchio_from_mujoco(model: mujoco.MjModel, joints: tuple[str, ...], tcp_site: str) -> Any:
-    """A ``pinocchio.Model`` of ``model``'s kinematic tree: a revolute joint per name in
-    ``joints`` (hinges about their axis through the body's origin), every other body welded
-    to its parent with its inertia, and the site ``tcp_site`` as a frame of that name."""
-    import pinocchio as pin
-
-    def placement(pos: np.ndarray, quat: np.ndarray) -> Any:
-        w, x, y, z = (float(v) for v in quat)
-        return pin.SE3(pin.Quaternion(w, x, y, z).normalized().matrix(), np.array(pos))
-
-    pin_model = pin.Model()
-    # MuJoCo body id -> (Pinocchio joint id, the body's placement in that joint's frame).
-    frames: dict[int, tuple[int, Any]] = {0: (0, pin.SE3.Identity())}
-    for body in range(1, model.nbody):
-        parent, parent_placement = frames[int(model.body_parentid[body])]
-        here = parent_placement * placement(model.body_pos[body], model.body_quat[body])
-        first = int(model.body_jntadr[body])
-        name = model.joint(first).name if model.body_jntnum[body] else ""
-        if name in joints:
-            joint = model.joint(first)
-            if np.any(joint.pos != 0) or joint.type != mujoco.mjtJoint.mjJNT_HINGE:
-                raise ValueError(f"joint {name!r} is not a hinge through its body's origin")
-            act = [a for a in range(model.nu) if model.actuator_trnid[a, 0] == joint.id]
-            effort = float(model.actuator_forcerange[act[0], 1]) if act else np.inf
-            parent = pin_model.addJoint(
-                parent,
-                pin.JointModelRevoluteUnaligned(np.array(joint.axis, dtype=float)),
-                here,
-                name,
-                np.array([effort]),
-                np.array([np.inf]),
-                np.array([joint.range[0]]),
-                np.array([joint.range[1]]),
-            )
-            here = pin.SE3.Identity()
-        inertia = pin.Inertia(
-            float(model.body_mass[body]),
-            np.array(model.body_ipos[body]),
-            placement(np.zeros(3), model.body_iquat[body]).rotation
-            @ np.diag(model.body_inertia[body])
-            @ placement(np.zeros(3), model.body_iquat[body]).rotation.T,
-        )
-        pin_model.appendBodyToJoint(parent, inertia, here)
-        frames[body] = (parent, here)
-    site = model.site(tcp_site)
-    body_joint, body_placement = frames[int(site.bodyid[0])]
-    tcp = body_placement * placement(site.pos, site.quat)
-    pin_model.addFrame(pin.Frame(tcp_site, body_joint, tcp, pin.FrameType.OP_FRAME))
-    return pin_model
-
-
 def kitchen_pinocchio_arm() -> Any:
-    """The arm-only ``pinocchio.Model`` (``ModelSource.pinocchio``; fingers welded) of the
-    same compiled MJCF, its limits ``enforced_limits``, its speeds ``ACTION_SPEED``, its
-    frame ``end_effector`` the TCP."""
-    compiled = _compiled_subtree()
+    """The arm-only ``pinocchio.Model`` (``ModelSource.pinocchio``; fingers welded) of
+    ``kitchen_arm_spec`` compiled (``control.mujoco_pinocchio``): its limits
+    ``enforced_limits``, its speeds ``ACTION_SPEED``, its frame ``end_effector`` the TCP."""
+    return pinocchio_arm_from_mujoco(
+        kitchen_arm_spec().compile(),
+        ARM_JOINTS,
+        _tcp(),
+        velocity=(ACTION_SPEED,) * len(ARM_JOINTS),
+    )
+
+
+def _tcp() -> rd.TcpFrame:
+    """The MJCF's ``end_effector`` site as the TCP, in both models."""
     facts = _facts()
-    pin_model = pinocchio_from_mujoco(compiled, ARM_JOINTS, TCP_SITE)
-    pin_model.lowerPositionLimit = facts.lower.copy()
-    pin_model.upperPositionLimit = facts.upper.copy()
-    pin_model.velocityLimit = np.full(len(ARM_JOINTS), ACTION_SPEED)
-    return pin_model
+    return rd.TcpFrame(
+        body=facts.tcp_body,
+        pos=facts.tcp_pos,  # type: ignore[arg-type]
+        quat=facts.tcp_quat,  # type: ignore[arg-type]
+        frame=TCP_SITE,
+        site=TCP_SITE,
+    )
 
 
 @cache
@@ -268,13 +229,7 @@ def kitchen_panda_description() -> rd.RobotDescription:
             armature=facts.armature,
         ),
         servo=rd.ServoGains(kp=facts.kp, kv=facts.damping),
-        tcp=rd.TcpFrame(
-            body=facts.tcp_body,
-            pos=facts.tcp_pos,  # type: ignore[arg-type]
-            quat=facts.tcp_quat,  # type: ignore[arg-type]
-            frame=TCP_SITE,
-            site=TCP_SITE,
-        ),
+        tcp=_tcp(),
         gripper=rd.Gripper(
             joints=FINGER_JOINTS,
             bodies=FINGER_BODIES,
