@@ -24,9 +24,9 @@ from osg_control.commands import (
     perception_of,
 )
 from osg_control.domain.base import Domain
+from osg_control.execution.bundle import DEPLOYMENT_NOISE
 from osg_control.json_files import dump_json
 from osg_control.parallel.machine import machine_cpus
-from osg_control.pipeline.bundle import DEPLOYMENT_NOISE
 
 if TYPE_CHECKING:
     from osg_control.evaluation.check import Comparison
