@@ -9,7 +9,8 @@ import numpy as np
 import pytest
 
 from osg_control.domain.registry import get_domain
-from osg_control.execution.defaults import load_defaults, read_manifest
+from osg_control.execution.bundle import read_manifest
+from osg_control.execution.defaults import load_defaults
 from osg_control.execution.executor import Executor as DomainExecutor
 from osg_control.execution.executor import task_env_config
 from osg_control.execution.locate import node_at, skill_on_path

@@ -94,6 +94,20 @@ def box_from_inequalities(problem: qpsolvers.Problem) -> tuple[np.ndarray, np.nd
     return lower, upper
 
 
+def assert_is_reference(ours: qpsolvers.Problem, reference: qpsolvers.Problem) -> None:
+    """Our QP is a library's ``build_ik`` to 1e-12: Hessian, linear term, the box its
+    ``+-I`` inequality rows imply, and its equality rows if it has any."""
+    np.testing.assert_allclose(ours.P, reference.P, rtol=0, atol=1e-12)
+    np.testing.assert_allclose(ours.q, reference.q, rtol=0, atol=1e-12)
+    lower, upper = box_from_inequalities(reference)
+    np.testing.assert_allclose(required(ours.lb), lower, rtol=0, atol=1e-12)
+    np.testing.assert_allclose(required(ours.ub), upper, rtol=0, atol=1e-12)
+    assert (ours.A is None) == (reference.A is None)
+    if reference.A is not None:
+        np.testing.assert_allclose(required(ours.A), reference.A, rtol=0, atol=1e-12)
+        np.testing.assert_allclose(required(ours.b), required(reference.b), rtol=0, atol=1e-12)
+
+
 # ------------------------------------------------------------------ one QP, two backends
 @pytest.mark.parametrize("hard_tcp", [False, True])
 def test_backends_build_the_same_qp(
@@ -162,12 +176,7 @@ def test_qp_is_minks_build_ik(robot: RobotDescription, costs: dict[str, Any]) ->
             damping=config.damping,
             limits=limits,
         )
-        ours = backend.build_qp(q, pos, rot, hard_tcp=False)
-        np.testing.assert_allclose(ours.P, reference.P, rtol=0, atol=1e-12)
-        np.testing.assert_allclose(ours.q, reference.q, rtol=0, atol=1e-12)
-        lower, upper = box_from_inequalities(reference)
-        np.testing.assert_allclose(required(ours.lb), lower, rtol=0, atol=1e-12)
-        np.testing.assert_allclose(required(ours.ub), upper, rtol=0, atol=1e-12)
+        assert_is_reference(backend.build_qp(q, pos, rot, hard_tcp=False), reference)
         expected = required(qpsolvers.solve_problem(reference, solver="daqp").x) / config.dt
         np.testing.assert_allclose(
             controller.solve_velocity(q, pos, rot), expected, rtol=0, atol=1e-6
@@ -206,15 +215,7 @@ def test_qp_is_pinks_build_ik(robot: RobotDescription, costs: dict[str, Any]) ->
                 limits=limits,
                 constraints=[frame_task] if hard_tcp else None,
             )
-            ours = backend.build_qp(q, pos, rot, hard_tcp)
-            np.testing.assert_allclose(ours.P, reference.P, rtol=0, atol=1e-12)
-            np.testing.assert_allclose(ours.q, reference.q, rtol=0, atol=1e-12)
-            lower, upper = box_from_inequalities(reference)
-            np.testing.assert_allclose(required(ours.lb), lower, rtol=0, atol=1e-12)
-            np.testing.assert_allclose(required(ours.ub), upper, rtol=0, atol=1e-12)
-            if hard_tcp:
-                np.testing.assert_allclose(required(ours.A), required(reference.A), atol=1e-12)
-                np.testing.assert_allclose(required(ours.b), required(reference.b), atol=1e-12)
+            assert_is_reference(backend.build_qp(q, pos, rot, hard_tcp), reference)
 
 
 @pytest.mark.parametrize("backend", BACKEND_NAMES)

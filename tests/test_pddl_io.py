@@ -10,9 +10,9 @@ from pddl.formatter import domain_to_string, problem_to_string
 
 from osg_control.domain.registry import get_domain
 from osg_control.errors import PDDLError, PlanningError
+from osg_control.execution.bundle import measured_graph
 from osg_control.kitchen.skills import NODES, SKILLS, WORLD_FACTS
 from osg_control.kitchen.tasks import DEFAULT_WORLD, KITCHEN_TASKS
-from osg_control.planning.costs import measured_graph
 from osg_control.planning.graph import graph_from_specs
 from osg_control.planning.pddl_io import (
     DEFAULT_COST,

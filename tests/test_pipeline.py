@@ -7,6 +7,7 @@ scripted episodes, a few hundred TD3+BC updates, a few evaluation episodes (abou
 
 from __future__ import annotations
 
+import ast
 import json
 import math
 import re
@@ -19,11 +20,11 @@ from minidomain import DOMAIN_NAME, mini_domain
 from osg_control.domain.base import Domain
 from osg_control.domain.registry import get_domain, register_domain
 from osg_control.errors import CheckpointError, OutputError
+from osg_control.execution import bundle
+from osg_control.execution.bundle import DEPLOYMENT_NOISE, RATES_KEY, ModelBundle, measured_graph
 from osg_control.execution.defaults import load_defaults
 from osg_control.perception.spec import PerceptionSpec, perception_spec
 from osg_control.pipeline import (
-    DEPLOYMENT_NOISE,
-    ModelBundle,
     ReproduceConfig,
     Reproduction,
     Scale,
@@ -35,7 +36,6 @@ from osg_control.pipeline import (
     train_missing,
 )
 from osg_control.pipeline.reproduction import training_early_stop
-from osg_control.planning.costs import RATES_KEY, measured_graph
 from osg_control.planning.pddl_io import skill_cost
 
 TINY = Scale(
@@ -46,7 +46,7 @@ MANIFEST_KEYS = {
     "domain", "command", "seed", "scale", "package_version", "git_commit", "datasets_sha256",
     "perception", "filter_gain", "success_rates", "success_rates_from", "motion_model",
 }  # fmt: skip
-"""The keys the manifest kept (``execution.defaults``, ``planning.costs`` and tests read them)."""
+"""The keys the manifest kept (``execution.bundle`` and tests read them)."""
 
 
 @pytest.fixture(scope="module")
@@ -167,7 +167,7 @@ def test_a_manifest_without_a_perception_reads_as_unrecorded(tmp_path: Path) -> 
     (tmp_path / "manifest.json").write_text(json.dumps(manifest))
     old = ModelBundle.read(tmp_path, kitchen)
     assert old.perception is None and old.noise is None and old.motion_model is None
-    assert old.success_rates == load_defaults(kitchen).manifest[RATES_KEY]
+    assert old.success_rates == load_defaults(kitchen).bundle.success_rates
 
 
 def test_the_shipped_kitchen_bundle_records_how_its_rates_were_measured() -> None:
@@ -197,6 +197,36 @@ def test_a_malformed_manifest_is_refused(field: str, value: object, tmp_path: Pa
     (tmp_path / "manifest.json").write_text(json.dumps({field: value}))
     with pytest.raises(CheckpointError, match="manifest.json"):
         ModelBundle.read(tmp_path)
+
+
+def test_only_the_bundle_names_the_manifest_and_its_own_keys() -> None:
+    """``execution/bundle.py`` owns the manifest: no other package module spells its file
+    name or the keys only it has (a second reader would drift from ``ModelBundle.read``'s
+    checks). ``motion_model`` and ``perception`` are left out: they are also parameter
+    names."""
+    owned = {bundle.MANIFEST, bundle.RATES_KEY, bundle.RATES_FROM_KEY}
+    package = Path(bundle.__file__).resolve().parents[1]
+    spelled = [
+        f"{path.relative_to(package)}: {node.value!r}"
+        for path in sorted(package.rglob("*.py"))
+        if path.name != "bundle.py" or path.parent.name != "execution"
+        for node in ast.walk(ast.parse(path.read_text()))
+        if isinstance(node, ast.Constant) and node.value in owned
+    ]
+    assert spelled == []
+
+
+def test_load_defaults_reads_through_the_bundle(tmp_path: Path) -> None:
+    """``load_defaults`` refuses what ``ModelBundle.read`` refuses (here a perception
+    whose noise is negative), naming the manifest."""
+    kitchen = get_domain("kitchen")
+    assert kitchen.defaults_dir is not None
+    manifest = json.loads((kitchen.defaults_dir / "manifest.json").read_text())
+    manifest["perception"]["tcp_noise"] = -1
+    (tmp_path / "manifest.json").write_text(json.dumps(manifest))
+    with pytest.raises(CheckpointError, match=f"{tmp_path / 'manifest.json'}: malformed"):
+        load_defaults(kitchen, tmp_path)
+    assert load_defaults(kitchen).bundle == ModelBundle.read(kitchen.defaults_dir, kitchen)
 
 
 def test_measured_rates_under_the_robot_perception() -> None:

@@ -15,6 +15,7 @@ from osg_control.domain.base import Task as KitchenTask
 from osg_control.domain.binding import recorded
 from osg_control.domain.registry import get_domain
 from osg_control.errors import PDDLError, PlanningError
+from osg_control.execution.bundle import read_manifest
 from osg_control.kitchen.tasks import DEFAULT_WORLD, KITCHEN_TASKS
 from osg_control.planning.api import (
     PLANNERS,
@@ -24,7 +25,6 @@ from osg_control.planning.api import (
     plan_on_graph,
     solve,
 )
-from osg_control.planning.costs import read_manifest
 from osg_control.planning.fast_downward import find_fast_downward
 from osg_control.planning.graph import graph_from_specs
 from osg_control.planning.grounding import ground

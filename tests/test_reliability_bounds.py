@@ -22,7 +22,7 @@ from osg_control.control.estimator import TcpFilter
 from osg_control.domain.registry import get_domain
 from osg_control.errors import EXIT_CODES, CheckpointError, DatasetError, UsageError
 from osg_control.evaluation.check import cells, wilson_interval
-from osg_control.execution.defaults import manifest_motion_model
+from osg_control.execution.bundle import manifest_motion_model
 from osg_control.execution.executor import load_executor
 from osg_control.perception.spec import PerceptionSpec, perception_spec
 from osg_control.planning.task import SearchLimits

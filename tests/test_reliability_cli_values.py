@@ -14,7 +14,7 @@ import pytest
 from osg_control import cli
 from osg_control.domain.registry import get_domain
 from osg_control.errors import EXIT_CODES, CheckpointError
-from osg_control.planning.costs import success_rates
+from osg_control.execution.bundle import success_rates
 
 ROOT = Path(__file__).resolve().parents[1]
 SHIPPED = ROOT / "osg_control/kitchen/defaults"

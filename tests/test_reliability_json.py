@@ -20,9 +20,9 @@ from osg_control import cli, json_files
 from osg_control.classifier.model import SIDECAR_FILE, StateClassifier
 from osg_control.data.minari_import import _read_metadata
 from osg_control.errors import EXIT_CODES, OSGError
+from osg_control.execution.bundle import read_manifest
 from osg_control.json_files import JSONFormatError, parse_json
 from osg_control.learning.checkpoints import load_checkpoint
-from osg_control.planning.costs import read_manifest
 from osg_control.planning.graph import load_graph
 
 LIMIT = 1 << 20

@@ -5,6 +5,8 @@ from __future__ import annotations
 import copy
 import json
 from pathlib import Path
+from types import SimpleNamespace
+from typing import Any
 
 import pytest
 
@@ -200,3 +202,37 @@ def test_a_genuinely_different_result_is_still_reported_outside(
 def test_check_with_quick_is_a_usage_error(tmp_path: Path) -> None:
     assert main(["reproduce", "--quick", "--check", "--out", str(tmp_path / "r")]) == 2
     assert not (tmp_path / "r").exists()
+
+
+@pytest.mark.parametrize(("rate", "code"), [(None, 0), (0.3, 1)])
+def test_check_with_json_prints_one_document(
+    rate: float | None,
+    code: int,
+    tmp_path: Path,
+    monkeypatch: pytest.MonkeyPatch,
+    capsys: pytest.CaptureFixture[str],
+) -> None:
+    """``reproduce --check --json``: stdout is one JSON document, the figures with the
+    verdict under ``check``; the stages' text goes to stderr. The pipeline is replaced by
+    one that logs and returns figures (the shipped ones, or every rate at ``rate``)."""
+    from osg_control.pipeline import reproduction
+
+    figures = _with_trials(SHIPPED, None, rate)
+
+    def fake_reproduce(config: Any, log: Any) -> Any:
+        log("== collect")
+        return SimpleNamespace(
+            figures=figures, out=tmp_path, report=[tmp_path / "report.md"], stage_seconds={}
+        )
+
+    monkeypatch.setattr(reproduction, "reproduce", fake_reproduce)
+    argv = ["reproduce", "--check", "--json", "--out", str(tmp_path / "r")]
+    assert main(argv) == code
+    captured = capsys.readouterr()
+    document = json.loads(captured.out)  # one document: a second would be "Extra data"
+    assert {key: document[key] for key in figures} == figures
+    assert document["check"]["compared"] == 179
+    assert len(document["check"]["mismatches"]) == (0 if rate is None else 179)
+    assert "== collect" in captured.err and "== collect" not in captured.out
+    assert main(argv[:2] + argv[3:]) == code  # in words: the figures' files, then the verdict
+    assert "check: 179 cells compared" in capsys.readouterr().out

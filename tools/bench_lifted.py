@@ -23,8 +23,8 @@ from pathlib import Path
 from typing import Any
 
 from osg_control.domain.registry import get_domain
+from osg_control.execution.bundle import measured_graph
 from osg_control.planning.api import graph_domain, solve
-from osg_control.planning.costs import measured_graph
 from osg_control.planning.fast_downward import find_fast_downward
 from osg_control.planning.grounding import ground
 from osg_control.planning.pddl_io import build_problem, write_pddl

@@ -7,7 +7,7 @@ from pathlib import Path
 from typing import TypeAlias
 
 from osg_control.commands import domain_of
-from osg_control.planning.costs import measured_graph
+from osg_control.execution.bundle import measured_graph
 from osg_control.planning.graph import load_graph
 from osg_control.planning.pddl_io import export_pddl
 

@@ -109,7 +109,7 @@ def _plan(args: argparse.Namespace) -> PlanResult:
             'give a goal (--goal "(door-open) (in-cabinet cube-1)") or DOMAIN PROBLEM files'
         )
     from osg_control.commands.checks import fact_atoms
-    from osg_control.planning.costs import measured_graph
+    from osg_control.execution.bundle import measured_graph
     from osg_control.planning.graph import load_graph
 
     domain = domain_of(args)

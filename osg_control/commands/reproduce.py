@@ -15,7 +15,7 @@ import argparse
 import shlex
 import sys
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from osg_control.commands import (
     add_filter_argument,
@@ -24,11 +24,14 @@ from osg_control.commands import (
     perception_of,
 )
 from osg_control.domain.base import Domain
+from osg_control.execution.bundle import DEPLOYMENT_NOISE
 from osg_control.json_files import dump_json
 from osg_control.parallel.machine import machine_cpus
-from osg_control.pipeline.bundle import DEPLOYMENT_NOISE
 
-__all__ = ["check_against_shipped", "register", "run"]
+if TYPE_CHECKING:
+    from osg_control.evaluation.check import Comparison
+
+__all__ = ["register", "run", "shipped_check"]
 
 
 def register(subparsers: argparse._SubParsersAction) -> None:
@@ -81,18 +84,17 @@ def register(subparsers: argparse._SubParsersAction) -> None:
         help="compare an earlier reproduction's figures.json (file or folder) with the shipped "
         "ones, without running anything",
     )
-    parser.add_argument("--json", action="store_true", help="print the figures as JSON")
+    parser.add_argument(
+        "--json",
+        action="store_true",
+        help="print one JSON document: the figures (with --check, its verdict under "
+        '"check"); with --compare, the verdict',
+    )
     parser.set_defaults(func=run)
 
 
-def check_against_shipped(
-    domain: Domain, figures: dict[str, Any], source: Path, as_json: bool
-) -> int:
-    """Compare figures (read from ``source``) with the domain's shipped ``figures.json``;
-    print the verdict.
-
-    Returns:
-        0 when every cell of the shipped figures agrees, 1 otherwise.
+def shipped_check(domain: Domain, figures: dict[str, Any], source: Path) -> Comparison:
+    """Compare figures (read from ``source``) with the domain's shipped ``figures.json``.
 
     Raises:
         DatasetError: either side malformed, or a shipped cell missing from ``figures``
@@ -102,31 +104,36 @@ def check_against_shipped(
     from osg_control.execution.defaults import defaults_root
 
     shipped = defaults_root(domain) / FIGURES
-    result = compare(read_figures(shipped), figures, str(shipped), str(source))
+    return compare(read_figures(shipped), figures, str(shipped), str(source))
+
+
+def verdict_json(result: Comparison) -> dict[str, Any]:
+    """A check's verdict as ``--json`` prints it: cells compared, mismatches, and the
+    smallest difference each cell could have detected."""
+    return {
+        "compared": result.compared,
+        "mismatches": [m.__dict__ for m in result.mismatches],
+        "detectable_difference": {**result.summary(), "cells": result.detectable},
+    }
+
+
+def print_verdict(result: Comparison) -> None:
+    """A check's verdict in words."""
     power = result.summary()
-    if as_json:
-        print(
-            dump_json(
-                {
-                    "compared": result.compared,
-                    "mismatches": [m.__dict__ for m in result.mismatches],
-                    "detectable_difference": {**power, "cells": result.detectable},
-                },
-                indent=None,
-            )
-        )
-    else:
-        print(
-            f"check: {result.compared} cells compared, {len(result.mismatches)} outside the "
-            "intervals"
-        )
-        print(
-            f"  smallest difference it could detect, per cell: {_rate(power['smallest'])} to "
-            f"{_rate(power['largest'])} (median {_rate(power['median'])}; least power: "
-            f"{power['largest_at']})"
-        )
-        for m in result.mismatches:
-            print(f"  {m.where}: shipped {m.shipped:.3f}, reproduced {m.reproduced:.3f}")
+    print(
+        f"check: {result.compared} cells compared, {len(result.mismatches)} outside the intervals"
+    )
+    print(
+        f"  smallest difference it could detect, per cell: {_rate(power['smallest'])} to "
+        f"{_rate(power['largest'])} (median {_rate(power['median'])}; least power: "
+        f"{power['largest_at']})"
+    )
+    for m in result.mismatches:
+        print(f"  {m.where}: shipped {m.shipped:.3f}, reproduced {m.reproduced:.3f}")
+
+
+def exit_code(result: Comparison) -> int:
+    """0 when every cell of the shipped figures agrees, 1 otherwise."""
     return 1 if result.mismatches else 0
 
 
@@ -175,7 +182,12 @@ def run(args: argparse.Namespace) -> int:
         from osg_control.evaluation.check import figures_file, read_figures
 
         report = figures_file(args.compare)
-        return check_against_shipped(domain, read_figures(report), report, args.json)
+        compared = shipped_check(domain, read_figures(report), report)
+        if args.json:
+            print(dump_json(verdict_json(compared), indent=None))
+        else:
+            print_verdict(compared)
+        return exit_code(compared)
     from osg_control.pipeline.reproduction import (
         FULL,
         QUICK,
@@ -198,17 +210,23 @@ def run(args: argparse.Namespace) -> int:
         command=manifest_command(domain, args),
         invocation="osg " + " ".join(map(shlex.quote, sys.argv[1:])),
     )
-    # With --json, stdout is the JSON alone: the stages' text goes to stderr.
+    # With --json, stdout is one JSON document alone: the stages' text goes to stderr, and
+    # --check's verdict joins the figures under "check".
     text_out = sys.stderr if args.json else sys.stdout
     done = reproduce(config, log=lambda text: print(text, file=text_out, flush=True))
-    if args.json:
-        print(dump_json(done.figures))
-    else:
-        for name, seconds in done.stage_seconds.items():
-            print(f"{name:14s} {seconds:8.1f} s")
-        print("report: " + ", ".join(map(str, done.report)))
+    result: Comparison | None = None
     if args.check:
         from osg_control.evaluation.check import FIGURES
 
-        return check_against_shipped(domain, done.figures, done.out / FIGURES, args.json)
-    return 0
+        result = shipped_check(domain, done.figures, done.out / FIGURES)
+    if args.json:
+        check = {} if result is None else {"check": verdict_json(result)}
+        print(dump_json({**done.figures, **check}))
+        return 0 if result is None else exit_code(result)
+    for name, seconds in done.stage_seconds.items():
+        print(f"{name:14s} {seconds:8.1f} s")
+    print("report: " + ", ".join(map(str, done.report)))
+    if result is None:
+        return 0
+    print_verdict(result)
+    return exit_code(result)

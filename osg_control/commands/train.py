@@ -17,11 +17,11 @@ from osg_control.commands import (
     perception_of,
 )
 from osg_control.domain.base import Domain
+from osg_control.execution.bundle import DEPLOYMENT_NOISE
 from osg_control.json_files import dump_json
 from osg_control.learning.early_stopping import CHECK_EPISODES, EarlyStopping
 from osg_control.parallel.machine import machine_cpus
 from osg_control.paths import cache_dir
-from osg_control.pipeline.bundle import DEPLOYMENT_NOISE
 from osg_control.pipeline.train import (
     DEFAULT_STEPS,
     TrainedSkills,

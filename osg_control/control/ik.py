@@ -21,7 +21,11 @@ a ``VelocityLimit``; the two limits are merged into one box because both are bou
 :math:`\Delta q`. In a joint reset (``hard_tcp``) the TCP task becomes the equality
 :math:`J_{tcp} \Delta q = -g\,e_{tcp}` and leaves the objective.
 
-Backends compute :math:`e_{tcp}` and :math:`J_{tcp}`; the QP around them is assembled by
+The QP is composed, as ``build_ik`` does, from open lists (``control.ik_tasks``): tasks,
+each adding its Hessian and linear terms (the frame and posture tasks above, then any the
+caller passes, e.g. ``DampingTask`` or another ``PostureTask``), and limits, each bounding
+:math:`\Delta q` (the two above, then any the caller passes), intersected into one box.
+Backends compute :math:`e_{tcp}` and :math:`J_{tcp}`; the QP around them is composed by
 shared code, so both backends build the same QP by construction:
 
 - ``mink``: mink's ``FrameTask`` on the robot's arm-only MuJoCo model (default);
@@ -45,12 +49,14 @@ than six joints has (``DiffIKController.has_null_space``); on another arm it hol
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import replace
 
 import numpy as np
 
 from osg_control.control.description import RobotDescription
 from osg_control.control.ik_backends import BACKENDS, Backend, IKConfig
+from osg_control.control.ik_tasks import Limit, Task
 from osg_control.control.qp import qp_solver
 from osg_control.control.rotations import check_rotation, rotation_error, rotation_step
 from osg_control.errors import ControllerError
@@ -75,16 +81,25 @@ class DiffIKController:
     Args:
         robot: the arm.
         config: weights, gains, backend and solver (default ``IKConfig()``).
+        tasks: costs added to the TCP frame and posture tasks (``control.ik_tasks``, e.g.
+            ``DampingTask(0.1)``).
+        limits: bounds on ``dq`` added to the joint position and velocity limits.
 
     Example:
         >>> ik = DiffIKController(robot, IKConfig(backend="mink"))  # robot: a description
         >>> q_next = ik.relative_step(ik.posture, np.array([0.01, 0, 0, 0, 0, 0]))
     """
 
-    def __init__(self, robot: RobotDescription, config: IKConfig | None = None) -> None:
+    def __init__(
+        self,
+        robot: RobotDescription,
+        config: IKConfig | None = None,
+        tasks: Sequence[Task] = (),
+        limits: Sequence[Limit] = (),
+    ) -> None:
         self.config = config or IKConfig()
         self.robot = robot
-        self.backend: Backend = BACKENDS[self.config.backend](self.config, robot)
+        self.backend: Backend = BACKENDS[self.config.backend](self.config, robot, tasks, limits)
         self._solve_qp = qp_solver(self.config.solver, self.config.osqp_eps, robot.n_joints)
         self._n = robot.n_joints
 

@@ -1,13 +1,14 @@
-"""The IK's kinematic backends (``mink``, ``pinocchio``) and the QP assembly they share.
+"""The IK's kinematic backends (``mink``, ``pinocchio``) and the QP composition they share.
 
 Each backend computes the TCP frame task's error and Jacobian on its own model of the arm
-(``robot_model``); ``Backend.build_qp`` assembles the QP of ``control.ik`` around them for
-an arm of any number of joints, so both backends build the same QP by construction.
+(``robot_model``); ``Backend.build_qp`` composes the QP of ``control.ik`` from its lists
+of tasks and limits (``control.ik_tasks``) for an arm of any number of joints, so both
+backends build the same QP by construction.
 """
 
 from __future__ import annotations
 
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 
 import mujoco
@@ -15,6 +16,17 @@ import numpy as np
 import qpsolvers
 
 from osg_control.control.description import RobotDescription
+from osg_control.control.ik_tasks import (
+    ConfigurationLimit,
+    IKState,
+    Limit,
+    PostureTask,
+    ResidualTask,
+    Task,
+    VelocityLimit,
+    compose_qp,
+    constant_diagonal,
+)
 from osg_control.control.qp import SOLVERS
 from osg_control.control.robot_model import pinocchio_arm, robot_spec
 from osg_control.errors import ControllerError
@@ -101,11 +113,25 @@ def axis_costs(name: str, cost: float | tuple[float, ...]) -> np.ndarray:
     return np.broadcast_to(values, (3,)).copy()
 
 
+class FrameTask(ResidualTask):
+    """The TCP frame task: error ``log(T_bt)`` and Jacobian from the backend's
+    ``frame_residual`` toward the solve's target, weighted per TCP axis."""
+
+    def residual(self, state: IKState) -> tuple[np.ndarray, np.ndarray]:
+        return state.kinematics.frame_residual(state.q, state.target_pos, state.target_rot)
+
+
 class Backend:
-    """Kinematics of the TCP frame task plus the QP assembly shared by every backend.
+    """Kinematics of the TCP frame task plus the QP composed from the task and limit lists.
 
     Subclasses implement ``tcp_pose`` and ``frame_residual``; ``build_qp`` is common, so
     all backends build the same QP.
+
+    Args:
+        config: the controller's configuration (the default tasks' and limits' weights).
+        robot: the arm's description.
+        tasks: costs added to the defaults (``control.ik_tasks``).
+        limits: bounds on ``dq`` added to the defaults.
 
     Attributes:
         config: the controller's configuration.
@@ -114,12 +140,23 @@ class Backend:
         upper: joint upper limits [rad] (n,).
         velocity_limit: joint velocity limits [rad/s] (n,), the robot's times
             ``velocity_scale``.
+        tcp_task: the TCP frame task (an equality in a joint reset).
+        tasks: every cost: ``tcp_task``, the posture task toward ``posture``, then
+            ``tasks``.
+        limits: every bound: joint positions (gain ``limit_gain``), joint velocities, then
+            ``limits``.
 
     Raises:
-        ControllerError: a posture with another number of values than the arm has joints.
+        ControllerError: a posture, task or limit sized for another number of joints.
     """
 
-    def __init__(self, config: IKConfig, robot: RobotDescription) -> None:
+    def __init__(
+        self,
+        config: IKConfig,
+        robot: RobotDescription,
+        tasks: Sequence[Task] = (),
+        limits: Sequence[Limit] = (),
+    ) -> None:
         n = robot.n_joints
         posture = robot.home_q if config.posture is None else config.posture
         if len(posture) != n:
@@ -132,20 +169,29 @@ class Backend:
         self.lower = np.array(robot.arm.lower, dtype=float)
         self.upper = np.array(robot.arm.upper, dtype=float)
         self.velocity_limit = np.array(robot.arm.velocity) * config.velocity_scale
-        # Constants of the QP, so that build_qp does the per-step arithmetic only.
-        cost = config.frame_cost
-        self._cost_column = cost[:, None]
-        self._gain_cost = config.gain * cost
         self.posture = np.asarray(posture, dtype=float)
         """The posture task's target [rad] (n,)."""
-        self._posture_gain = config.posture_cost**2 * config.gain
-        self._diagonal = config.posture_cost**2 + config.damping
-        # Both box rows at once: lower = max(gain (lower - q), -step), upper = min(gain
-        # (upper - q), step), as one clip of a (2, n) array between these rows.
-        step_limit = self.velocity_limit * config.dt
-        self._limits = np.stack([self.lower, self.upper])
-        self._box_floor = np.stack([-step_limit, np.full(n, -np.inf)])
-        self._box_ceiling = np.stack([np.full(n, np.inf), step_limit])
+        self.tcp_task = FrameTask(config.frame_cost, config.gain, config.lm_damping)
+        posture_task = PostureTask(self.posture, config.posture_cost, config.gain)
+        self.tasks: list[Task] = [self.tcp_task, posture_task, *tasks]
+        self.limits: list[Limit] = [
+            ConfigurationLimit(self.lower, self.upper, config.limit_gain),
+            VelocityLimit(self.velocity_limit, config.dt),
+            *limits,
+        ]
+        for task in self.tasks:
+            task.check(n)
+        for limit in self.limits:
+            limit.check(n)
+        # The objective without the frame task when it is held as an equality (joint reset).
+        self._reset_tasks = [task for task in self.tasks if task is not self.tcp_task]
+        self._diagonal = constant_diagonal(self.tasks, config.damping)
+        self._reset_diagonal = constant_diagonal(self._reset_tasks, config.damping)
+        self._load()
+
+    def _load(self) -> None:
+        """Load the backend's own model of the arm (``robot``, ``config`` set)."""
+        raise NotImplementedError
 
     def tcp_pose(self, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """TCP position [m] and rotation matrix in the base frame at ``q``."""
@@ -163,52 +209,37 @@ class Backend:
     def build_qp(
         self, q: np.ndarray, target_pos: np.ndarray, target_rot: np.ndarray, hard_tcp: bool
     ) -> qpsolvers.Problem:
-        """Assemble the QP in ``dq = v dt`` at ``q`` toward the target.
+        """Compose the QP in ``dq = v dt`` at ``q`` toward the target from ``tasks`` and
+        ``limits`` (``ik_tasks.compose_qp``).
 
         Args:
             q: arm configuration [rad] (n,).
             target_pos: TCP target position [m] (3,).
             target_rot: TCP target rotation matrix (3, 3).
-            hard_tcp: make the TCP task an equality constraint (joint reset).
+            hard_tcp: hold the TCP frame task as an equality constraint (joint reset).
 
         Returns:
             ``qpsolvers.Problem`` with ``P``, ``q``, box bounds ``lb``/``ub`` and, if
             ``hard_tcp``, the equality ``A dq = b``; no general inequalities.
         """
-        config = self.config
-        error, jacobian = self.frame_residual(q, target_pos, target_rot)
-        linear = self._posture_gain * (q - self.posture)
+        state = IKState(q, target_pos, target_rot, self)
         if hard_tcp:
-            hessian = np.zeros((self.n, self.n))
-            hessian.flat[:: self.n + 1] = self._diagonal
-            equality_matrix: np.ndarray | None = jacobian
-            equality_vector: np.ndarray | None = -config.gain * error
-        else:
-            weighted_error = self._gain_cost * error
-            weighted_jacobian = self._cost_column * jacobian
-            hessian = weighted_jacobian.T @ weighted_jacobian
-            linear += weighted_error @ weighted_jacobian
-            lm_term = config.lm_damping * float(weighted_error @ weighted_error)
-            hessian.flat[:: self.n + 1] += self._diagonal + lm_term
-            equality_matrix = equality_vector = None
-        box = np.minimum(
-            np.maximum(config.limit_gain * (self._limits - q), self._box_floor), self._box_ceiling
-        )
-        return qpsolvers.Problem(
-            hessian, linear, A=equality_matrix, b=equality_vector, lb=box[0], ub=box[1]
-        )
+            return compose_qp(
+                self._reset_tasks, self.limits, [self.tcp_task], self._reset_diagonal, state
+            )
+        return compose_qp(self.tasks, self.limits, [], self._diagonal, state)
 
 
 class MinkBackend(Backend):
     """mink's ``FrameTask`` on the robot's arm-only MuJoCo model."""
 
-    def __init__(self, config: IKConfig, robot: RobotDescription) -> None:
+    def _load(self) -> None:
         import mink
 
-        super().__init__(config, robot)
+        robot, config = self.robot, self.config
         self.model = robot_spec(robot, with_gripper=False).compile()
         self.configuration = mink.Configuration(self.model)
-        self.frame_task = mink.FrameTask(
+        self.mink_task = mink.FrameTask(
             robot.tcp.site,
             "site",
             position_cost=config.position_cost,
@@ -219,7 +250,7 @@ class MinkBackend(Backend):
         # The task's target is this SE3, overwritten in place each step (``set_target``
         # would build and copy a new one every time).
         self._target = mink.SE3(np.array([1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0]))
-        self.frame_task.transform_target_to_world = self._target
+        self.mink_task.transform_target_to_world = self._target
         self._site = self.model.site(robot.tcp.site).id
         self._posed_at = np.full(self.n, np.nan)  # the configuration's q (NaN: none yet)
 
@@ -243,8 +274,8 @@ class MinkBackend(Backend):
         mujoco.mju_mat2Quat(target[:4], target_rot.ravel())
         target[4:] = target_pos
         return (
-            self.frame_task.compute_error(self.configuration),
-            self.frame_task.compute_jacobian(self.configuration),
+            self.mink_task.compute_error(self.configuration),
+            self.mink_task.compute_jacobian(self.configuration),
         )
 
 
@@ -255,10 +286,10 @@ class PinocchioBackend(Backend):
     without Pink's per-call ``Configuration`` and ``SE3`` copies.
     """
 
-    def __init__(self, config: IKConfig, robot: RobotDescription) -> None:
+    def _load(self) -> None:
         import pinocchio as pin
 
-        super().__init__(config, robot)
+        robot = self.robot
         self.model = pinocchio_arm(robot)
         self.model.velocityLimit = self.velocity_limit.copy()
         self.data = self.model.createData()
@@ -282,7 +313,9 @@ class PinocchioBackend(Backend):
         return error, -pin.Jlog6(target.actInv(frame)) @ jacobian
 
 
-BACKENDS: dict[str, Callable[[IKConfig, RobotDescription], Backend]] = {
+BACKENDS: dict[
+    str, Callable[[IKConfig, RobotDescription, Sequence[Task], Sequence[Limit]], Backend]
+] = {
     "mink": MinkBackend,
     "pinocchio": PinocchioBackend,
 }

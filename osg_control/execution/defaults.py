@@ -3,8 +3,9 @@
 A defaults directory holds ``skills/`` (one checkpoint per skill), ``classifier/`` and
 ``manifest.json`` (the command, seeds, data-set hashes and package version that produced
 them, and ``success_rates``: each skill's measured Table I rate at the deployment noise,
-which become the plan costs). A domain ships one (``Domain.defaults_dir``); ``osg
-reproduce`` writes a directory of the same layout.
+which become the plan costs), read and checked by ``execution.bundle.ModelBundle``. A
+domain ships one (``Domain.defaults_dir``); ``osg reproduce`` writes a directory of the
+same layout.
 """
 
 from __future__ import annotations
@@ -13,25 +14,22 @@ import hashlib
 from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
 
 from osg_control.classifier.data import movement_classes
 from osg_control.classifier.model import StateClassifier
-from osg_control.control.estimator import MOTION_MODEL, check_motion_model
+from osg_control.control.estimator import MOTION_MODEL
 from osg_control.domain.base import Domain
 from osg_control.errors import CheckpointError
+from osg_control.execution.bundle import CLASSIFIER_DIR, MANIFEST, SKILLS_DIR, ModelBundle
 from osg_control.learning.checkpoints import check_action_scale, checkpoint_paths, require_skills
 from osg_control.learning.policy import SkillPolicy
-from osg_control.planning.costs import MANIFEST, read_manifest, success_rates
-from osg_control.planning.graph import SkillGraph, graph_from_specs
+from osg_control.planning.graph import SkillGraph
 
 __all__ = [
-    "MANIFEST",
     "Defaults",
     "defaults_root",
     "load_defaults",
     "load_skill_policies",
-    "read_manifest",
 ]
 
 
@@ -45,7 +43,7 @@ class Defaults:
         classifier: the state->skill classifier.
         graph: the domain's skill graph with the manifest's success rates (uniform costs
             for skills without one).
-        manifest: the manifest as read.
+        bundle: the manifest, read and checked (``execution.bundle.ModelBundle``).
         motion_model: the TCP filter's ``(k_now, k_prev)`` fitted on the defaults' data
             (the manifest's ``motion_model``; ``control.estimator.MOTION_MODEL`` when it
             records none).
@@ -55,7 +53,7 @@ class Defaults:
     policies: dict[str, SkillPolicy]
     classifier: StateClassifier
     graph: SkillGraph
-    manifest: dict[str, Any]
+    bundle: ModelBundle
     motion_model: tuple[float, float] = MOTION_MODEL
 
 
@@ -81,37 +79,15 @@ def load_defaults(domain: Domain, directory: str | Path | None = None) -> Defaul
     root = defaults_root(domain, directory)
     if not root.is_dir():
         raise CheckpointError(f"{root}: defaults directory not found")
-    manifest = read_manifest(root)
-    rates = success_rates(manifest, root / MANIFEST, domain)
+    bundle = ModelBundle.read(root, domain)
     return Defaults(
         directory=root,
-        policies=load_skill_policies(domain, root / "skills"),
-        classifier=StateClassifier.load(root / "classifier", movement_classes(domain)),
-        graph=graph_from_specs(domain, success_rates=rates),
-        manifest=manifest,
-        motion_model=manifest_motion_model(manifest, root / MANIFEST) or MOTION_MODEL,
+        policies=load_skill_policies(domain, bundle.policies_dir),
+        classifier=StateClassifier.load(bundle.classifier_dir, movement_classes(domain)),
+        graph=bundle.graph(domain),
+        bundle=bundle,
+        motion_model=bundle.motion_model or MOTION_MODEL,
     )
-
-
-MOTION_KEY = "motion_model"
-"""The manifest key of the TCP filter's motion model ``[k_now, k_prev]``."""
-
-
-def manifest_motion_model(manifest: dict[str, Any], path: Path) -> tuple[float, float] | None:
-    """A manifest's TCP filter motion model (None when it records none).
-
-    Raises:
-        CheckpointError: not two finite numbers within ``MOTION_BOUND``; names the file.
-    """
-    value = manifest.get(MOTION_KEY)
-    if value is None:
-        return None
-    if not isinstance(value, list):
-        raise CheckpointError(f"{path}: {MOTION_KEY!r} must be a list, got {value!r}")
-    try:
-        return check_motion_model(value)
-    except ValueError as err:
-        raise CheckpointError(f"{path}: {MOTION_KEY!r}: {err}") from None
 
 
 def load_skill_policies(
@@ -142,8 +118,8 @@ def models_in_use(domain: Domain, directory: str | Path | None = None) -> dict[s
         "domain": domain.name,
         "directory": str(root),
         "source": "shipped defaults" if shipped else "given --models",
-        "skills": str(root / "skills"),
-        "classifier": str(root / "classifier"),
+        "skills": str(root / SKILLS_DIR),
+        "classifier": str(root / CLASSIFIER_DIR),
     }
 
 

@@ -20,10 +20,9 @@ over them):
 - ``reproduce(ReproduceConfig(domain, out, ...), log) -> Reproduction``: all of them and
   the report (``reproduction``)
 
-``ModelBundle`` (``bundle``) is a defaults folder's manifest, typed: its skills and
-classifier folders, the measured success rates (the plan costs) and the perception, noise
-and filter gain they were measured at. Names are imported on first use, so importing this
-package loads neither torch nor MuJoCo.
+The stages read and write a defaults folder through ``execution.bundle.ModelBundle``
+(its manifest, typed). Names are imported on first use, so importing this package loads
+neither torch nor MuJoCo.
 """
 
 from __future__ import annotations
@@ -32,7 +31,6 @@ import importlib
 from typing import Any
 
 _EXPORTS: dict[str, str] = {
-    "ModelBundle": "bundle",
     "DataSets": "collect",
     "collect_datasets": "collect",
     "fit_filter_motion": "motion",
@@ -40,7 +38,6 @@ _EXPORTS: dict[str, str] = {
     "train_skills": "train",
     "train_missing": "train",
     "untrained_skills": "resume",
-    "DEPLOYMENT_NOISE": "bundle",
     "MeasuredRates": "tables",
     "table_i": "tables",
     "deployment_rates": "tables",
@@ -65,13 +62,11 @@ _EXPORTS: dict[str, str] = {
 """Public name -> the sub-module that defines it."""
 
 __all__ = [
-    "DEPLOYMENT_NOISE",
     "DataSets",
     "fit_filter_motion",
     "ExportedPlan",
     "FULL",
     "MeasuredRates",
-    "ModelBundle",
     "QUICK",
     "ReproduceConfig",
     "Reproduction",

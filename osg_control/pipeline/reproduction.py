@@ -25,11 +25,11 @@ from osg_control.errors import OSGError
 from osg_control.evaluation.evaluate import format_reach_table, format_task_table
 from osg_control.evaluation.report import write_report
 from osg_control.evaluation.skill_table import format_skill_table
+from osg_control.execution.bundle import SKILLS_DIR, ModelBundle
 from osg_control.io_safety import check_output_dir
 from osg_control.learning.early_stopping import CHECK_EPISODES, EarlyStopping
 from osg_control.paths import PACKAGE_DIR
 from osg_control.perception.spec import PerceptionSpec
-from osg_control.pipeline.bundle import SKILLS_DIR, ModelBundle
 from osg_control.pipeline.classifier import (
     TrainedClassifier,
     format_classifier,

@@ -18,8 +18,8 @@ from osg_control.control.estimator import MOTION_MODEL
 from osg_control.domain.base import Domain
 from osg_control.evaluation.evaluate import reach_table, task_table
 from osg_control.evaluation.skill_table import skill_table
+from osg_control.execution.bundle import DEPLOYMENT_NOISE, ModelBundle
 from osg_control.perception.spec import PerceptionSpec
-from osg_control.pipeline.bundle import DEPLOYMENT_NOISE, ModelBundle
 
 PAPER_NOISE_LEVELS = (0.0, 0.01, DEPLOYMENT_NOISE)
 """Table I's columns under the paper's protocol (one column, 0, under the others)."""

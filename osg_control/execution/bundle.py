@@ -1,30 +1,35 @@
 """The model bundle: a defaults folder's skills, classifier and the success rates measured
-with them, with the perception, noise and filter the rates were measured at.
+with them, with the perception, noise and filter the rates were measured at; the one
+owner of the folder's ``manifest.json``: its keys, reading, checking and writing.
 
 A bundle is a folder of the shipped defaults' layout (``skills/``, ``classifier/``,
-``manifest.json``); ``ModelBundle`` is its manifest, typed. The manifest keeps the keys the
-rest of the package reads (``success_rates``: the plan costs, ``planning.costs``;
-``command``, ``seed``, ``datasets_sha256``...: provenance) and adds ``perception``,
-``noise`` and ``filter_gain``. Reading needs no model (no torch).
+``manifest.json``); ``ModelBundle`` is its manifest, typed. The manifest records
+``success_rates`` (each skill's measured Table I rate at the deployment noise: the plan
+costs ``round(-ln p * 1000)``, ``measured_graph``), ``perception``, ``noise``,
+``filter_gain``, ``motion_model`` (the TCP filter's fit) and provenance (``command``,
+``seed``, ``datasets_sha256``...). ``execution.defaults.load_defaults`` and ``osg plan``
+read it through here. Reading needs no model (no torch).
 """
 
 from __future__ import annotations
 
 import json
+import logging
 import math
 from collections.abc import Mapping
 from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any
 
+from osg_control.control.estimator import check_motion_model
 from osg_control.domain.base import Domain
 from osg_control.errors import CheckpointError, OSGError
-from osg_control.execution.defaults import MOTION_KEY, manifest_motion_model
 from osg_control.io_safety import atomic_write
-from osg_control.json_files import is_json_number
+from osg_control.json_files import is_json_number, read_json_object
 from osg_control.perception.spec import PerceptionSpec
-from osg_control.planning.costs import MANIFEST, RATES_KEY, read_manifest, success_rates
+from osg_control.planning.graph import SkillGraph, graph_from_specs
 
+LOGGER = logging.getLogger(__name__)
 DEPLOYMENT_NOISE = 0.02
 """The paper protocol's observation noise [m] whose Table I rates become the plan costs
 (the paper's 2 cm)."""
@@ -32,6 +37,12 @@ SKILLS_DIR = "skills"
 """The bundle's skill checkpoint folder (one ``<skill>.safetensors`` + ``.json`` each)."""
 CLASSIFIER_DIR = "classifier"
 """The bundle's state->skill classifier folder."""
+MANIFEST = "manifest.json"
+"""The bundle's manifest file."""
+RATES_KEY = "success_rates"
+"""The manifest's map of skill name -> measured success rate (the plan costs)."""
+MOTION_KEY = "motion_model"
+"""The manifest key of the TCP filter's motion model ``[k_now, k_prev]``."""
 PERCEPTION_KEY = "perception"
 NOISE_KEY = "noise"
 FILTER_KEY = "filter_gain"
@@ -80,6 +91,11 @@ class ModelBundle:
     def classifier_dir(self) -> Path:
         """The classifier folder (``classifier.model.StateClassifier.load``)."""
         return self.directory / CLASSIFIER_DIR
+
+    def graph(self, domain: Domain) -> SkillGraph:
+        """The domain's skill graph with these success rates as costs (uniform for a
+        skill without one)."""
+        return graph_from_specs(domain, success_rates=self.success_rates)
 
     @property
     def manifest_path(self) -> Path:
@@ -204,3 +220,64 @@ def _text(value: object, path: Path) -> str | None:
     if value is None or isinstance(value, str):
         return value
     raise CheckpointError(f"{path}: {RATES_FROM_KEY!r} must be text, got {value!r}")
+
+
+def measured_graph(domain: Domain, directory: str | Path | None = None) -> SkillGraph:
+    """The domain's skill graph with the success rates of a defaults directory (default:
+    the domain's shipped one; uniform costs when there is none)."""
+    root = Path(directory) if directory is not None else domain.defaults_dir
+    if root is None:
+        return graph_from_specs(domain)
+    if not (root / MANIFEST).exists():
+        LOGGER.warning(
+            "%s: no %s: planning at uniform skill costs (no measured success rates)",
+            root,
+            MANIFEST,
+        )
+    return ModelBundle.read(root, domain).graph(domain)
+
+
+def read_manifest(directory: Path) -> dict[str, Any]:
+    """The manifest of a defaults directory as JSON, unchecked (``ModelBundle.read`` checks
+    it); empty if the directory has none."""
+    path = Path(directory) / MANIFEST
+    if not path.exists():
+        return {}
+    return read_json_object(path, "manifest", CheckpointError)
+
+
+def success_rates(manifest: dict[str, Any], path: Path, domain: Domain | None) -> dict[str, float]:
+    """The manifest's measured success rates, checked: rates in [0, 1], and with a
+    ``domain`` its skills only.
+
+    Raises:
+        CheckpointError: an unknown skill or a rate that is not a number in [0, 1].
+    """
+    rates = manifest.get(RATES_KEY, {})
+    if not isinstance(rates, dict):
+        raise CheckpointError(f"{path}: {RATES_KEY!r} must map skill names to rates")
+    checked = {}
+    for name, rate in rates.items():
+        if domain is not None and name not in domain.skills_by_name:
+            raise CheckpointError(f"{path}: {RATES_KEY!r} names unknown skill {name!r}")
+        if not is_json_number(rate) or not math.isfinite(rate) or not 0 <= rate <= 1:
+            raise CheckpointError(f"{path}: {RATES_KEY!r}[{name!r}] = {rate!r} is not in [0, 1]")
+        checked[name] = float(rate)
+    return checked
+
+
+def manifest_motion_model(manifest: dict[str, Any], path: Path) -> tuple[float, float] | None:
+    """A manifest's TCP filter motion model (None when it records none).
+
+    Raises:
+        CheckpointError: not two finite numbers within ``MOTION_BOUND``; names the file.
+    """
+    value = manifest.get(MOTION_KEY)
+    if value is None:
+        return None
+    if not isinstance(value, list):
+        raise CheckpointError(f"{path}: {MOTION_KEY!r} must be a list, got {value!r}")
+    try:
+        return check_motion_model(value)
+    except ValueError as err:
+        raise CheckpointError(f"{path}: {MOTION_KEY!r}: {err}") from None
