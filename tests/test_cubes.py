@@ -1,0 +1,112 @@
+"""N cubes: the scene composed with 1-3 cubes, their world vector and facts, placements
+anywhere in the counter square without overlap, and the errors."""
+
+from __future__ import annotations
+
+import mujoco
+import numpy as np
+import pytest
+
+from osg_control.domain.frames import sample_placements
+from osg_control.environment.arm_env import EnvConfig
+from osg_control.errors import EnvOptionError, PlacementError
+from osg_control.kitchen.cubes import CUBE_CLEARANCE, cube_frame, cube_objects
+from osg_control.kitchen.env import KitchenEnv
+from osg_control.kitchen.scene import build_kitchen_model, kitchen_robot, kitchen_xml_path
+from osg_control.kitchen.skills import CUBE, OBJECTS
+from osg_control.kitchen.world import (
+    CUBE_HALF_SIZE,
+    WORLD_FIELDS,
+    cube_count,
+    world_facts,
+    world_fields,
+    world_state_from_array,
+)
+from osg_control.perception.spec import perception_spec
+
+
+def test_one_cube_model_is_the_files_scene_and_more_cubes_are_added_bodies() -> None:
+    robot = kitchen_robot("panda")
+    one = build_kitchen_model(robot)
+    three = build_kitchen_model(robot, cubes=3)
+    assert three.nbody == one.nbody + 2 and three.nq == one.nq + 14
+    with pytest.raises(KeyError):
+        one.body("cube2")
+    scene = mujoco.MjModel.from_xml_path(str(kitchen_xml_path()))
+    assert [scene.body(i).name for i in range(scene.nbody)] == [
+        one.body(i).name for i in range(scene.nbody)
+    ]  # the file's bodies first, in its order
+    colours = {tuple(three.geom_rgba[three.geom(n).id]) for n in ("cube", "cube2", "cube3")}
+    assert len(colours) == 3
+    np.testing.assert_array_equal(three.geom_size[three.geom("cube3").id], [CUBE_HALF_SIZE] * 3)
+
+
+@pytest.mark.parametrize("cubes", [2, 3])
+def test_each_cube_has_its_world_fields_grasp_and_facts(cubes: int) -> None:
+    env = KitchenEnv(skill="move-home-to-cube", cubes=cubes)
+    env.reset(seed=0)
+    world = env.read_world()
+    assert world.shape == (len(world_fields(cubes)),) and cube_count(len(world)) == cubes
+    assert world_fields(cubes)[: len(WORLD_FIELDS)] == WORLD_FIELDS  # cube 1's layout kept
+    state = world_state_from_array(world)
+    np.testing.assert_array_equal(state.as_array(), world)
+    facts = env.facts()
+    expected = {"cube-on-counter", *(f"(on-counter cube-{k})" for k in range(2, cubes + 1))}
+    assert expected <= facts and "hand-empty" in facts
+    assert env.percept().facts >= expected  # the robot perception reports every cube
+    # cube 2 lifted in a gripper: its own facts, not cube 1's, and the hand not empty
+    lifted = state.more_cubes[0].__class__((0.5, -0.2, 0.2), (1.0, 0.0, 0.0, 0.0), True)
+    held = world_facts(state.__class__(**{**state.__dict__, "more_cubes": (lifted,)}))
+    assert {"(holding cube-2)", "(lifted cube-2)"} <= held
+    assert "hand-empty" not in held and "holding-cube" not in held
+
+
+def test_cube_placements_cover_the_square_without_overlap_and_follow_the_seed() -> None:
+    frames = cube_objects(3)
+    rng = np.random.default_rng(11)
+    draws = [sample_placements(frames, rng) for _ in range(300)]
+    for placed in draws:
+        xy = np.array([placed[name][:2] for name in ("cube", "cube2", "cube3")])
+        assert np.all(xy >= CUBE.region_low) and np.all(xy <= CUBE.region_high)
+        gaps = [np.linalg.norm(xy[i] - xy[j]) for i in range(3) for j in range(i + 1, 3)]
+        assert min(gaps) >= 2 * CUBE_CLEARANCE
+    third = np.array([d["cube3"][:2] for d in draws])
+    assert np.ptp(third[:, 0]) > 0.17 and np.ptp(third[:, 1]) > 0.17  # anywhere in it
+    again = sample_placements(frames, np.random.default_rng(11))
+    assert all(np.array_equal(again[k], draws[0][k]) for k in again)
+    # one cube: exactly the draw of the one-cube scene (one uniform draw)
+    one = sample_placements(OBJECTS, np.random.default_rng(5))["cube"]
+    np.testing.assert_array_equal(
+        one[:2], np.random.default_rng(5).uniform((0.4, -0.3), (0.6, -0.1))
+    )
+
+
+def test_more_cubes_than_fit_are_a_named_error() -> None:
+    with pytest.raises(PlacementError, match="fits no more"):
+        sample_placements([cube_frame(k) for k in range(1, 10)], np.random.default_rng(0))
+    with pytest.raises(EnvOptionError, match="1 to 3 cubes"):
+        KitchenEnv(cubes=4)
+
+
+def test_placed_cubes_rest_where_asked_and_overlapping_ones_are_refused() -> None:
+    env = KitchenEnv(skill="move-home-to-cube", cubes=2)
+    placements = sample_placements(env.objects, np.random.default_rng(3))
+    world = env.placement_world(placements, None)
+    assert set(world) == {"cube_pos", "cube2_pos"}
+    env.reset(seed=1, options={"world": world})
+    cubes = env.world().cubes
+    for cube, name in zip(cubes, ("cube", "cube2"), strict=True):
+        np.testing.assert_allclose(cube.pos[:2], placements[name][:2], atol=2e-3)
+    before = env.data.qpos.copy()
+    overlapping = {"cube_pos": [0.5, -0.2, CUBE_HALF_SIZE], "cube2_pos": [0.52, -0.19, 0.0225]}
+    with pytest.raises(PlacementError, match="cube_pos .* and cube2_pos"):
+        env.reset(seed=2, options={"world": overlapping})
+    with pytest.raises(PlacementError, match="overlapping"):  # cube 2 onto cube 1's rest place
+        env.reset(seed=2, options={"world": {"cube2_pos": [0.5, -0.2, CUBE_HALF_SIZE]}})
+    np.testing.assert_array_equal(env.data.qpos, before)  # refused before anything moved
+
+
+def test_several_cubes_on_camera_are_refused() -> None:
+    config = EnvConfig(perception=perception_spec("camera", 0.0))
+    with pytest.raises(EnvOptionError, match="camera perception locates one cube"):
+        KitchenEnv(config=config, cubes=2)
