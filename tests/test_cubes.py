@@ -3,13 +3,19 @@ anywhere in the counter square without overlap, and the errors."""
 
 from __future__ import annotations
 
+import json
+from pathlib import Path
+
 import mujoco
 import numpy as np
 import pytest
 
+from osg_control.cli import main
+from osg_control.domain.binding import bind_step
 from osg_control.domain.frames import sample_placements
+from osg_control.domain.registry import get_domain
 from osg_control.environment.arm_env import EnvConfig
-from osg_control.errors import EnvOptionError, PlacementError
+from osg_control.errors import DomainError, EnvOptionError, PlacementError
 from osg_control.kitchen.cubes import CUBE_CLEARANCE, cube_frame, cube_objects
 from osg_control.kitchen.env import KitchenEnv
 from osg_control.kitchen.scene import build_kitchen_model, kitchen_robot, kitchen_xml_path
@@ -23,6 +29,7 @@ from osg_control.kitchen.world import (
     world_state_from_array,
 )
 from osg_control.perception.spec import perception_spec
+from osg_control.planning.api import plan_for_goal
 
 
 def test_one_cube_model_is_the_files_scene_and_more_cubes_are_added_bodies() -> None:
@@ -110,3 +117,59 @@ def test_several_cubes_on_camera_are_refused() -> None:
     config = EnvConfig(perception=perception_spec("camera", 0.0))
     with pytest.raises(EnvOptionError, match="camera perception locates one cube"):
         KitchenEnv(config=config, cubes=2)
+
+
+def test_a_two_cube_task_runs_in_the_kitchen_with_two_cubes() -> None:
+    kitchen = get_domain("kitchen")
+    task = kitchen.task("two-cubes-in-cabinet")
+    scene = kitchen.for_task(task)
+    assert scene.ref == "kitchen[cube=2]" and get_domain(scene.ref) is get_domain(scene.ref)
+    assert scene.lifting.of_type("cube") == ["cube-1", "cube-2"]
+    assert [t.name for t in scene.tasks] == ["two-cubes-in-cabinet", "pick-up-cube-2"]
+    assert "(on-counter cube-2)" in scene.start_world and "(holding cube-2)" in scene.facts
+    assert [o.name for o in scene.objects] == ["cube", "cube2", "door"]
+    assert kitchen.for_task(kitchen.task("pick-up")) is kitchen
+    assert kitchen.with_counts({"cube": 1}) is kitchen
+    env = scene.make_env()
+    assert env.cubes == 2 and len(env.read_world()) == len(scene.world_fields)
+    with pytest.raises(DomainError, match="1 to 3 cubes"):
+        kitchen.with_counts({"cube": 4})
+    with pytest.raises(DomainError, match="only the number of cubes"):
+        kitchen.with_counts({"valve": 2})
+
+
+def test_facts_per_cube_instance_and_a_plan_for_both_cubes() -> None:
+    scene = get_domain("kitchen[cube=2]")
+    facts = scene.facts_of(np.array(_two_cube_world()))
+    assert {"cube-in-cabinet", "(on-counter cube-2)", "hand-empty"} <= facts
+    assert scene.lifting.atom("(in-cabinet cube-2)") == ("in-cabinet", "cube-2")
+    result = plan_for_goal(scene, ["(door-open door-1) (in-cabinet cube-1) (in-cabinet cube-2)"])
+    assert result.solved
+    steps = list(result.actions)
+    assert "grab-cube cube-1" in steps and "grab-cube cube-2" in steps
+    assert steps.index("release-cube cube-1") < steps.index("grab-cube cube-2")  # one at a time
+    bound = bind_step(scene.lifting, scene.skills_by_name, "grab-cube cube-2")
+    assert bound.frames == {"cube": "cube2"} and "(holding cube-2)" in bound.skill.add_effects
+
+
+def test_cli_plans_and_exports_two_cubes(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    goal = "(door-open door-1) (in-cabinet cube-2)"
+    assert main(["--domain", "kitchen[cube=2]", "plan", "--goal", goal, "--json"]) == 0
+    plan = json.loads(capsys.readouterr().out)
+    assert "place-cube-in-cabinet cube-2" in [s["action"] for s in plan["steps"]]
+    assert main(["plan", "--goal", "(in-cabinet cube-2)"]) == 2  # one cube: no cube-2
+    assert "unknown object 'cube-2'" in capsys.readouterr().err
+    assert main(["--domain", "kitchen[cube=9]", "plan", "--goal", "door-open"]) == 2
+    assert "1 to 3 cubes" in capsys.readouterr().err
+    assert main(["pddl", "export", "--out", str(tmp_path)]) == 0
+    problem = (tmp_path / "problems" / "two-cubes-in-cabinet.pddl").read_text()
+    assert "(:objects cube-1 cube-2 - cube" in problem and "(on-counter cube-2)" in problem
+
+
+def _two_cube_world() -> list[float]:
+    """Door shut, cube 1 in the cabinet, cube 2 on the counter, nothing held."""
+    cube_1 = [0.64, 0.30, 0.1225, 1.0, 0.0, 0.0, 0.0, 0.0]
+    cube_2 = [0.45, -0.15, CUBE_HALF_SIZE, 1.0, 0.0, 0.0, 0.0, 0.0]
+    return [0.0, 0.0, *cube_1[:7], 0.0, 0.0, *cube_2]

@@ -55,7 +55,8 @@ def domain_names() -> list[str]:
 
 def get_domain(name: str) -> Domain:
     """The domain registered under ``name``, or ``NAME@ROBOT`` (``Domain.ref``): domain
-    NAME with the registered robot ROBOT (``Domain.with_robot``).
+    NAME with the registered robot ROBOT (``Domain.with_robot``), or ``NAME[TYPE=N,...]``:
+    domain NAME with N objects of TYPE in its scene (``Domain.with_counts``).
 
     Raises:
         DomainError: an unknown name (the known ones listed), or a factory that does not
@@ -68,6 +69,10 @@ def get_domain(name: str) -> Domain:
     if "@" in name:
         base, robot = name.split("@", 1)
         _BUILT[name] = get_domain(base).with_robot(robot)
+        return _BUILT[name]
+    if name.endswith("]") and "[" in name:
+        base, counts = name[:-1].split("[", 1)
+        _BUILT[name] = get_domain(base).with_counts(_counts(name, counts))
         return _BUILT[name]
     factory = _FACTORIES.get(name)
     if factory is None:
@@ -84,3 +89,18 @@ def get_domain(name: str) -> Domain:
         raise DomainError(f"domain {name!r}: its factory built a domain named {domain.name!r}")
     _BUILT[name] = domain
     return domain
+
+
+def _counts(ref: str, text: str) -> dict[str, int]:
+    """``cube=2,plate=1`` as counts.
+
+    Raises:
+        DomainError: naming ``ref`` and what cannot be read.
+    """
+    counts = {}
+    for part in text.split(","):
+        kind, _, number = part.partition("=")
+        if not kind.strip() or not number.strip().isdigit():
+            raise DomainError(f"domain {ref!r}: cannot read object counts {text!r} (TYPE=N,...)")
+        counts[kind.strip()] = int(number)
+    return counts

@@ -295,9 +295,13 @@ def build_problem(
 
 
 def task_problem(pddl: SkillPDDL, domain: OSGDomain, task: Task) -> Problem:
-    """The problem of one of a domain's tasks over its PDDL domain ``pddl``."""
+    """The problem of one of a domain's tasks over its PDDL domain ``pddl``, naming the
+    objects of the task's scene (``Domain.for_task``: e.g. two cubes)."""
+    scene = domain.for_task(task)
+    if scene is not domain:
+        pddl = SkillPDDL(pddl.domain, scene.lifting)
     return build_problem(
-        pddl, domain.task_node(task), domain.task_world(task), task.goal, name=task.name
+        pddl, scene.task_node(task), scene.task_world(task), task.goal, name=task.name
     )
 
 
