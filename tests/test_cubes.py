@@ -16,6 +16,7 @@ from osg_control.domain.frames import sample_placements
 from osg_control.domain.registry import get_domain
 from osg_control.environment.arm_env import EnvConfig
 from osg_control.errors import DomainError, EnvOptionError, PlacementError
+from osg_control.execution.executor import load_executor, task_env_config
 from osg_control.kitchen.cubes import CUBE_CLEARANCE, cube_frame, cube_objects
 from osg_control.kitchen.env import KitchenEnv
 from osg_control.kitchen.scene import build_kitchen_model, kitchen_robot, kitchen_xml_path
@@ -173,3 +174,28 @@ def _two_cube_world() -> list[float]:
     cube_1 = [0.64, 0.30, 0.1225, 1.0, 0.0, 0.0, 0.0, 0.0]
     cube_2 = [0.45, -0.15, CUBE_HALF_SIZE, 1.0, 0.0, 0.0, 0.0, 0.0]
     return [0.0, 0.0, *cube_1[:7], 0.0, 0.0, *cube_2]
+
+
+def test_the_entry_skill_is_bound_to_the_goals_cube() -> None:
+    scene = get_domain("kitchen[cube=2]")
+    executor = load_executor(scene, max_replans=0)
+    facts = set(scene.start_world)
+    for cube in ("cube-1", "cube-2"):
+        label, end, after = executor.entry.bind("move-home-to-cube", [f"(lifted {cube})"], facts)
+        assert (label, end) == (f"move-home-to-cube {cube}", f"above-cube {cube}")
+        plan = executor._plans([f"(lifted {cube})"], end, after, "astar")
+        assert list(plan.actions) == [f"grab-cube {cube}", f"pick-up-cube {cube}"]
+
+
+@pytest.mark.slow
+def test_an_executed_two_cube_episode_puts_both_cubes_in_the_cabinet() -> None:
+    scene = get_domain("kitchen[cube=2]")
+    task = scene.task("two-cubes-in-cabinet")
+    env = scene.make_env(config=task_env_config(perception_spec("robot", 0.0)))
+    world = env.placement_world(sample_placements(scene, np.random.default_rng(7)), None)
+    obs, _ = env.reset(seed=7, options={"facts": task.world, "world": world})
+    result = load_executor(scene, max_replans=2).execute(task.goal, env, obs)
+    assert result.success and set(task.goal) <= env.facts(), result.to_dict()
+    assert all(cube.in_cabinet for cube in env.world().cubes)
+    bound = [o.skill for o in result.outcomes]
+    assert bound.count("grab-cube") >= 2  # each cube grabbed in its own frame

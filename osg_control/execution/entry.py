@@ -8,6 +8,7 @@ import numpy as np
 
 from osg_control.classifier.motion import MotionMemory
 from osg_control.domain.base import Domain
+from osg_control.domain.binding import bindings, end_place
 from osg_control.domain.frames import Offsets, shifted_nodes
 from osg_control.domain.spec import nearest_start
 from osg_control.execution.locate import recorded_world_holds, skill_on_path
@@ -116,3 +117,27 @@ class EntryChoice:
         edge = self.graph.edge(name)
         entering = skill_cost(max(probability, MIN_SUCCESS_RATE)) + skill_cost(edge.success_rate)
         return float(entering + edge.step_cost + planned.cost)
+
+    def bind(
+        self, name: str, goal: list[str], facts: set[str], planner: str = "astar"
+    ) -> tuple[str, str, set[str]]:
+        """The entry skill ``name`` bound to the objects that make the goal cheapest (the
+        goal's object: entering toward cube 2 for a goal on cube 2); a skill of one
+        binding is its recorded one, without planning.
+
+        Returns:
+            ``(ground operator, where it ends as a planner's start, facts after it)``.
+        """
+        best: tuple[float, str, str, set[str]] | None = None
+        candidates = bindings(self.domain.lifting, self.skills[name])
+        for bound in candidates:
+            end = end_place(self.domain.lifting, bound)
+            after = (facts - bound.skill.del_effects) | bound.skill.add_effects
+            if len(candidates) == 1:
+                return bound.label, end, after
+            planned = self.plans(goal, end, after, planner)
+            cost = planned.cost if planned.solved and planned.cost is not None else float("inf")
+            if best is None or cost < best[0]:
+                best = (float(cost), bound.label, end, after)
+        assert best is not None  # a skill has at least its recorded binding
+        return best[1], best[2], best[3]
