@@ -14,9 +14,10 @@ from osg_control.cli import main
 from osg_control.domain.binding import bind_step
 from osg_control.domain.frames import sample_placements
 from osg_control.domain.registry import get_domain
-from osg_control.environment.arm_env import EnvConfig
+from osg_control.environment.arm_env import GRIPPER_OPEN_CMD, EnvConfig
 from osg_control.errors import DomainError, EnvOptionError, PlacementError
 from osg_control.execution.executor import load_executor, task_env_config
+from osg_control.execution.locate import node_at, skill_on_path
 from osg_control.kitchen.cubes import CUBE_CLEARANCE, cube_frame, cube_objects
 from osg_control.kitchen.env import KitchenEnv
 from osg_control.kitchen.scene import build_kitchen_model, kitchen_robot, kitchen_xml_path
@@ -199,3 +200,21 @@ def test_an_executed_two_cube_episode_puts_both_cubes_in_the_cabinet() -> None:
     assert all(cube.in_cabinet for cube in env.world().cubes)
     bound = [o.skill for o in result.outcomes]
     assert bound.count("grab-cube") >= 2  # each cube grabbed in its own frame
+
+
+def test_the_robot_is_located_on_each_cubes_nodes_and_paths() -> None:
+    scene = get_domain("kitchen[cube=2]")
+    offsets = {"cube": np.zeros(3), "cube2": np.array([-0.09, 0.09, 0.0])}
+    obs = np.zeros(10)
+    obs[3:7], obs[7] = (0.0, 1.0, 0.0, 0.0), GRIPPER_OPEN_CMD
+    facts = set(scene.start_world)
+    obs[:3] = np.add(scene.nodes["above-cube"].position, offsets["cube2"])
+    assert node_at(scene, obs, facts, offsets) == "above-cube cube-2"
+    obs[:3] = scene.nodes["above-cube"].position
+    assert node_at(scene, obs, facts, offsets) == "above-cube"
+    grasp = np.add(scene.nodes["cube-grasped"].position, offsets["cube2"])
+    obs[:3] = (obs[:3] + offsets["cube2"] + grasp) / 2  # half-way down to cube 2
+    skills = scene.skills_by_name.values()
+    assert skill_on_path(scene, obs, facts, skills, offsets) == "grab-cube cube-2"
+    plan = plan_for_goal(scene, "(lifted cube-2)", "above-cube cube-2", sorted(facts))
+    assert plan.actions == ("grab-cube cube-2", "pick-up-cube cube-2")
