@@ -165,6 +165,9 @@ def test_cli_plans_and_exports_two_cubes(
     assert "unknown object 'cube-2'" in capsys.readouterr().err
     assert main(["--domain", "kitchen[cube=9]", "plan", "--goal", "door-open"]) == 2
     assert "1 to 3 cubes" in capsys.readouterr().err
+    camera = ["--domain", "kitchen[cube=2]", "run", "--goal", "(lifted cube-2)"]
+    assert main([*camera, "--perception", "camera"]) == 2  # refused before any episode
+    assert "does not support perception 'camera'" in capsys.readouterr().err
     assert main(["pddl", "export", "--out", str(tmp_path)]) == 0
     problem = (tmp_path / "problems" / "two-cubes-in-cabinet.pddl").read_text()
     assert "(:objects cube-1 cube-2 - cube" in problem and "(on-counter cube-2)" in problem
@@ -188,7 +191,6 @@ def test_the_entry_skill_is_bound_to_the_goals_cube() -> None:
         assert list(plan.actions) == [f"grab-cube {cube}", f"pick-up-cube {cube}"]
 
 
-@pytest.mark.slow
 def test_an_executed_two_cube_episode_puts_both_cubes_in_the_cabinet() -> None:
     scene = get_domain("kitchen[cube=2]")
     task = scene.task("two-cubes-in-cabinet")
