@@ -186,7 +186,8 @@ def test_the_entry_skill_is_bound_to_the_goals_cube() -> None:
     facts = set(scene.start_world)
     for cube in ("cube-1", "cube-2"):
         label, end, after = executor.entry.bind("move-home-to-cube", [f"(lifted {cube})"], facts)
-        assert (label, end) == (f"move-home-to-cube {cube}", f"above-cube {cube}")
+        place = "above-cube" if cube == "cube-1" else f"above-cube {cube}"  # recorded: bare
+        assert (label, end) == (f"move-home-to-cube {cube}", place)
         plan = executor._plans([f"(lifted {cube})"], end, after, "astar")
         assert list(plan.actions) == [f"grab-cube {cube}", f"pick-up-cube {cube}"]
 
@@ -202,6 +203,21 @@ def test_an_executed_two_cube_episode_puts_both_cubes_in_the_cabinet() -> None:
     assert all(cube.in_cabinet for cube in env.world().cubes)
     bound = [o.skill for o in result.outcomes]
     assert bound.count("grab-cube") >= 2  # each cube grabbed in its own frame
+
+
+def test_a_goal_on_cube_2_enters_toward_it_from_off_the_graph() -> None:
+    """Goal-aware entry weighs each binding of a candidate: from the cabinet with the door
+    shut, toward cube 2 (before, each candidate was costed from cube 1's place, which made
+    the way via the valve look cheaper)."""
+    scene = get_domain("kitchen[cube=2]")
+    executor = load_executor(scene, max_replans=0)
+    obs = np.zeros(10)
+    obs[:3], obs[3:7], obs[7] = (0.395, 0.317, 0.327), (0.0, 1.0, 0.0, 0.0), GRIPPER_OPEN_CMD
+    facts = set(scene.start_world)
+    offsets = {"cube": np.zeros(3), "cube2": np.array([0.04, -0.06, 0.0])}
+    entry, plan, _ = executor.plan(["(lifted cube-2)"], obs, facts, offsets)
+    assert entry is not None and entry.endswith("-to-cube cube-2")  # to above cube 2
+    assert plan == ["grab-cube cube-2", "pick-up-cube cube-2"]
 
 
 def test_the_robot_is_located_on_each_cubes_nodes_and_paths() -> None:

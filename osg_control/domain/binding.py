@@ -120,9 +120,12 @@ def recorded(lifting: Lifting, skill: SkillSpec) -> BoundSkill:
 
 def end_place(lifting: Lifting, bound: BoundSkill) -> str:
     """Where a bound skill ends, as a planner's start: its end node, or ``NODE OBJ`` for a
-    node relative to a bound object (``above-cube cube-2``; ``pddl_io.build_problem``)."""
-    end = lifting.skills[bound.skill.name].end
-    if end[0] == AT_OBJECT and end[2] in bound.binding:
+    node relative to another object than the recorded one (``above-cube cube-2``;
+    ``pddl_io.build_problem``)."""
+    lifted = lifting.skills[bound.skill.name]
+    end = lifted.end
+    moved = end[0] == AT_OBJECT and end[2] in bound.binding
+    if moved and bound.binding[end[2]] != lifted.recorded[end[2]]:
         return f"{end[1]} {bound.binding[end[2]]}"
     return end[1]
 

@@ -119,15 +119,14 @@ class EntryChoice:
         self, name: str, probability: float, facts: set[str], goal: list[str], planner: str
     ) -> float:
         """``-1000 ln p`` of entering through ``name``, its operator cost and the plan cost
-        from its end node (inf without a plan)."""
-        skill = self.skills[name]
-        after = (facts - skill.del_effects) | skill.add_effects
-        planned = self.plans(goal, skill.end, after, planner)
-        if not planned.solved or planned.cost is None:
-            return float("inf")
+        from its end node, bound to the objects that make it cheapest (inf without a
+        plan)."""
+        planned, _label, _end, _after = self._cheapest(name, goal, facts, planner)
+        if planned == float("inf"):
+            return planned
         edge = self.graph.edge(name)
         entering = skill_cost(max(probability, MIN_SUCCESS_RATE)) + skill_cost(edge.success_rate)
-        return float(entering + edge.step_cost + planned.cost)
+        return float(entering + edge.step_cost + planned)
 
     def bind(
         self, name: str, goal: list[str], facts: set[str], planner: str = "astar"
@@ -144,16 +143,26 @@ class EntryChoice:
             chosen = bind_step(self.domain.lifting, self.skills, name)
             after = (facts - chosen.skill.del_effects) | chosen.skill.add_effects
             return chosen.label, end_place(self.domain.lifting, chosen), after
+        _cost, label, end, after = self._cheapest(name, goal, facts, planner, plan_one=False)
+        return label, end, after
+
+    def _cheapest(
+        self, name: str, goal: list[str], facts: set[str], planner: str, plan_one: bool = True
+    ) -> tuple[float, str, str, set[str]]:
+        """The binding of skill ``name`` whose end is cheapest to the goal: ``(the plan's
+        cost from its end (inf without a plan; 0, unplanned, for a skill of one binding
+        unless ``plan_one``), ground operator, end place, facts after it)``; the first on
+        ties."""
         best: tuple[float, str, str, set[str]] | None = None
         candidates = bindings(self.domain.lifting, self.skills[name])
         for bound in candidates:
             end = end_place(self.domain.lifting, bound)
             after = (facts - bound.skill.del_effects) | bound.skill.add_effects
-            if len(candidates) == 1:
-                return bound.label, end, after
+            if len(candidates) == 1 and not plan_one:
+                return 0.0, bound.label, end, after
             planned = self.plans(goal, end, after, planner)
             cost = planned.cost if planned.solved and planned.cost is not None else float("inf")
             if best is None or cost < best[0]:
                 best = (float(cost), bound.label, end, after)
         assert best is not None  # a skill has at least its recorded binding
-        return best[1], best[2], best[3]
+        return best
