@@ -385,59 +385,7 @@ class Domain:
         return task.node or self.home
 
     def summary(self) -> dict[str, Any]:
-        """A JSON-ready description (``osg domains --json``)."""
-        return {
-            "name": self.name,
-            "description": self.description,
-            "nodes": {
-                n.name: {
-                    "position": list(n.position),
-                    "gripper": n.gripper,
-                    "orientation": list(n.orientation),
-                }
-                for n in self.nodes.values()
-            },
-            "facts": list(self.facts),
-            "skills": [
-                {
-                    "name": s.name,
-                    "kind": s.kind,
-                    "start": s.start,
-                    "end": s.end,
-                    "preconditions": sorted(s.preconditions),
-                    "add_effects": sorted(s.add_effects),
-                    "del_effects": sorted(s.del_effects),
-                    "parameters": [f"?{var} - {kind}" for var, kind in s.parameters],
-                }
-                for s in self.skills
-            ],
-            "types": dict(self.types),
-            "instances": {i.name: i.type for i in self.instances},
-            "fact_atoms": {f.name: "(" + " ".join(f.atom) + ")" for f in self.fact_atoms},
-            "tasks": [
-                {
-                    "name": t.name,
-                    "goal": list(t.goal),
-                    "world": list(self.task_world(t)),
-                    "node": self.task_node(t),
-                    "description": t.description,
-                }
-                for t in self.tasks
-            ],
-            "start_regions": [
-                {
-                    "name": r.name,
-                    "position": list(r.position),
-                    "radius": r.radius,
-                    "angle": r.angle,
-                    "facts": list(r.facts),
-                }
-                for r in self.start_regions
-            ],
-            "world_fields": list(self.world_fields),
-            "hand_empty": self.hand_empty,
-            "watched_facts": sorted(self.watched_facts),
-            "env_id": self.env_id,
-            "perceptions": list(self.perceptions),
-            "robot": self.robot,
-        }
+        """A JSON-ready description (``osg domains --json``; ``summary.domain_summary``)."""
+        from osg_control.domain.summary import domain_summary
+
+        return domain_summary(self)
