@@ -177,7 +177,7 @@ def selected_robot(args: argparse.Namespace) -> Iterator[None]:
         return
     from osg_control.domain.registry import domain_override, get_domain
 
-    with domain_override(get_domain(args.domain).with_robot(args.robot)):
+    with domain_override(get_domain(args.domain).with_robot(args.robot), args.domain):
         yield
 
 

@@ -13,7 +13,7 @@ import pytest
 from osg_control.cli import main
 from osg_control.domain.binding import bind_step
 from osg_control.domain.frames import sample_placements
-from osg_control.domain.registry import get_domain
+from osg_control.domain.registry import domain_override, get_domain
 from osg_control.environment.arm_env import GRIPPER_OPEN_CMD, EnvConfig
 from osg_control.errors import DomainError, EnvOptionError, PlacementError
 from osg_control.execution.executor import load_executor, task_env_config
@@ -236,3 +236,15 @@ def test_the_robot_is_located_on_each_cubes_nodes_and_paths() -> None:
     assert skill_on_path(scene, obs, facts, skills, offsets) == "grab-cube cube-2"
     plan = plan_for_goal(scene, "(lifted cube-2)", "above-cube cube-2", sorted(facts))
     assert plan.actions == ("grab-cube cube-2", "pick-up-cube cube-2")
+
+
+def test_two_cubes_with_another_robot_keep_both_choices() -> None:
+    domain = get_domain("kitchen[cube=2]@ur5")
+    assert (domain.ref, domain.robot) == ("kitchen[cube=2]@ur5", "ur5")
+    assert domain.lifting.of_type("cube") == ["cube-1", "cube-2"]
+    ur5 = get_domain("kitchen@ur5")
+    two = ur5.for_task(ur5.task("two-cubes-in-cabinet"))
+    assert (two.ref, two.robot) == ("kitchen[cube=2]@ur5", "ur5")
+    with domain_override(domain, "kitchen[cube=2]"):  # what osg --robot ur5 does
+        assert get_domain("kitchen[cube=2]") is domain
+    assert get_domain("kitchen[cube=2]").robot == "panda"

@@ -28,19 +28,21 @@ def register_domain(name: str, factory: Callable[[], Domain]) -> None:
 
 
 @contextmanager
-def domain_override(domain: Domain) -> Iterator[Domain]:
-    """Within the block, ``get_domain(domain.name)`` gives ``domain`` (e.g. the domain with
-    the robot ``osg --robot`` chose), in this process and in worker processes forked inside
-    the block; the registry is as before after it."""
-    saved = _BUILT.get(domain.name)
-    _BUILT[domain.name] = domain
+def domain_override(domain: Domain, name: str | None = None) -> Iterator[Domain]:
+    """Within the block, ``get_domain(name)`` (default ``domain.name``; e.g.
+    ``kitchen[cube=2]``) gives ``domain`` (e.g. the domain with the robot ``osg --robot``
+    chose), in this process and in worker processes forked inside the block; the registry
+    is as before after it."""
+    key = domain.name if name is None else name
+    saved = _BUILT.get(key)
+    _BUILT[key] = domain
     try:
         yield domain
     finally:
         if saved is None:
-            _BUILT.pop(domain.name, None)
+            _BUILT.pop(key, None)
         else:
-            _BUILT[domain.name] = saved
+            _BUILT[key] = saved
 
 
 def _installed() -> dict[str, Callable[[], Callable[[], Domain]]]:
