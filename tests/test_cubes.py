@@ -3,6 +3,7 @@ anywhere in the counter square without overlap, and the errors."""
 
 from __future__ import annotations
 
+import dataclasses
 import json
 from pathlib import Path
 
@@ -25,6 +26,7 @@ from osg_control.kitchen.skills import CUBE, OBJECTS
 from osg_control.kitchen.world import (
     CUBE_HALF_SIZE,
     WORLD_FIELDS,
+    CubeState,
     cube_count,
     world_facts,
     world_fields,
@@ -64,8 +66,8 @@ def test_each_cube_has_its_world_fields_grasp_and_facts(cubes: int) -> None:
     assert expected <= facts and "hand-empty" in facts
     assert env.percept().facts >= expected  # the robot perception reports every cube
     # cube 2 lifted in a gripper: its own facts, not cube 1's, and the hand not empty
-    lifted = state.more_cubes[0].__class__((0.5, -0.2, 0.2), (1.0, 0.0, 0.0, 0.0), True)
-    held = world_facts(state.__class__(**{**state.__dict__, "more_cubes": (lifted,)}))
+    lifted = CubeState((0.5, -0.2, 0.2), (1.0, 0.0, 0.0, 0.0), True)
+    held = world_facts(dataclasses.replace(state, more_cubes=(lifted, *state.more_cubes[1:])))
     assert {"(holding cube-2)", "(lifted cube-2)"} <= held
     assert "hand-empty" not in held and "holding-cube" not in held
 
