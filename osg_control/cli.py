@@ -24,7 +24,7 @@ from osg_control.commands import (
 )
 from osg_control.commands.checks import check_args
 from osg_control.commands.errors import handle_errors
-from osg_control.errors import UsageError, lookup
+from osg_control.errors import OSGError, UsageError, lookup
 
 VERBS: tuple[tuple[str, str, str], ...] = (
     ("collect", "collect", "record scripted noisy episodes (Algorithm 1), one HDF5 file per skill"),
@@ -137,15 +137,22 @@ def hoist_global_options(argv: Sequence[str]) -> list[str]:
 
 
 def check_domain_name(name: str) -> None:
-    """``--domain`` (either form, any verb, ``domains`` too) names a known domain.
+    """``--domain`` (either form, any verb, ``domains`` too) names a known domain, maybe
+    with object counts (``kitchen[cube=2]``, ``Domain.with_counts``) it can build.
 
     Raises:
-        UsageError: naming the option, the value and the known domains.
+        UsageError: naming the option, the value and the known domains, or why the
+            counts are refused.
     """
-    from osg_control.domain.registry import domain_names
+    from osg_control.domain.registry import domain_names, get_domain
 
     known = dict.fromkeys(sorted({*domain_names(), *domain_verb_names()}))
-    lookup(known, name, "domain", lambda m: UsageError(f"--domain: {m}"))
+    lookup(known, name.split("[", 1)[0], "domain", lambda m: UsageError(f"--domain: {m}"))
+    if "[" in name:
+        try:
+            get_domain(name)
+        except OSGError as err:
+            raise UsageError(f"--domain: {err}") from None
 
 
 def check_robot_name(name: str | None) -> None:
@@ -170,7 +177,7 @@ def selected_robot(args: argparse.Namespace) -> Iterator[None]:
         return
     from osg_control.domain.registry import domain_override, get_domain
 
-    with domain_override(get_domain(args.domain).with_robot(args.robot)):
+    with domain_override(get_domain(args.domain).with_robot(args.robot), args.domain):
         yield
 
 

@@ -90,3 +90,8 @@ or unsupported PDDL; 130 interrupted (Ctrl-C or SIGTERM)."""
 class EnvOptionError(OSGError, ValueError):
     """An env reset option or configuration field is unknown, non-finite, out of range or
     contradictory; the message names it."""
+
+
+class PlacementError(EnvOptionError):
+    """Objects cannot be placed where asked: more than their region fits, or two explicit
+    placements overlapping; the message names them."""

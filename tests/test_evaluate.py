@@ -38,7 +38,7 @@ def test_nearest_start_skill_picks_a_movement_skill_starting_at_the_nearest_node
 def test_tasks_match_the_paper_and_one_list_feeds_problems_evaluation_and_report() -> None:
     assert list(TASKS_BY_NAME) == [
         "pick-up", "open-door", "open-pick-up", "pick-up-place", "open-pick-up-place",
-        "turn-valve", "open-door-turn-valve",
+        "turn-valve", "open-door-turn-valve", "two-cubes-in-cabinet", "pick-up-cube-2",
     ]  # fmt: skip
     assert list(PAPER_TASK_AVERAGES) == list(TASKS_BY_NAME)[:5]  # the paper's five
     assert "door-open" in get_task("pick-up-place").world

@@ -34,20 +34,21 @@ def main() -> None:
     args = parser.parse_args()
     noise = args.noise if args.perception == "paper" else 0.0
     spec = perception_spec(args.perception, noise)
-    env = _plain_env(kitchen.name, spec)
     rows = {}
     for aware in (True, False):
-        executor = load_executor(
-            kitchen, max_replans=2, filter_gain=args.filter, goal_aware_entry=aware
-        )
         for name in args.task:
             task = kitchen.task(name)
+            scene = kitchen.for_task(task)  # the kitchen with the task's cubes
+            env = _plain_env(scene.ref, spec)
+            executor = load_executor(
+                scene, max_replans=2, filter_gain=args.filter, goal_aware_entry=aware
+            )
             successes, skills = [], []
             for region in range(len(kitchen.start_regions)):
                 for index in range(args.episodes):
-                    start = StartEpisode(kitchen.name, name, None, region, spec, args.seed,
+                    start = StartEpisode(scene.ref, name, None, region, spec, args.seed,
                                          region, index)  # fmt: skip
-                    obs = _reset_in_region(env, start, kitchen.task_world(task))
+                    obs = _reset_in_region(env, start, scene.task_world(task))
                     result = executor.execute(task.goal, env, obs)
                     successes.append(set(task.goal) <= env.facts())
                     skills.append(len(result.outcomes))

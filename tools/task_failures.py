@@ -53,15 +53,16 @@ def main() -> None:
     args = parser.parse_args()
     domain = get_domain(args.domain)
     task = domain.task(args.task)
+    domain = domain.for_task(task)  # the scene of its objects (e.g. two cubes)
     perception = perception_spec(args.perception)
-    executor = cached_executor(domain.name, args.models, args.replans, None)
-    env = _plain_env(domain.name, perception)
+    executor = cached_executor(domain.ref, args.models, args.replans, None)
+    env = _plain_env(domain.ref, perception)
     failures: list[dict[str, Any]] = []
     placed: dict[bool, list[dict[str, list[float]]]] = {True: [], False: []}
     for region in range(len(domain.start_regions)):
         for i in range(args.episodes):
             start = StartEpisode(
-                domain.name,
+                domain.ref,
                 task.name,
                 args.models,
                 region,

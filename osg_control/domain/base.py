@@ -45,6 +45,8 @@ class Task:
         world: the world facts at the start (empty: the domain's ``start_world``).
         node: the graph node the PDDL problem starts at (evaluations start anywhere).
         description: one line for humans.
+        counts: how many objects of a type its scene holds, ``(("cube", 2),)``, where it
+            is not the domain's own scene (``Domain.for_task``); empty: the domain's.
     """
 
     name: str
@@ -52,6 +54,7 @@ class Task:
     world: tuple[str, ...] = ()
     node: str = ""
     description: str = ""
+    counts: tuple[tuple[str, int], ...] = ()
 
 
 @dataclass(frozen=True)
@@ -165,6 +168,12 @@ class Domain:
             without a ``fact_atoms`` entry is a 0-ary predicate of its own name.
         fact_atoms: each fact's ground atom (``lifted.FactAtom``: ``cube-lifted`` is
             ``(lifted cube-1)``). ``lifting`` derives the lifted operators from these.
+        scaled: builds the domain with another number of objects of a type in its scene
+            (``{"cube": 2}`` -> the domain with two cubes: its instances, facts, world
+            fields, objects and env), if its scene can; ``with_counts`` calls it.
+        counts: the object counts it was built with by ``with_counts`` (empty: its own
+            scene); part of its ``ref``. Its tasks of other counts are checked and run in
+            the domain of theirs (``for_task``).
     """
 
     name: str
@@ -198,6 +207,8 @@ class Domain:
     instances: tuple[ObjectInstance, ...] = ()
     predicates: tuple[PredicateDecl, ...] = ()
     fact_atoms: tuple[FactAtom, ...] = ()
+    scaled: Callable[[Mapping[str, int]], Domain] | None = None
+    counts: tuple[tuple[str, int], ...] = ()
     skills_by_name: dict[str, SkillSpec] = field(init=False, repr=False, compare=False)
     lifting: Lifting = field(init=False, repr=False, compare=False)
     """The lifted view of its declarations (``domain.lifted``)."""
@@ -277,6 +288,33 @@ class Domain:
             defaults_dir=defaults if defaults is not None and defaults.is_dir() else None,
         )
 
+    def with_counts(self, counts: Mapping[str, int]) -> Domain:
+        """This domain with ``counts`` objects of each type named (e.g. ``{"cube": 2}``):
+        itself for its own counts, else ``scaled``'s domain (with this one's robot).
+
+        Raises:
+            DomainError: the domain cannot change its objects (no ``scaled``), or its
+                ``scaled`` refuses the counts (e.g. more cubes than its scene fits).
+        """
+        wanted = tuple(sorted((str(kind), int(n)) for kind, n in counts.items()))
+        own = self.counts or tuple(
+            sorted((kind, len(self.lifting.of_type(kind))) for kind, _ in wanted)
+        )
+        if wanted == own or not wanted:
+            return self
+        if self.scaled is None:
+            raise DomainError(f"domain {self.name!r} cannot change its objects to {dict(wanted)}")
+        domain = replace(self.scaled(dict(wanted)), counts=wanted)
+        return domain if self.robot_is_default else domain.with_robot(str(self.robot))
+
+    def for_task(self, task: Task) -> Domain:
+        """The domain whose scene a task runs in (``Task.counts``; itself if none)."""
+        return self.with_counts(dict(task.counts)) if task.counts else self
+
+    def runs_here(self, task: Task) -> bool:
+        """Whether a task runs in this domain's own scene (its counts are this one's)."""
+        return not task.counts or tuple(sorted(task.counts)) == self.counts
+
     @property
     def control_hz(self) -> float:
         """Its env's control rate [Hz]: one action per ``1 / control_hz`` s."""
@@ -301,8 +339,11 @@ class Domain:
         """How the domain is found again: ``name``, or ``name@robot`` with another robot
         than its own (``with_robot``). ``registry.get_domain`` takes it, so a worker in a
         fresh process (Ray's) rebuilds the same robot's domain; it also names the folder
-        of its artifacts under the cache."""
-        return self.name if self.robot_is_default else f"{self.name}@{self.robot}"
+        of its artifacts under the cache; ``name[cube=2]`` names its object counts
+        (``with_counts``)."""
+        counts = ",".join(f"{kind}={n}" for kind, n in self.counts)
+        name = f"{self.name}[{counts}]" if counts else self.name
+        return name if self.robot_is_default else f"{name}@{self.robot}"
 
     def skill(self, name: str) -> SkillSpec:
         """Look a skill up by name.
@@ -344,59 +385,7 @@ class Domain:
         return task.node or self.home
 
     def summary(self) -> dict[str, Any]:
-        """A JSON-ready description (``osg domains --json``)."""
-        return {
-            "name": self.name,
-            "description": self.description,
-            "nodes": {
-                n.name: {
-                    "position": list(n.position),
-                    "gripper": n.gripper,
-                    "orientation": list(n.orientation),
-                }
-                for n in self.nodes.values()
-            },
-            "facts": list(self.facts),
-            "skills": [
-                {
-                    "name": s.name,
-                    "kind": s.kind,
-                    "start": s.start,
-                    "end": s.end,
-                    "preconditions": sorted(s.preconditions),
-                    "add_effects": sorted(s.add_effects),
-                    "del_effects": sorted(s.del_effects),
-                    "parameters": [f"?{var} - {kind}" for var, kind in s.parameters],
-                }
-                for s in self.skills
-            ],
-            "types": dict(self.types),
-            "instances": {i.name: i.type for i in self.instances},
-            "fact_atoms": {f.name: "(" + " ".join(f.atom) + ")" for f in self.fact_atoms},
-            "tasks": [
-                {
-                    "name": t.name,
-                    "goal": list(t.goal),
-                    "world": list(self.task_world(t)),
-                    "node": self.task_node(t),
-                    "description": t.description,
-                }
-                for t in self.tasks
-            ],
-            "start_regions": [
-                {
-                    "name": r.name,
-                    "position": list(r.position),
-                    "radius": r.radius,
-                    "angle": r.angle,
-                    "facts": list(r.facts),
-                }
-                for r in self.start_regions
-            ],
-            "world_fields": list(self.world_fields),
-            "hand_empty": self.hand_empty,
-            "watched_facts": sorted(self.watched_facts),
-            "env_id": self.env_id,
-            "perceptions": list(self.perceptions),
-            "robot": self.robot,
-        }
+        """A JSON-ready description (``osg domains --json``; ``summary.domain_summary``)."""
+        from osg_control.domain.summary import domain_summary
+
+        return domain_summary(self)

@@ -14,7 +14,7 @@ from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field, replace
 from typing import Any
 
-from osg_control.domain.lifted import Lifting
+from osg_control.domain.lifted import AT_OBJECT, Lifting
 from osg_control.domain.spec import SkillSpec
 from osg_control.errors import PlanningError
 
@@ -116,3 +116,25 @@ def bind_step(lifting: Lifting, skills: Mapping[str, SkillSpec], step: str) -> B
 def recorded(lifting: Lifting, skill: SkillSpec) -> BoundSkill:
     """The skill bound as its spec is written (its recorded binding)."""
     return BoundSkill(skill, dict(lifting.skills[skill.name].recorded))
+
+
+def end_place(lifting: Lifting, bound: BoundSkill) -> str:
+    """Where a bound skill ends, as a planner's start: its end node, or ``NODE OBJ`` for a
+    node relative to another object than the recorded one (``above-cube cube-2``;
+    ``pddl_io.build_problem``)."""
+    lifted = lifting.skills[bound.skill.name]
+    end = lifted.end
+    moved = end[0] == AT_OBJECT and end[2] in bound.binding
+    if moved and bound.binding[end[2]] != lifted.recorded[end[2]]:
+        return f"{end[1]} {bound.binding[end[2]]}"
+    return end[1]
+
+
+def bindings(lifting: Lifting, skill: SkillSpec) -> list[BoundSkill]:
+    """The skill bound to every assignment of distinct instances to its parameters, the
+    recorded binding first."""
+    lifted = lifting.skills[skill.name]
+    choices: list[list[str]] = [[]]
+    for _var, kind in lifted.parameters:
+        choices = [[*c, obj] for c in choices for obj in lifting.of_type(kind) if obj not in c]
+    return [bind(lifting, skill, objects) for objects in choices]

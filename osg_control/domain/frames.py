@@ -18,6 +18,7 @@ import numpy as np
 
 from osg_control.domain.base import Domain
 from osg_control.domain.spec import Node, ObjectFrame, SkillSpec
+from osg_control.errors import PlacementError
 
 Offsets = Mapping[str, np.ndarray]
 """Object name -> its displacement (3-D, z = 0) from its nominal place [m]."""
@@ -79,15 +80,41 @@ def offsets_of(
     }
 
 
-def sample_placements(domain: Domain, rng: np.random.Generator) -> dict[str, np.ndarray]:
+PLACEMENT_DRAWS = 1000
+"""Draws of one object's place before ``sample_placements`` gives up on clearing the
+others."""
+
+
+def sample_placements(
+    domain: Domain | Sequence[ObjectFrame], rng: np.random.Generator
+) -> dict[str, np.ndarray]:
     """A uniform placement of every placed object (``ObjectFrame.placed``) in its region
-    (x, y, and its resting z); the others stay where the scene has them."""
-    placed = {}
-    for frame in domain.objects:
+    (x, y, and its resting z), each clear of those placed before it (``clearance``: drawn
+    again until it is); the others stay where the scene has them. One object, or objects
+    that clear each other at the first draw, take one draw each.
+
+    Raises:
+        PlacementError: an object not cleared of the others in ``PLACEMENT_DRAWS`` draws
+            (more objects than its region fits).
+    """
+    frames = domain.objects if isinstance(domain, Domain) else domain
+    placed: dict[str, np.ndarray] = {}
+    clear: list[tuple[np.ndarray, float]] = []
+    for frame in frames:
         if frame.region_low is None or frame.region_high is None:
             continue
-        xy = rng.uniform(frame.region_low, frame.region_high)
+        for _draw in range(PLACEMENT_DRAWS):
+            xy = rng.uniform(frame.region_low, frame.region_high)
+            if all(np.hypot(*(xy - at)) >= r + frame.clearance for at, r in clear):
+                break
+        else:
+            raise PlacementError(
+                f"cannot place {frame.name!r} in its region {frame.region_low}-"
+                f"{frame.region_high} {frame.clearance} m clear of {len(clear)} other "
+                f"object(s) in {PLACEMENT_DRAWS} draws: the region fits no more"
+            )
         placed[frame.name] = np.array([xy[0], xy[1], frame.rest_z])
+        clear.append((xy, frame.clearance))
     return placed
 
 

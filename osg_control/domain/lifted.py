@@ -84,6 +84,11 @@ class FactAtom:
         return (self.predicate, *self.args)
 
 
+def _is_atom(fact: str) -> bool:
+    """Whether a fact name is written as an atom, ``(on-counter cube-2)``."""
+    return fact.startswith("(")
+
+
 def atom_text(atom: Atom) -> str:
     """An atom in PDDL syntax: ``(lifted cube-1)``."""
     return "(" + " ".join(atom) + ")"
@@ -148,8 +153,8 @@ class Lifting:
         self.instances = {i.name: i for i in instances}
         declared = {f.name: f for f in fact_atoms}
         self.predicates = {p.name: p for p in predicates}
-        for name in facts:  # an undeclared fact is its own 0-ary predicate
-            if name not in declared and name not in self.predicates:
+        for name in facts:  # an undeclared fact is its own 0-ary predicate, or an atom
+            if name not in declared and name not in self.predicates and not _is_atom(name):
                 self.predicates[name] = PredicateDecl(name)
         self._atom = {name: f.atom for name, f in declared.items()}
         self._name = {atom: name for name, atom in self._atom.items()}
@@ -196,6 +201,12 @@ class Lifting:
             for _var, kind in predicate.parameters:
                 if kind != OBJECT_TYPE and kind not in self.types:
                     raise DomainError(f"predicate {predicate.name!r} names unknown type {kind!r}")
+        for name in facts:
+            if _is_atom(name):  # a fact written as its atom: (on-counter cube-2)
+                try:
+                    self.check_atom(self.atom(name))
+                except PlanningError as err:
+                    raise DomainError(f"fact {name!r}: {err}") from None
         for fact in fact_atoms:
             if fact.name not in facts:
                 raise DomainError(f"fact_atoms: {fact.name!r} is not one of the domain's facts")

@@ -28,19 +28,21 @@ def register_domain(name: str, factory: Callable[[], Domain]) -> None:
 
 
 @contextmanager
-def domain_override(domain: Domain) -> Iterator[Domain]:
-    """Within the block, ``get_domain(domain.name)`` gives ``domain`` (e.g. the domain with
-    the robot ``osg --robot`` chose), in this process and in worker processes forked inside
-    the block; the registry is as before after it."""
-    saved = _BUILT.get(domain.name)
-    _BUILT[domain.name] = domain
+def domain_override(domain: Domain, name: str | None = None) -> Iterator[Domain]:
+    """Within the block, ``get_domain(name)`` (default ``domain.name``; e.g.
+    ``kitchen[cube=2]``) gives ``domain`` (e.g. the domain with the robot ``osg --robot``
+    chose), in this process and in worker processes forked inside the block; the registry
+    is as before after it."""
+    key = domain.name if name is None else name
+    saved = _BUILT.get(key)
+    _BUILT[key] = domain
     try:
         yield domain
     finally:
         if saved is None:
-            _BUILT.pop(domain.name, None)
+            _BUILT.pop(key, None)
         else:
-            _BUILT[domain.name] = saved
+            _BUILT[key] = saved
 
 
 def _installed() -> dict[str, Callable[[], Callable[[], Domain]]]:
@@ -55,7 +57,8 @@ def domain_names() -> list[str]:
 
 def get_domain(name: str) -> Domain:
     """The domain registered under ``name``, or ``NAME@ROBOT`` (``Domain.ref``): domain
-    NAME with the registered robot ROBOT (``Domain.with_robot``).
+    NAME with the registered robot ROBOT (``Domain.with_robot``), or ``NAME[TYPE=N,...]``:
+    domain NAME with N objects of TYPE in its scene (``Domain.with_counts``).
 
     Raises:
         DomainError: an unknown name (the known ones listed), or a factory that does not
@@ -68,6 +71,10 @@ def get_domain(name: str) -> Domain:
     if "@" in name:
         base, robot = name.split("@", 1)
         _BUILT[name] = get_domain(base).with_robot(robot)
+        return _BUILT[name]
+    if name.endswith("]") and "[" in name:
+        base, counts = name[:-1].split("[", 1)
+        _BUILT[name] = get_domain(base).with_counts(_counts(name, counts))
         return _BUILT[name]
     factory = _FACTORIES.get(name)
     if factory is None:
@@ -84,3 +91,18 @@ def get_domain(name: str) -> Domain:
         raise DomainError(f"domain {name!r}: its factory built a domain named {domain.name!r}")
     _BUILT[name] = domain
     return domain
+
+
+def _counts(ref: str, text: str) -> dict[str, int]:
+    """``cube=2,plate=1`` as counts.
+
+    Raises:
+        DomainError: naming ``ref`` and what cannot be read.
+    """
+    counts = {}
+    for part in text.split(","):
+        kind, _, number = part.partition("=")
+        if not kind.strip() or not number.strip().isdigit():
+            raise DomainError(f"domain {ref!r}: cannot read object counts {text!r} (TYPE=N,...)")
+        counts[kind.strip()] = int(number)
+    return counts

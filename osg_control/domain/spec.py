@@ -73,6 +73,8 @@ class ObjectFrame:
             never held.
         axis: the unit (x, y) direction of a tracked object's travel; None: placed freely
             in the plane (two ``position_fields``).
+        clearance: the radius [m] it keeps clear around it where it is placed at random:
+            two placed objects' centres are at least their clearances' sum apart (0: none).
     """
 
     name: str
@@ -83,6 +85,7 @@ class ObjectFrame:
     region_high: tuple[float, float] | None = None
     held_fact: str | None = None
     axis: tuple[float, float] | None = None
+    clearance: float = 0.0
 
     @property
     def placed(self) -> bool:

@@ -86,13 +86,16 @@ def validate_domain(domain: Domain) -> None:
 
 
 def fact_fields(domain: Domain) -> list[tuple[str, Iterable[str]]]:
-    """Every field that names facts (by name, or as atoms over the domain's objects)."""
+    """Every field that names facts (by name, or as atoms over the domain's objects); a
+    task of other object counts than the domain's is left to the domain of its scene."""
     fields: list[tuple[str, Iterable[str]]] = [
         ("start_world", domain.start_world),
         ("watched_facts", domain.watched_facts),
         ("hand_empty", (domain.hand_empty,)),
     ]
     for task in domain.tasks:
+        if not domain.runs_here(task):
+            continue  # checked in the domain of its scene (``Domain.for_task``)
         fields += [
             (f"tasks[{task.name}].goal", task.goal),
             (f"tasks[{task.name}].world", task.world),

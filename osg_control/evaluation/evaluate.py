@@ -281,8 +281,9 @@ def task_table(
     randomize: bool = False,
 ) -> dict[str, Any]:
     """Tables IV and V: task success per start region, without and with replanning,
-    scored on the simulator's truth (the goal facts hold at the end); ``randomize``: the
-    objects placed at random in their regions (seeded per episode). Each episode is run
+    scored on the simulator's truth (the goal facts hold at the end), each task in the
+    scene of its objects (``Domain.for_task``); ``randomize``: the objects placed at
+    random in their regions (seeded per episode). Each episode is run
     once, with the largest budget in ``replans``, and scored for every budget
     (``run_task_episode``).
 
@@ -299,10 +300,12 @@ def task_table(
     seen = perception or PerceptionSpec(tcp_noise=0.02)
     budgets = tuple(int(k) for k in replans)
 
+    scenes = {t: domain.for_task(domain.task(t)).ref for t in tasks}  # e.g. two cubes
+
     def job(cell: tuple[str, int], i: int) -> TaskEpisode:
         t, r = cell
         return TaskEpisode(
-            StartEpisode(domain.ref, t, models, r, seen, seed, r, i, randomize),
+            StartEpisode(scenes[t], t, models, r, seen, seed, r, i, randomize),
             t,
             budgets,
             filter_gain,

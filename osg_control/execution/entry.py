@@ -8,7 +8,8 @@ import numpy as np
 
 from osg_control.classifier.motion import MotionMemory
 from osg_control.domain.base import Domain
-from osg_control.domain.frames import Offsets, shifted_nodes
+from osg_control.domain.binding import BoundSkill, bind_step, bindings, end_place
+from osg_control.domain.frames import Offsets, node_position, shifted_nodes
 from osg_control.domain.spec import nearest_start
 from osg_control.execution.locate import recorded_world_holds, skill_on_path
 from osg_control.execution.results import EntryClassifier
@@ -51,17 +52,28 @@ class EntryChoice:
     ) -> str:
         """Off the graph: the manipulation skill whose path the TCP is on; else, the hand
         empty, the classifier's movement skill (``classify``; goal-aware with a ``goal``);
-        else the applicable skill whose start node is nearest (retry from where it failed).
-        ``motion``: the commands sent so far (the classifier's motion input)."""
+        else the applicable skill whose start node is nearest (retry from where it failed),
+        each bound to its objects (``skill obj`` for another than the recorded one, e.g.
+        the held cube's). ``motion``: the commands sent so far (the classifier's motion
+        input)."""
         on_path = skill_on_path(self.domain, obs, facts, self.skills.values(), offsets)
         if on_path is not None:
             return on_path
         if self.domain.hand_empty in facts:
             return self.classify(obs, facts, motion, goal, planner)
-        applicable = [s for s in self.skills.values() if s.preconditions <= facts]
-        fallback = applicable or list(self.skills.values())
-        nodes = shifted_nodes(self.domain, offsets or {})
-        return nearest_start(fallback, nodes, obs[:3]).name
+        lifting, offsets = self.domain.lifting, offsets or {}
+        bound = [b for s in self.skills.values() for b in bindings(lifting, s)]
+        applicable = [b for b in bound if b.skill.preconditions <= facts]
+        if not applicable:
+            nodes = shifted_nodes(self.domain, offsets)
+            return nearest_start(self.skills.values(), nodes, obs[:3]).name
+
+        def distance(b: BoundSkill) -> float:
+            start = node_position(self.domain.nodes, b.skill.start, b.offsets(offsets))
+            return float(np.linalg.norm(obs[:3] - start))
+
+        nearest = min(applicable, key=distance)  # the first on ties
+        return nearest.label if nearest.frames or nearest.facts else nearest.skill.name
 
     def classify(
         self,
@@ -107,12 +119,50 @@ class EntryChoice:
         self, name: str, probability: float, facts: set[str], goal: list[str], planner: str
     ) -> float:
         """``-1000 ln p`` of entering through ``name``, its operator cost and the plan cost
-        from its end node (inf without a plan)."""
-        skill = self.skills[name]
-        after = (facts - skill.del_effects) | skill.add_effects
-        planned = self.plans(goal, skill.end, after, planner)
-        if not planned.solved or planned.cost is None:
-            return float("inf")
+        from its end node, bound to the objects that make it cheapest (inf without a
+        plan)."""
+        planned, _label, _end, _after = self._cheapest(name, goal, facts, planner)
+        if planned == float("inf"):
+            return planned
         edge = self.graph.edge(name)
         entering = skill_cost(max(probability, MIN_SUCCESS_RATE)) + skill_cost(edge.success_rate)
-        return float(entering + edge.step_cost + planned.cost)
+        return float(entering + edge.step_cost + planned)
+
+    def bind(
+        self, name: str, goal: list[str], facts: set[str], planner: str = "astar"
+    ) -> tuple[str, str, set[str]]:
+        """The entry skill ``name`` bound to the objects that make the goal cheapest (the
+        goal's object: entering toward cube 2 for a goal on cube 2); a skill of one
+        binding is its recorded one, without planning; ``skill obj`` (``skill`` found the
+        TCP on that bound skill's path) keeps its binding.
+
+        Returns:
+            ``(ground operator, where it ends as a planner's start, facts after it)``.
+        """
+        if " " in name:  # already bound (on a bound skill's path): that binding
+            chosen = bind_step(self.domain.lifting, self.skills, name)
+            after = (facts - chosen.skill.del_effects) | chosen.skill.add_effects
+            return chosen.label, end_place(self.domain.lifting, chosen), after
+        _cost, label, end, after = self._cheapest(name, goal, facts, planner, plan_one=False)
+        return label, end, after
+
+    def _cheapest(
+        self, name: str, goal: list[str], facts: set[str], planner: str, plan_one: bool = True
+    ) -> tuple[float, str, str, set[str]]:
+        """The binding of skill ``name`` whose end is cheapest to the goal: ``(the plan's
+        cost from its end (inf without a plan; 0, unplanned, for a skill of one binding
+        unless ``plan_one``), ground operator, end place, facts after it)``; the first on
+        ties."""
+        best: tuple[float, str, str, set[str]] | None = None
+        candidates = bindings(self.domain.lifting, self.skills[name])
+        for bound in candidates:
+            end = end_place(self.domain.lifting, bound)
+            after = (facts - bound.skill.del_effects) | bound.skill.add_effects
+            if len(candidates) == 1 and not plan_one:
+                return 0.0, bound.label, end, after
+            planned = self.plans(goal, end, after, planner)
+            cost = planned.cost if planned.solved and planned.cost is not None else float("inf")
+            if best is None or cost < best[0]:
+                best = (float(cost), bound.label, end, after)
+        assert best is not None  # a skill has at least its recorded binding
+        return best

@@ -38,7 +38,7 @@ from osg_control.control.estimator import (
     check_motion_model,
 )
 from osg_control.domain.base import Domain
-from osg_control.domain.binding import BoundSkill, bind_step, recorded
+from osg_control.domain.binding import BoundSkill, bind_step
 from osg_control.domain.contract import SkillEnv
 from osg_control.domain.frames import (
     Offsets,
@@ -191,8 +191,9 @@ class Executor:
         the objects are (anchored nodes move with them).
 
         Returns:
-            ``(entry skill or None, plan, planner result)``; the plan's steps are ground
-            operators, ``skill obj1 ...`` (``lifted.Lifting.bind_step``).
+            ``(entry skill or None, plan, planner result)``; the entry and the plan's steps
+            are ground operators, ``skill obj1 ...`` (``binding.bind_step``), the entry
+            bound to the objects that make the goal cheapest (``EntryChoice.bind``).
         """
         facts = set(facts)
         goal = list(goal)
@@ -201,10 +202,8 @@ class Executor:
         entry = None
         if node is None:
             aware = goal if self.goal_aware_entry else None
-            entry = self.entry.skill(obs, facts, self.motion, offsets, aware, self.planner)
-            skill = self.skills[entry]
-            node = skill.end
-            facts = (facts - skill.del_effects) | skill.add_effects
+            name = self.entry.skill(obs, facts, self.motion, offsets, aware, self.planner)
+            entry, node, facts = self.entry.bind(name, goal, facts, self.planner)
         result = self._plans(goal, node, facts, self.planner)
         return entry, list(result.actions), result
 
@@ -330,12 +329,13 @@ class Executor:
             entry, plan, planned = self.plan(goal, seen, facts, objects.offsets())
             planning_time += time.perf_counter() - t0
             if attempt == 0:
-                result.entry_skill, result.plan = entry, plan
+                result.entry_skill = entry.split()[0] if entry else None
+                result.plan = plan
             self._emit("plan", attempt=attempt, entry=entry, plan=plan)
             if not planned.solved:
                 result.failure = f"no plan: unreachable goal facts {list(planned.unreached)}"
                 break
-            entered = [recorded(self.domain.lifting, self.skills[entry]).label] if entry else []
+            entered = [entry] if entry else []
             obs, failed = self._run_sequence(env, entered + plan, obs, result, tracker, objects)
             facts = env.percept().facts
             if after_attempt is not None:

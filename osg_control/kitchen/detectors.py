@@ -1,9 +1,10 @@
 """The kitchen's perception: which sensor reads each world field, and the grasp detectors.
 
-A robot has no contact oracle: it believes it holds the cube when its gripper is commanded
+A robot has no contact oracle: it believes it holds a cube when its gripper is commanded
 shut, the finger width reads the cube's width and the perceived cube lies between the
-fingers; the handle likewise with the fin's width and the handle's perceived place (the
-``handle`` node moved with the door's perceived travel, ``skills.DOOR``).
+fingers (of several cubes, the one nearest the TCP); the handle likewise with the fin's
+width and the handle's perceived place (the ``handle`` node moved with the door's perceived
+travel, ``skills.DOOR``).
 """
 
 from __future__ import annotations
@@ -15,7 +16,7 @@ import numpy as np
 from osg_control.domain.frames import reading_displacement
 from osg_control.environment.success import GRIPPER_CLOSED_CMD
 from osg_control.kitchen.skills import DOOR, NODES
-from osg_control.kitchen.world import CUBE_HALF_SIZE, WORLD_FIELDS
+from osg_control.kitchen.world import CUBE_FIELDS, CUBE_HALF_SIZE, WORLD_FIELDS
 from osg_control.perception.sensors import ANGLE, DETECTED, POSITION, QUATERNION
 
 WORLD_SENSORS: dict[str, str] = {
@@ -50,6 +51,8 @@ _FIELD = {name: i for i, name in enumerate(WORLD_FIELDS)}
 _CUBE_POSITION = slice(_FIELD["cube_x"], _FIELD["cube_z"] + 1)
 assert WORLD_FIELDS[_CUBE_POSITION] == ("cube_x", "cube_y", "cube_z")
 _DOOR_FIELD = _FIELD[DOOR.position_fields[0]]
+_CUBE_WIDTH = len(CUBE_FIELDS)
+"""World fields per cube beyond the first (its position first, its grasp last)."""
 _HANDLE_SHUT = np.asarray(NODES["handle"].position, dtype=float)
 """The handle node with the door shut [m]."""
 
@@ -63,15 +66,24 @@ def _grips(state: np.ndarray, width: float, target: np.ndarray) -> bool:
 
 
 def detect_grasps(state: np.ndarray, world: np.ndarray) -> np.ndarray:
-    """The perceived world with ``cube_grasped`` and ``handle_grasped`` from the percepts.
+    """The perceived world with each cube's grasp and ``handle_grasped`` from the percepts.
 
     Args:
         state: the perceived 10-D state (TCP, gripper command, force, finger width).
-        world: the pose estimator's world vector (``WORLD_FIELDS``).
+        world: the pose estimator's world vector (``world.world_fields(cubes)``).
     """
     detected = np.array(world, dtype=float)
-    cube = detected[_CUBE_POSITION]
     handle = _HANDLE_SHUT + reading_displacement(DOOR, (detected[_DOOR_FIELD],))
-    detected[_FIELD["cube_grasped"]] = float(_grips(state, CUBE_GRIP_WIDTH, cube))
     detected[_FIELD["handle_grasped"]] = float(_grips(state, HANDLE_GRIP_WIDTH, handle))
+    if len(detected) == len(WORLD_FIELDS):
+        cube = detected[_CUBE_POSITION]
+        detected[_FIELD["cube_grasped"]] = float(_grips(state, CUBE_GRIP_WIDTH, cube))
+        return detected
+    starts = [_CUBE_POSITION.start, *range(len(WORLD_FIELDS), len(detected), _CUBE_WIDTH)]
+    grasps = [_FIELD["cube_grasped"], *(i + _CUBE_WIDTH - 1 for i in starts[1:])]
+    gaps = [float(np.linalg.norm(state[:3] - detected[i : i + 3])) for i in starts]
+    nearest = int(np.argmin(gaps))
+    for k, (start, grasp) in enumerate(zip(starts, grasps, strict=True)):
+        held = k == nearest and _grips(state, CUBE_GRIP_WIDTH, detected[start : start + 3])
+        detected[grasp] = float(held)
     return detected

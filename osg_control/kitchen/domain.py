@@ -2,17 +2,28 @@
 
 from __future__ import annotations
 
+from collections.abc import Mapping
+from functools import partial
 from typing import Any
 
 import numpy as np
 
 from osg_control.domain.base import Domain, StartRegion
-from osg_control.kitchen.objects import FACT_ATOMS, INSTANCES, PREDICATES, TYPES
+from osg_control.errors import DomainError
+from osg_control.kitchen.cubes import check_cubes, cube_objects
+from osg_control.kitchen.objects import (
+    FACT_ATOMS,
+    PREDICATES,
+    TYPES,
+    cube_fact,
+    cube_instances,
+    world_fact_names,
+)
 from osg_control.kitchen.paper import PUBLISHED
 from osg_control.kitchen.scene import ROBOT_MOUNTS
-from osg_control.kitchen.skills import NODES, OBJECTS, SKILLS, WORLD_FACTS
+from osg_control.kitchen.skills import NODES, SKILLS
 from osg_control.kitchen.tasks import DEFAULT_WORLD, KITCHEN_TASKS
-from osg_control.kitchen.world import WORLD_FIELDS, world_facts, world_state_from_array
+from osg_control.kitchen.world import world_facts, world_fields, world_state_from_array
 from osg_control.paths import PACKAGE_DIR
 
 DEFAULT_ROBOT = "panda"
@@ -53,7 +64,8 @@ def start_regions() -> tuple[StartRegion, ...]:
 
 
 def facts_of(world: np.ndarray) -> frozenset[str]:
-    """The kitchen's facts of a world-state vector (``world.WORLD_FIELDS``)."""
+    """The kitchen's facts of a world-state vector (``world.world_fields``, any number of
+    cubes)."""
     return world_facts(world_state_from_array(world))
 
 
@@ -64,32 +76,59 @@ def make_kitchen_env(**kwargs: Any) -> Any:
     return KitchenEnv(**kwargs)
 
 
-def kitchen_domain() -> Domain:
-    """The kitchen domain (registered as ``kitchen``)."""
+def kitchen_domain(cubes: int = 1) -> Domain:
+    """The kitchen domain (registered as ``kitchen``) with ``cubes`` cubes in its scene
+    (1 to ``objects.MAX_CUBES``; ``kitchen[cube=2]``, ``Domain.with_counts``): the one-cube
+    kitchen lists every task, each of the others the tasks of its count.
+
+    Raises:
+        DomainError: a cube count out of range.
+    """
+    try:
+        check_cubes(cubes)
+    except ValueError as err:
+        raise DomainError(f"domain 'kitchen': {err}") from None
+    counts = () if cubes == 1 else (("cube", cubes),)
+    tasks = tuple(t for t in KITCHEN_TASKS if cubes == 1 or t.counts == counts)
+    more = range(2, cubes + 1)
     return Domain(
         name="kitchen",
-        description="MuJoCo kitchen: a sliding-door cabinet, a cube and a valve around a robot",
+        description="MuJoCo kitchen: a sliding-door cabinet, cubes and a valve around a robot",
         nodes=NODES,
-        facts=WORLD_FACTS,
+        facts=world_fact_names(cubes),
         skills=SKILLS,
-        tasks=KITCHEN_TASKS,
+        tasks=tasks,
         start_regions=start_regions(),
-        start_world=DEFAULT_WORLD,
+        start_world=DEFAULT_WORLD + tuple(cube_fact("cube-on-counter", k) for k in more),
         home="home",
-        world_fields=WORLD_FIELDS,
+        world_fields=world_fields(cubes),
         facts_of=facts_of,
-        make_env=make_kitchen_env,
+        make_env=partial(make_kitchen_env, cubes=cubes) if cubes > 1 else make_kitchen_env,
         hand_empty="hand-empty",
         watched_facts=WATCHED_FACTS,
-        objects=OBJECTS,
-        perceptions=("paper", "robot", "sim", "camera"),
+        objects=cube_objects(cubes),
+        perceptions=("paper", "robot", "sim", *(("camera",) if cubes == 1 else ())),
         defaults_dir=PACKAGE_DIR / "kitchen" / "defaults",
         env_id="osg/Kitchen-v0",
         published=PUBLISHED,
         robot=DEFAULT_ROBOT,
         mounts=ROBOT_MOUNTS,
         types=TYPES,
-        instances=INSTANCES,
+        instances=cube_instances(cubes),
         predicates=PREDICATES,
         fact_atoms=FACT_ATOMS,
+        scaled=scaled_kitchen,
+        counts=counts,
     )
+
+
+def scaled_kitchen(counts: Mapping[str, int]) -> Domain:
+    """The kitchen with ``counts`` objects (``Domain.scaled``): only its cubes vary.
+
+    Raises:
+        DomainError: a type other than ``cube``, or a cube count out of range.
+    """
+    other = sorted(set(counts) - {"cube"})
+    if other:
+        raise DomainError(f"domain 'kitchen': only the number of cubes varies, not {other}")
+    return kitchen_domain(int(counts.get("cube", 1)))

@@ -1,11 +1,14 @@
 """``KitchenEnv``: the kitchen scene around a robot (``ArmEnv`` with the kitchen's world).
 
-The world-state vector is ``world.WORLD_FIELDS`` (door travel, valve angle, cube pose, which
-objects both fingers touch); its facts are ``world.world_facts``. A start world is given by
-facts (``door-open`` slides the door to ``skills.DOOR_OPENED``) or explicitly with the
-``world`` reset option (``door_opening`` [m], ``cube_pos``); ``holding`` is ``"cube"`` or
-``"handle"``. The robot is ``DEFAULT_ROBOT`` unless another is given (any registered
-``RobotDescription`` with a two-finger gripper).
+The world-state vector is ``world.world_fields(cubes)`` (door travel, valve angle, each
+cube's pose, which objects both fingers touch); its facts are ``world.world_facts``. The
+scene holds ``cubes`` cubes (1 to ``objects.MAX_CUBES``; a constructor argument, since the
+cubes are bodies of the compiled model and the world vector's width follows them). A start
+world is given by facts (``door-open`` slides the door to ``skills.DOOR_OPENED``) or
+explicitly with the ``world`` reset option (``door_opening`` [m], ``cube_pos``,
+``cube2_pos`` ...); ``holding`` is ``"cube"`` (cube 1) or ``"handle"``. The robot is
+``DEFAULT_ROBOT`` unless another is given (any registered ``RobotDescription`` with a
+two-finger gripper).
 """
 
 from __future__ import annotations
@@ -18,26 +21,18 @@ import numpy as np
 from osg_control.control.description import RobotDescription
 from osg_control.control.robot_model import workspace
 from osg_control.domain.frames import placement_offsets, reading_displacement
-from osg_control.domain.spec import SkillSpec
+from osg_control.domain.spec import ObjectFrame, SkillSpec
 from osg_control.environment.arm_env import ArmEnv, EnvConfig
-from osg_control.errors import SkillSpecError, lookup
+from osg_control.errors import EnvOptionError, SkillSpecError, lookup
 from osg_control.kitchen.cameras import KITCHEN_CAMERAS
+from osg_control.kitchen.cubes import check_cubes, cube_objects, cube_sensors
 from osg_control.kitchen.detectors import WORLD_SENSORS, detect_grasps
 from osg_control.kitchen.domain import DEFAULT_ROBOT, facts_of
-from osg_control.kitchen.options import WORLD_OPTIONS, check_world_options
+from osg_control.kitchen.objects import world_fact_names
+from osg_control.kitchen.options import check_world_options, cube_option, world_options
 from osg_control.kitchen.scene import SceneIndex, build_kitchen_model, kitchen_robot
-from osg_control.kitchen.skills import (
-    DOOR,
-    DOOR_OPENED,
-    NODES,
-    OBJECTS,
-    SKILLS_BY_NAME,
-    WORLD_FACTS,
-)
-from osg_control.kitchen.world import (
-    CUBE_HALF_SIZE,
-    WorldState,
-)
+from osg_control.kitchen.skills import DOOR, DOOR_OPENED, NODES, SKILLS_BY_NAME
+from osg_control.kitchen.world import CUBE_HALF_SIZE, WorldState
 
 HANDLE_GRASP_SLACK = 0.015
 """How far along the handle fin [m] (x) a handle-holding start may grasp it: about the
@@ -54,6 +49,11 @@ class KitchenEnv(ArmEnv):
         config: noise, step budget, IK and random-start options.
         render_mode: ``"rgb_array"`` for ``render``.
         robot: a registered robot's name or a description (default ``DEFAULT_ROBOT``).
+        cubes: how many cubes the scene holds (1 to ``objects.MAX_CUBES``; more than one
+            not with the ``camera`` perception, whose colour target finds one red cube).
+
+    Raises:
+        EnvOptionError: a cube count out of range, or more than one cube on camera.
 
     Example:
         >>> env = KitchenEnv(skill="move-home-to-cube")
@@ -61,11 +61,7 @@ class KitchenEnv(ArmEnv):
         >>> obs, reward, terminated, truncated, info = env.step(env.action_space.sample())
     """
 
-    world_facts = WORLD_FACTS
-    world_options = WORLD_OPTIONS
     holdable = tuple(_FINGER_ON)
-    world_sensors = WORLD_SENSORS
-    objects = OBJECTS
     camera_perception = KITCHEN_CAMERAS
 
     def __init__(
@@ -74,7 +70,19 @@ class KitchenEnv(ArmEnv):
         config: EnvConfig | None = None,
         render_mode: str | None = None,
         robot: str | RobotDescription | None = None,
+        cubes: int = 1,
     ) -> None:
+        self.cubes = check_cubes(cubes)
+        """How many cubes the scene holds."""
+        if cubes > 1 and config is not None and config.perception.name == "camera":
+            raise EnvOptionError(
+                f"KitchenEnv: the camera perception locates one cube (its red colour target); "
+                f"use the robot, paper or sim perception with cubes={cubes}"
+            )
+        self.world_facts = world_fact_names(cubes)
+        self.world_options = world_options(cubes)
+        self.world_sensors = {**WORLD_SENSORS, **cube_sensors(cubes)}
+        self.objects = cube_objects(cubes)
         spec = (
             lookup(SKILLS_BY_NAME, skill, "skill", SkillSpecError)
             if isinstance(skill, str)
@@ -82,30 +90,39 @@ class KitchenEnv(ArmEnv):
         )  # anything else is checked (named) by ArmEnv
         robot = kitchen_robot(robot or DEFAULT_ROBOT)
         super().__init__(NODES, "home", spec, config or EnvConfig(), render_mode, robot=robot)
-        self.scene = SceneIndex(self.model, robot)
+        self.scene = SceneIndex(self.model, robot, cubes)
 
     def build_model(self) -> mujoco.MjModel:
-        """The kitchen with the env's robot (``scene.build_kitchen_model``)."""
-        return build_kitchen_model(self.robot)
+        """The kitchen with the env's robot and cubes (``scene.build_kitchen_model``)."""
+        return build_kitchen_model(self.robot, self.cubes)
 
     def world(self) -> WorldState:
-        """The kitchen's world state as named fields (door, valve, cube, grasps)."""
+        """The kitchen's world state as named fields (door, valve, cubes, grasps)."""
         return self.scene.read(self.model, self.data)
 
     def read_world(self) -> np.ndarray:
-        """``world.WORLD_FIELDS`` of the current state."""
+        """``world.world_fields(cubes)`` of the current state."""
         return self.scene.read(self.model, self.data).as_array()
 
     facts_of = staticmethod(facts_of)
     """The domain's ``facts_of`` (``world.world_facts`` of a world-state vector)."""
 
+    def _cube_options(self) -> dict[str, str]:
+        """Each cube's frame -> the ``world`` option that places it."""
+        return {frame.name: cube_option(k) for k, frame in enumerate(self._cube_frames(), 1)}
+
+    def _cube_frames(self) -> list[ObjectFrame]:
+        return [f for f in self.objects if f.name != DOOR.name]
+
     def placement_offsets(self, world: dict[str, Any]) -> dict[str, np.ndarray]:
-        """The cube's displacement when ``world`` places it (``cube_pos``), the door's when
-        it slides it (``door_opening``)."""
-        offsets = {}
-        if world.get("cube_pos") is not None:
-            cube = np.asarray(world["cube_pos"], float)
-            offsets = placement_offsets(self.objects, {"cube": cube})
+        """Each cube's displacement when ``world`` places it (``cube_pos``, ``cube2_pos``
+        ...), the door's when it slides it (``door_opening``)."""
+        placed = {
+            frame: np.asarray(world[option], float)
+            for frame, option in self._cube_options().items()
+            if world.get(option) is not None
+        }
+        offsets = placement_offsets(self.objects, placed)
         if world.get("door_opening") is not None:
             offsets["door"] = reading_displacement(DOOR, [float(world["door_opening"])])
         return offsets
@@ -113,10 +130,12 @@ class KitchenEnv(ArmEnv):
     def placement_world(
         self, placements: dict[str, np.ndarray], holding: str | None
     ) -> dict[str, Any]:
-        """``cube_pos`` unless the cube is held."""
-        if "cube" not in placements or holding == "cube":
-            return {}
-        return {"cube_pos": [float(v) for v in placements["cube"]]}
+        """Each placed cube's option (``cube_pos`` ...), but cube 1's when it is held."""
+        return {
+            option: [float(v) for v in placements[frame]]
+            for frame, option in self._cube_options().items()
+            if frame in placements and not (option == "cube_pos" and holding == "cube")
+        }
 
     def detect_world(self, state: np.ndarray, world: np.ndarray) -> np.ndarray:
         """The grasps from the finger width and the perceived poses
@@ -124,23 +143,24 @@ class KitchenEnv(ArmEnv):
         return detect_grasps(state, world)
 
     def check_world(self, world: dict[str, Any], holding: str | None) -> None:
-        """Refuse a non-finite or out-of-range ``door_opening`` or ``cube_pos``
-        (``options.check_world_options``)."""
-        check_world_options(world, holding, workspace(self.robot))
+        """Refuse a non-finite or out-of-range ``door_opening`` or cube position, or two
+        cubes overlapping (``options.check_world_options``)."""
+        check_world_options(world, holding, workspace(self.robot), self.cubes)
 
     def place_world(
         self, world: dict[str, Any], facts: frozenset[str], holding: str | None
     ) -> None:
-        """Slide the door (open if ``door-open`` is a start fact) and place the cube (in the
-        fingers when held)."""
+        """Slide the door (open if ``door-open`` is a start fact) and place the cubes (cube
+        1 in the fingers when held)."""
         self.data.qpos[self.scene.door_qpos] = _door_opening(world, facts)
-        cube_pos = world.get("cube_pos")
-        if holding == "cube":
-            cube_pos = self.data.site_xpos[self._tcp].copy()
-        if cube_pos is not None:
-            adr = self.scene.cube_qpos
-            self.data.qpos[adr : adr + 3] = cube_pos
-            self.data.qpos[adr + 3 : adr + 7] = (1.0, 0.0, 0.0, 0.0)
+        options = self._cube_options().values()
+        for adr, option in zip(self.scene.cube_qposes, options, strict=True):
+            cube_pos = world.get(option)
+            if holding == "cube" and option == "cube_pos":
+                cube_pos = self.data.site_xpos[self._tcp].copy()
+            if cube_pos is not None:
+                self.data.qpos[adr : adr + 3] = cube_pos
+                self.data.qpos[adr + 3 : adr + 7] = (1.0, 0.0, 0.0, 0.0)
 
     def snap_start(
         self,

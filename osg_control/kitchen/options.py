@@ -1,4 +1,4 @@
-"""Validation of the kitchen's ``world`` reset options (door travel, cube position).
+"""Validation of the kitchen's ``world`` reset options (door travel, cube positions).
 
 A cube position must be one where the cube rests and the arm can reach it: on the counter's
 top, clear of the cabinet's plinth and the valve, or on the cabinet's floor, and within the
@@ -12,13 +12,27 @@ from typing import Any
 import numpy as np
 
 from osg_control.environment.options import Sphere, check_reach, finite_option
-from osg_control.errors import EnvOptionError
+from osg_control.errors import EnvOptionError, PlacementError
+from osg_control.kitchen.cubes import REST_PLACES
+from osg_control.kitchen.objects import cube_prefix
 from osg_control.kitchen.world import CABINET_INTERIOR_HIGH, CABINET_INTERIOR_LOW, CUBE_HALF_SIZE
 
 DOOR_TRAVEL = 0.45
 """The door slide's range [m] (``robots/kitchen.xml``)."""
 WORLD_OPTIONS = ("door_opening", "cube_pos")
-"""The kitchen's ``world`` reset options."""
+"""The kitchen's ``world`` reset options with one cube (``world_options``)."""
+
+
+def cube_option(k: int) -> str:
+    """The ``world`` reset option that places cube k: ``cube_pos``, ``cube2_pos`` ..."""
+    return f"{cube_prefix(k)}_pos"
+
+
+def world_options(cubes: int) -> tuple[str, ...]:
+    """The ``world`` reset options with ``cubes`` cubes: each cube's position too."""
+    return WORLD_OPTIONS + tuple(cube_option(k) for k in range(2, cubes + 1))
+
+
 CUBE_RESTS = {
     "the counter": ((-0.35, -0.70, 0.0), (1.05, 0.90)),
     "the cabinet's floor": (
@@ -36,12 +50,16 @@ REST_TOLERANCE = 0.005
 """How far [m] above its surface a cube position may lie (it settles in the start's 0.1 s)."""
 
 
-def check_world_options(world: dict[str, Any], holding: str | None, reach: Sphere) -> None:
+def check_world_options(
+    world: dict[str, Any], holding: str | None, reach: Sphere, cubes: int = 1
+) -> None:
     """Refuse a non-finite or out-of-range door opening or cube position (outside the
-    robot's workspace ``reach`` included), or a cube position with the cube held.
+    robot's workspace ``reach`` included), a cube position with the cube held, or two of
+    ``cubes`` cubes overlapping where the options and the scene's rest places put them.
 
     Raises:
         EnvOptionError: naming the option and its value.
+        PlacementError: naming the two overlapping cubes and their places.
     """
     door = float(finite_option("world.door_opening", world.get("door_opening", 0.0)))
     if not 0.0 <= door <= DOOR_TRAVEL:
@@ -55,16 +73,45 @@ def check_world_options(world: dict[str, Any], holding: str | None, reach: Spher
                 "(a held cube is placed in the fingers)"
             )
         check_cube_position(finite_option("world.cube_pos", world["cube_pos"], (3,)), reach)
+    places = []
+    for k in range(1, cubes + 1):
+        option = cube_option(k)
+        if world.get(option) is None:
+            if k > 1 or holding != "cube":
+                places.append((option, np.array([*REST_PLACES[k - 1], CUBE_HALF_SIZE])))
+            continue
+        if k > 1:
+            pos = finite_option(f"world.{option}", world[option], (3,))
+            check_cube_position(pos, reach, option)
+        places.append((option, np.asarray(world[option], dtype=float)))
+    check_apart(places)
 
 
-def check_cube_position(pos: np.ndarray, reach: Sphere) -> None:
-    """Refuse a cube position where it does not rest on a surface or out of reach.
+def check_apart(places: list[tuple[str, np.ndarray]]) -> None:
+    """Refuse two cubes that overlap (their boxes, axis-aligned, intersect).
+
+    Raises:
+        PlacementError: naming both and where they are.
+    """
+    for i, (first, a) in enumerate(places):
+        for second, b in places[i + 1 :]:
+            if np.all(np.abs(a - b) < 2 * CUBE_HALF_SIZE):
+                raise PlacementError(
+                    f"reset options place two cubes overlapping: {first} at {a.tolist()} and "
+                    f"{second} at {b.tolist()} (their centres must be at least "
+                    f"{2 * CUBE_HALF_SIZE} m apart along x, y or z)"
+                )
+
+
+def check_cube_position(pos: np.ndarray, reach: Sphere, option: str = "cube_pos") -> None:
+    """Refuse a cube position (the ``world`` option ``option``) where it does not rest on
+    a surface or out of reach.
 
     Raises:
         EnvOptionError: naming the option, the value and the rule broken.
     """
-    check_reach("world.cube_pos", pos, reach)
-    where = f"reset option world.cube_pos {pos.tolist()}"
+    check_reach(f"world.{option}", pos, reach)
+    where = f"reset option world.{option} {pos.tolist()}"
     surface = _resting_surface(pos)
     if surface is None:
         raise EnvOptionError(

@@ -14,7 +14,9 @@ import mujoco
 from osg_control.control.description import ORIGIN, Placement, RobotDescription, mounted
 from osg_control.control.scene_model import home_keyed_model, with_robot
 from osg_control.errors import ModelNotFoundError
-from osg_control.kitchen.world import WorldState
+from osg_control.kitchen.cubes import COLOURS, REST_PLACES
+from osg_control.kitchen.objects import cube_prefix
+from osg_control.kitchen.world import CubeState, WorldState
 from osg_control.paths import PACKAGE_DIR
 from osg_control.robots.registry import get_robot
 
@@ -52,51 +54,86 @@ def kitchen_xml_path() -> Path:
     )
 
 
-def kitchen_spec(robot: RobotDescription) -> mujoco.MjSpec:
-    """Compose the kitchen with ``robot`` (its base at ``robot.mount``)."""
-    return with_robot(mujoco.MjSpec.from_file(str(kitchen_xml_path())), robot)
+def kitchen_spec(robot: RobotDescription, cubes: int = 1) -> mujoco.MjSpec:
+    """Compose the kitchen with ``robot`` (its base at ``robot.mount``) and ``cubes`` cubes
+    (``add_cubes``; one: the file's scene as it is)."""
+    spec = mujoco.MjSpec.from_file(str(kitchen_xml_path()))
+    add_cubes(spec, cubes)
+    return with_robot(spec, robot)
 
 
-def build_kitchen_model(robot: RobotDescription) -> mujoco.MjModel:
+def add_cubes(spec: mujoco.MjSpec, cubes: int) -> None:
+    """Add cubes 2 ... ``cubes`` to the kitchen's spec: copies of its ``cube`` body (size,
+    mass, friction) named ``cube2`` ... (body, geom; joint ``cube2_free``), each its own
+    colour (``cubes.COLOURS``), resting at ``cubes.REST_PLACES``."""
+    first = spec.geom("cube")
+    for k in range(2, cubes + 1):
+        name = cube_prefix(k)
+        x, y = REST_PLACES[k - 1]
+        body = spec.worldbody.add_body(name=name, pos=[x, y, first.size[2]])
+        body.add_freejoint(name=f"{name}_free")
+        body.add_geom(
+            name=name,
+            type=mujoco.mjtGeom.mjGEOM_BOX,
+            size=first.size,
+            mass=first.mass,
+            friction=first.friction,
+            condim=first.condim,
+            rgba=COLOURS[k - 1],
+        )
+
+
+def build_kitchen_model(robot: RobotDescription, cubes: int = 1) -> mujoco.MjModel:
     """Compile the kitchen with a full-state ``HOME_KEY`` keyframe (arm home, door shut)."""
-    return home_keyed_model(kitchen_spec(robot), robot)
+    return home_keyed_model(kitchen_spec(robot, cubes), robot)
 
 
 class SceneIndex:
     """Ids of the named parts of a compiled kitchen model (with ``robot``), looked up once."""
 
-    def __init__(self, model: mujoco.MjModel, robot: RobotDescription) -> None:
+    def __init__(self, model: mujoco.MjModel, robot: RobotDescription, cubes: int = 1) -> None:
         self.door_qpos = model.joint("door_slide").qposadr[0]
         self.valve_qpos = model.joint("valve_hinge").qposadr[0]
-        self.cube_qpos = model.joint("cube_free").qposadr[0]
-        self.cube_geom = model.geom("cube").id
+        names = [cube_prefix(k) for k in range(1, cubes + 1)]
+        self.cube_qposes = [model.joint(f"{name}_free").qposadr[0] for name in names]
+        """Each cube's free joint's first qpos address, cube 1 first."""
+        self.cube_geoms = [model.geom(name).id for name in names]
+        """Each cube's geom, cube 1 first."""
+        self.cube_qpos, self.cube_geom = self.cube_qposes[0], self.cube_geoms[0]
         self.handle_geom = model.geom("handle").id
         self.left_finger, self.right_finger = (model.body(b).id for b in robot.gripper.bodies)
 
-    def _grasped(self, model: mujoco.MjModel, data: mujoco.MjData) -> tuple[bool, bool]:
-        """Whether the cube, and the handle, touch both fingers: one vectorised pass over
-        the contacts (iterating ``data.contact`` in Python costs about 10 us per contact)."""
+    def _grasped(self, model: mujoco.MjModel, data: mujoco.MjData) -> list[bool]:
+        """Whether each cube, then the handle, touches both fingers: one vectorised pass
+        over the contacts (iterating ``data.contact`` in Python costs about 10 us per
+        contact)."""
+        geoms = [*self.cube_geoms, self.handle_geom]
         pairs = data.contact.geom  # (ncon, 2)
         if not len(pairs):
-            return False, False
+            return [False] * len(geoms)
         bodies = model.geom_bodyid[pairs]  # (ncon, 2)
         left = (bodies == self.left_finger)[:, ::-1]  # the other side of each pair
         right = (bodies == self.right_finger)[:, ::-1]
         grasped = []
-        for geom in (self.cube_geom, self.handle_geom):
+        for geom in geoms:
             side = pairs == geom
             grasped.append(bool((side & left).any() and (side & right).any()))
-        return grasped[0], grasped[1]
+        return grasped
 
     def read(self, model: mujoco.MjModel, data: mujoco.MjData) -> WorldState:
         """Read the world state from the simulator (copies, never aliases ``data``)."""
-        cube = data.qpos[self.cube_qpos : self.cube_qpos + 7].tolist()
-        cube_grasped, handle_grasped = self._grasped(model, data)
+        *grasps, handle_grasped = self._grasped(model, data)
+        cubes = []
+        for adr, grasped in zip(self.cube_qposes, grasps, strict=True):
+            c = data.qpos[adr : adr + 7].tolist()
+            cubes.append(CubeState((c[0], c[1], c[2]), (c[3], c[4], c[5], c[6]), grasped))
+        first = cubes[0]
         return WorldState(
             door_opening=float(data.qpos[self.door_qpos]),
             valve_angle=float(data.qpos[self.valve_qpos]),
-            cube_pos=(cube[0], cube[1], cube[2]),
-            cube_quat=(cube[3], cube[4], cube[5], cube[6]),
-            cube_grasped=cube_grasped,
+            cube_pos=first.pos,
+            cube_quat=first.quat,
+            cube_grasped=first.grasped,
             handle_grasped=handle_grasped,
+            more_cubes=tuple(cubes[1:]),
         )

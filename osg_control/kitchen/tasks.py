@@ -1,5 +1,6 @@
-"""The paper's five kitchen tasks: one list that the PDDL problems, the executor's
-evaluations (Tables IV/V) and the report all read."""
+"""The kitchen's tasks: the paper's five, the valve's two, and two with two cubes; one
+list that the PDDL problems, the executor's evaluations (Tables IV/V) and the report all
+read."""
 
 from __future__ import annotations
 
@@ -11,13 +12,20 @@ DEFAULT_WORLD: tuple[str, ...] = ("door-closed", "cube-on-counter", "hand-empty"
 shut."""
 
 
+TWO_CUBES: tuple[tuple[str, int], ...] = (("cube", 2),)
+"""The object counts of a task with two cubes (``Task.counts``)."""
+TWO_CUBE_WORLD: tuple[str, ...] = (*DEFAULT_WORLD, "(on-counter cube-2)")
+"""The start of a two-cube task: both cubes on the counter."""
+
+
 def _task(
     name: str,
     goal: tuple[str, ...],
     world: tuple[str, ...] = DEFAULT_WORLD,
     description: str = "",
+    counts: tuple[tuple[str, int], ...] = (),
 ) -> Task:
-    return Task(name, goal, world, "home", description)
+    return Task(name, goal, world, "home", description, counts)
 
 
 KITCHEN_TASKS: tuple[Task, ...] = (
@@ -49,9 +57,23 @@ KITCHEN_TASKS: tuple[Task, ...] = (
         ("door-open", "valve-open", "hand-empty"),
         description="slide the cabinet door open, let go of the handle, turn the valve",
     ),
+    _task(
+        "two-cubes-in-cabinet",
+        ("door-open", "cube-in-cabinet", "(in-cabinet cube-2)"),
+        world=TWO_CUBE_WORLD,
+        description="two cubes: open the door, put both cubes in the cabinet",
+        counts=TWO_CUBES,
+    ),
+    _task(
+        "pick-up-cube-2",
+        ("(lifted cube-2)",),
+        world=TWO_CUBE_WORLD,
+        description="two cubes: pick up the second (blue) one",
+        counts=TWO_CUBES,
+    ),
 )
 """The paper's five long-horizon tasks (Tables IV and V), in its order, then the tasks the
-valve's skills added to the graph."""
+valve's skills added to the graph, then the tasks of a scene with two cubes."""
 TASKS_BY_NAME: dict[str, Task] = {task.name: task for task in KITCHEN_TASKS}
 
 

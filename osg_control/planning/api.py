@@ -194,11 +194,11 @@ def graph_domain(domain: OSGDomain, graph: SkillGraph | None = None) -> SkillPDD
     that one is built once per domain, it never changes)."""
     if graph is not None:
         return build_domain(graph, pddl_domain_name(domain), domain.lifting)
-    if domain.name not in _SPEC_DOMAINS:
-        _SPEC_DOMAINS[domain.name] = build_domain(
+    if domain.ref not in _SPEC_DOMAINS:
+        _SPEC_DOMAINS[domain.ref] = build_domain(
             graph_from_specs(domain), pddl_domain_name(domain), domain.lifting
         )
-    return _SPEC_DOMAINS[domain.name]
+    return _SPEC_DOMAINS[domain.ref]
 
 
 def plan_for_goal(

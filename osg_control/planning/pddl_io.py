@@ -252,7 +252,8 @@ def build_problem(
 
     Args:
         pddl: the domain (its constants are the nodes) and its lifting.
-        node: the node the robot is at.
+        node: the node the robot is at; ``NODE OBJ`` for an anchored node relative to
+            another object than its frame's recorded one (``above-cube cube-2``).
         world: the world facts that hold (the domain's fact names, or atoms such as
             ``(lifted cube-2)``); all others are false.
         goal: atoms to reach, e.g. ``"door-open (in-cabinet cube-1)"`` or ``"(at home)"``.
@@ -270,9 +271,11 @@ def build_problem(
     goal_atoms = parse_atoms(goal)
     if not goal_atoms:
         raise PlanningError("empty goal: name at least one fact to reach")
+    node, *at = node.split()  # "above-cube cube-2": the node relative to that object
     if node not in lifting.nodes:
         raise PlanningError(f"unknown node {node!r}; nodes: {', '.join(sorted(lifting.nodes))}")
-    init_atoms = _atoms([(AT, node), *(lifting.atom(fact) for fact in world)], lifting)
+    place = (AT_OBJECT, node, *at) if at else (AT, node)
+    init_atoms = _atoms([place, *(lifting.atom(fact) for fact in world)], lifting)
     goal_resolved = _atoms(goal_atoms, lifting)
     constants = {str(c.name) for c in pddl.domain.constants}
     objects = [
@@ -295,9 +298,13 @@ def build_problem(
 
 
 def task_problem(pddl: SkillPDDL, domain: OSGDomain, task: Task) -> Problem:
-    """The problem of one of a domain's tasks over its PDDL domain ``pddl``."""
+    """The problem of one of a domain's tasks over its PDDL domain ``pddl``, naming the
+    objects of the task's scene (``Domain.for_task``: e.g. two cubes)."""
+    scene = domain.for_task(task)
+    if scene is not domain:
+        pddl = SkillPDDL(pddl.domain, scene.lifting)
     return build_problem(
-        pddl, domain.task_node(task), domain.task_world(task), task.goal, name=task.name
+        pddl, scene.task_node(task), scene.task_world(task), task.goal, name=task.name
     )
 
 
