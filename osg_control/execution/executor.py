@@ -111,7 +111,7 @@ class Executor:
             ``load_executor``; default the kitchen's fit).
         graph: the skill graph whose costs plans minimise: the cost model, e.g. the
             defaults' measured success rates (``defaults.load_defaults(...).graph``,
-            ``planning.costs.measured_graph``), or ``planning.graph.graph_from_specs(domain)``
+            ``execution.bundle.measured_graph``), or ``planning.graph.graph_from_specs(domain)``
             for uniform costs, said explicitly.
     """
 
