@@ -39,6 +39,11 @@ Target = Callable[[LiberoPercept, LiberoPercept], tuple[np.ndarray, np.ndarray |
 """(percept now, percept when the leg started) -> TCP position and rotation (None: the
 controller's grasp rotation)."""
 
+TURN_WINDOW = np.radians(15.0)
+"""How far past a quarter turn from the start a grasp may turn the wrist [rad]."""
+TURN_FIRST = 0.4
+"""A hand that must turn more than this [rad] to grasp turns where it is, at least at
+the home height, before it moves (turning on the way swung the arm into the object)."""
 TURN_TOLERANCE = 0.1
 """A leg that names a rotation is reached only within this of it [rad]."""
 HOVER = 0.10
@@ -227,14 +232,15 @@ def grasp_rotation(ctx: Context, percept: LiberoPercept, obj: str) -> np.ndarray
 
 def fingers_along(ctx: Context, direction: np.ndarray) -> np.ndarray:
     """The top-down rotation turned about the vertical so that the fingers slide along
-    ``direction``'s horizontal part: of the two turns that do (the fingers are alike), the
-    one nearer the last commanded rotation (a direction near the boundary would otherwise
-    flip the wrist by half a turn between steps)."""
+    ``direction``'s horizontal part, by at most a quarter turn (and ``TURN_WINDOW``) from
+    the start's: the wrist keeps clear of its limits. Where both turns are in that window
+    (the fingers are alike), the one nearer the last commanded rotation: a direction near
+    the boundary would otherwise flip the wrist by half a turn between steps."""
     finger = ctx.base[:, 1]
     angle = float(np.arctan2(finger[0] * direction[1] - finger[1] * direction[0],
                              finger[:2] @ direction[:2]))  # fmt: skip
     turns = [_yaw(ctx.base, a) for a in (angle, angle - np.pi, angle + np.pi)
-             if -np.pi - 1e-9 <= a <= np.pi + 1e-9]  # fmt: skip
+             if abs(a) <= np.pi / 2 + TURN_WINDOW]  # fmt: skip
     return max(turns, key=lambda r: float(np.trace(r.T @ ctx.rotation)))
 
 
@@ -287,7 +293,11 @@ def approach(ctx: Context, thing: str, holding: str | None) -> list[Leg]:
         if holding is None and thing in now.objects:  # above the object's top
             top = now.position(thing)[2] + ctx.scene.extents[thing][1][2]
             hover = np.r_[point[:2], max(point[2] + HOVER, top + TOP_CLEARANCE)]
-            return hover, grasp_rotation(ctx, now, thing)
+            turn = grasp_rotation(ctx, now, thing)
+            _, rot = ctx.driver.tcp_pose(now.joints)
+            if Rotation.from_matrix(rot.T @ turn).magnitude() > TURN_FIRST:  # turn in place
+                return np.r_[start.tcp[:2], max(start.tcp[2], ctx.home_z)], turn
+            return hover, turn
         if holding is None:
             return point + np.array([0.0, 0.0, HOVER]), ctx.base
         return point + np.array([0.0, 0.0, CARRY]) + _carried_offset(now, holding), None
