@@ -4,7 +4,6 @@ states scored by its own ``check_success()``, and the benchmark harness."""
 
 from __future__ import annotations
 
-import json
 from pathlib import Path
 
 import numpy as np
@@ -21,8 +20,6 @@ from osg_control.libero.env import LiberoEnv  # noqa: E402
 from osg_control.libero.operators import achievers  # noqa: E402
 from osg_control.libero.pddl_export import UnsupportedPredicateError, export_problems  # noqa: E402
 from osg_control.libero.problem import Atom, LiberoProblem  # noqa: E402
-from osg_control.libero.robot import mounted_panda  # noqa: E402
-from osg_control.libero.scripted import ScriptedPickPlace  # noqa: E402
 from osg_control.libero.suites import INIT_STATES, max_steps, suite_names  # noqa: E402
 from osg_control.libero.tasks import (  # noqa: E402
     check_task_indices,
@@ -142,10 +139,10 @@ class HoldStill:
 
     name = "hold-still"
 
-    def start(self, problem: LiberoProblem, robot: object, obs: dict[str, np.ndarray]) -> None:
-        self.width = len(obs["robot0_joint_pos"]) + 1
+    def start(self, problem: LiberoProblem, robot: object, scene: object, percept) -> None:
+        self.width = len(percept.joints) + 1
 
-    def act(self, obs: dict[str, np.ndarray]) -> np.ndarray:
+    def act(self, percept) -> np.ndarray:
         return np.r_[np.zeros(self.width - 1), -1.0]
 
 
@@ -163,30 +160,4 @@ def test_harness_scores_by_check_success_within_the_budget() -> None:
 def test_benchmark_verb_refuses_without_a_policy(capsys) -> None:
     argv = ["--domain", "libero", "evaluate", "benchmark", "--suite", "libero_10", "--task", "0"]
     assert cli.main(argv) == 1
-    assert "no LIBERO skills shipped yet" in capsys.readouterr().err
-
-
-def test_scripted_oracle_puts_the_soup_in_the_basket(capsys) -> None:
-    """The scripted data collector on LIBERO-Object task 0, initial state 0, from the
-    observation only, within the suite's 280 steps; scored by check_success()."""
-    argv = ["--domain", "libero", "evaluate", "benchmark", "--suite", "libero_object", "--task",
-            "0", "--init-states", "0:1", "--policy", "scripted-oracle", "--json"]  # fmt: skip
-    assert cli.main(argv) == 0
-    summary = json.loads(capsys.readouterr().out)
-    assert summary["policy"] == "scripted-oracle" and summary["max_steps"] == 280
-    (episode,) = summary["episode_log"]
-    assert episode["success"] and episode["steps"] < 280
-
-
-def test_scripted_oracle_declines_a_fixture_goal() -> None:
-    """LIBERO-10 task 3 (bowl in the drawer, then close it): fixtures' joints and regions
-    are not in the observation, so the oracle holds still instead of guessing."""
-    drawer = LiberoEnv("libero_10", 3)
-    try:
-        obs = drawer.reset(0)
-        policy = ScriptedPickPlace()
-        policy.start(drawer.problem, mounted_panda(drawer.sim), obs)
-        assert policy.declined
-        np.testing.assert_array_equal(policy.act(obs), np.r_[np.zeros(7), -1.0])
-    finally:
-        drawer.close()
+    assert "no learned LIBERO skills shipped yet" in capsys.readouterr().err

@@ -11,7 +11,7 @@ pytest.importorskip("libero.libero", reason="needs the libero extra: pip install
 from osg_control.control.ik import DiffIKController  # noqa: E402
 from osg_control.control.ik_backends import IKConfig  # noqa: E402
 from osg_control.control.robot_model import check_models  # noqa: E402
-from osg_control.libero.drive import JointTargetDriver  # noqa: E402
+from osg_control.libero.drive import JOINTS_OBS, JointTargetDriver  # noqa: E402
 from osg_control.libero.env import LiberoEnv  # noqa: E402
 from osg_control.libero.robot import libero_panda, mounted_panda  # noqa: E402
 
@@ -46,11 +46,11 @@ def test_ik_reaches_above_an_observed_object(soup_env: LiberoEnv) -> None:
     """A scripted reach to 10 cm above the alphabet soup, from the observation only."""
     obs = soup_env.reset(0)
     driver = JointTargetDriver(mounted_panda(soup_env.sim))
-    _, rotation = driver.tcp_pose(obs)
+    _, rotation = driver.tcp_pose(obs[JOINTS_OBS])
     target = obs["alphabet_soup_1_pos"] + np.array([0.0, 0.0, 0.10])
     start = np.linalg.norm(obs["robot0_eef_pos"] - target)
     for _ in range(80):
-        action = driver.action(obs, target, rotation)
+        action = driver.action(obs[JOINTS_OBS], target, rotation)
         assert np.all(np.abs(action) <= 1.0)
         obs = soup_env.step(action)
     assert start > 0.15

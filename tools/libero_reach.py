@@ -18,7 +18,7 @@ from typing import Any
 
 import numpy as np
 
-from osg_control.libero.drive import TCP_OBS, JointTargetDriver
+from osg_control.libero.drive import JOINTS_OBS, TCP_OBS, JointTargetDriver
 from osg_control.libero.env import JOINT_DELTA_LIMIT, LiberoEnv
 from osg_control.libero.robot import mounted_panda
 from osg_control.libero.suites import parse_init_states
@@ -35,13 +35,13 @@ def reach(env: LiberoEnv, state: int, obj: str, steps: int) -> dict[str, Any]:
     """One reach from initial state ``state``."""
     obs = env.reset(state)
     driver = JointTargetDriver(mounted_panda(env.sim))
-    _, rotation = driver.tcp_pose(obs)
+    _, rotation = driver.tcp_pose(obs[JOINTS_OBS])
     target = obs[f"{obj}_pos"] + ABOVE
     start = float(np.linalg.norm(obs[TCP_OBS] - target))
     errors, ik_s, tracking = [], [], []
     for _ in range(steps):
         begin = time.process_time()
-        action = driver.action(obs, target, rotation)
+        action = driver.action(obs[JOINTS_OBS], target, rotation)
         ik_s.append(time.process_time() - begin)
         commanded = obs["robot0_joint_pos"] + action[:7] * JOINT_DELTA_LIMIT
         obs = env.step(action)

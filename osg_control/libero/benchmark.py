@@ -1,7 +1,8 @@
 """The LIBERO benchmark's protocol: an episode is one of a task's fixed initial states, run
 for at most the suite's published step budget, scored by the env's own ``check_success()``.
 
-A policy (``LiberoPolicy``) decides each step from the env's observation; the harness reads
+A policy (``LiberoPolicy``) decides each step from a percept (``perception``: the env's
+observation and the fixture sensor) and the scene's static description; the harness reads
 the simulator's verdict only to score. The summary (``summarise``) is what ``osg --domain
 libero evaluate benchmark --json`` prints: per-task success, the overall rate and its 95 %
 Wilson interval, the suite, the perception and the step budget.
@@ -20,13 +21,16 @@ from osg_control.control.description import RobotDescription
 from osg_control.evaluation.benchmark import Z95
 from osg_control.evaluation.check import wilson_interval
 from osg_control.libero.env import LiberoEnv
+from osg_control.libero.perception import FIXTURE_NOISE, LiberoPercept, LiberoPerception
 from osg_control.libero.problem import LiberoProblem
 from osg_control.libero.robot import mounted_panda
+from osg_control.libero.scene import Scene
 from osg_control.libero.suites import max_steps
 from osg_control.parallel import LocalExecutor
 
 PERCEPTION = "env"
-"""What the policies decide from: the env's observation (robot proprio, object poses)."""
+"""What the policies decide from: the env's observation (robot proprio, object poses) and
+the fixture sensor's noisy joint readings (``perception.FixtureSensor``)."""
 
 
 class LiberoPolicy(Protocol):
@@ -35,13 +39,14 @@ class LiberoPolicy(Protocol):
     name: str
 
     def start(
-        self, problem: LiberoProblem, robot: RobotDescription, obs: dict[str, np.ndarray]
-    ) -> None:
+        self, problem: LiberoProblem, robot: RobotDescription, scene: Scene,
+        percept: LiberoPercept,
+    ) -> None:  # fmt: skip
         """Begin an episode of ``problem`` with the arm ``robot`` (where the scene stands
-        it) at observation ``obs``."""
+        it) in ``scene`` at ``percept``."""
         ...
 
-    def act(self, obs: dict[str, np.ndarray]) -> np.ndarray:
+    def act(self, percept: LiberoPercept) -> np.ndarray:
         """The next action (the env's controller's; ``env.CONTROLLER``)."""
         ...
 
@@ -60,6 +65,7 @@ class Episode:
     steps: int
     reset_s: float
     step_s: float
+    trace: tuple[str, ...] = ()
 
 
 @dataclass(frozen=True)
@@ -71,28 +77,33 @@ class Job:
     init_states: tuple[int, ...]
     policy: PolicyFactory
     max_steps: int
+    seed: int = 0
 
 
 def run_job(job: Job) -> list[Episode]:
-    """Run a job's episodes: reset to the initial state, step the policy until the env's
-    ``check_success()`` holds or the step budget is spent."""
+    """Run a job's episodes: reset to the initial state, step the policy on percepts until
+    the env's ``check_success()`` holds or the step budget is spent. The fixture sensor's
+    noise of initial state ``s`` is seeded by ``(job.seed, s)``."""
     env = LiberoEnv(job.suite, job.task)
     robot = mounted_panda(env.sim)
+    perception = LiberoPerception(env, job.seed)
     policy = job.policy()
     episodes = []
     try:
         for state in job.init_states:
             start = time.process_time()
             obs = env.reset(state)
+            scene, percept = perception.reset(obs, state)
             reset_s = time.process_time() - start
-            policy.start(env.problem, robot, obs)
+            policy.start(env.problem, robot, scene, percept)
             success = env.check_success()
             start = time.process_time()
             while not success and env.steps < job.max_steps:
-                obs = env.step(policy.act(obs))
+                percept = perception.percept(env.step(policy.act(percept)))
                 success = env.check_success()
             step_s = (time.process_time() - start) / max(env.steps, 1)
-            episodes.append(Episode(job.task, state, success, env.steps, reset_s, step_s))
+            trace = tuple(getattr(policy, "trace", ()))
+            episodes.append(Episode(job.task, state, success, env.steps, reset_s, step_s, trace))
     finally:
         env.close()
     return episodes
@@ -104,17 +115,21 @@ def run_suite(
     init_states: Sequence[int],
     policy: PolicyFactory,
     workers: int = 1,
+    seed: int = 0,
 ) -> list[Episode]:
     """Every (task, initial state) episode, a task's episodes in one worker (arguments
-    checked by the caller: ``tasks.check_task_indices``, ``suites.parse_init_states``)."""
-    jobs = [Job(suite, t, tuple(init_states), policy, max_steps(suite)) for t in tasks]
+    checked by the caller: ``tasks.check_task_indices``, ``suites.parse_init_states``);
+    ``seed`` seeds the fixture sensor's noise."""
+    jobs = [Job(suite, t, tuple(init_states), policy, max_steps(suite), seed) for t in tasks]
     episodes: list[Episode] = []
     for done in LocalExecutor(workers).map(run_job, jobs):
         episodes += done
     return episodes
 
 
-def summarise(suite: str, policy_name: str, episodes: Sequence[Episode]) -> dict[str, Any]:
+def summarise(
+    suite: str, policy_name: str, episodes: Sequence[Episode], seed: int = 0
+) -> dict[str, Any]:
     """The JSON summary: per-task and overall success with 95 % Wilson intervals."""
     per_task: dict[str, Any] = {}
     for task in sorted({e.task for e in episodes}):
@@ -133,6 +148,8 @@ def summarise(suite: str, policy_name: str, episodes: Sequence[Episode]) -> dict
         "suite": suite,
         "policy": policy_name,
         "perception": PERCEPTION,
+        "fixture_noise": FIXTURE_NOISE,
+        "seed": seed,
         "max_steps": max_steps(suite),
         "episodes": len(episodes),
         "success_rate": rate,

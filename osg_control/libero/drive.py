@@ -40,17 +40,17 @@ class JointTargetDriver:
 
     def action(
         self,
-        obs: dict[str, np.ndarray],
+        joints: np.ndarray,
         target_pos: np.ndarray,
         target_rot: np.ndarray,
         gripper: float = GRIPPER_OPEN,
     ) -> np.ndarray:
         """The action that moves the TCP toward ``target_pos`` and ``target_rot`` (world
-        frame) from the observed joints, with the gripper command."""
-        q = np.asarray(obs[JOINTS_OBS], dtype=float)
+        frame) from the perceived joints (``robot0_joint_pos``), with the gripper command."""
+        q = np.asarray(joints, dtype=float)
         delta = self.ik.step(q, target_pos, target_rot) - q
         return np.r_[np.clip(delta / JOINT_DELTA_LIMIT, -1.0, 1.0), gripper]
 
-    def tcp_pose(self, obs: dict[str, np.ndarray]) -> tuple[np.ndarray, np.ndarray]:
-        """The TCP pose (position, rotation) of the observed joints, by forward kinematics."""
-        return self.ik.tcp_pose(np.asarray(obs[JOINTS_OBS], dtype=float))
+    def tcp_pose(self, joints: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """The TCP pose (position, rotation) of the perceived joints, by forward kinematics."""
+        return self.ik.tcp_pose(np.asarray(joints, dtype=float))

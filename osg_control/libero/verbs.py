@@ -8,9 +8,9 @@ each verb checks its arguments (exit 2, nothing run), then needs the ``libero`` 
 - ``plan --suite S --task I [--planner P] [--time-limit S] [--json]``: the plan for one
   task's goal (exit status as ``osg plan``'s);
 - ``evaluate benchmark --suite S [--task I ...] [--episodes N | --init-states A:B]
-  [--policy scripted-oracle] [--workers W] [--json]``: the benchmark's protocol
-  (``libero.benchmark``); without ``--policy`` it refuses (``NoPolicyError``): no skills
-  are shipped yet.
+  [--policy scripted-plan] [--seed K] [--workers W] [--json]``: the benchmark's protocol
+  (``libero.benchmark``); without ``--policy`` it refuses (``NoPolicyError``): no learned
+  skills are shipped yet.
 """
 
 from __future__ import annotations
@@ -27,15 +27,19 @@ class NoPolicyError(OSGError):
     """No LIBERO policy to evaluate is shipped yet (exit 1)."""
 
 
+POLICIES = ("scripted-plan",)
+"""The policies ``--policy`` runs: ``scripted-plan`` plans the task file's goal and runs it
+with scripted operator controllers (``executor.PlanExecutor``)."""
 NO_POLICY = (
-    "no LIBERO skills shipped yet: there is no skill graph to evaluate (docs/libero.md); "
-    "--policy scripted-oracle runs the scripted data collector instead; nothing was run"
+    "no learned LIBERO skills shipped yet: there is no skill graph to evaluate "
+    "(docs/libero.md); --policy scripted-plan runs the plans with scripted operator "
+    "controllers instead; nothing was run"
 )
 
 
 PLAN_HELP = (
     "plan one task's goal, read from its task file, over the lifted domain osg-libero "
-    "(planned only: no skill runs its operators yet)"
+    "(--policy scripted-plan of evaluate benchmark runs such plans)"
 )
 
 
@@ -108,10 +112,14 @@ def register(subparsers: argparse._SubParsersAction) -> None:
         "--policy",
         default=None,
         metavar="NAME",
-        help="what runs the episodes: scripted-oracle (the scripted pick-and-place data "
-        "collector, told the task file's goal: not a skill graph's result). Without it the "
-        "verb refuses: no LIBERO skills are shipped yet",
+        help="what runs the episodes: scripted-plan (plans the task file's goal and runs "
+        "it with scripted operator controllers, replanning from percepts: not learned "
+        "skills). Without it the verb refuses: no learned LIBERO skills are shipped yet",
     )
+    bench.add_argument(
+        "--seed", type=int, default=0,
+        help="seed of the fixture sensor's noise (initial state s draws from (seed, s))",
+    )  # fmt: skip
     bench.add_argument("--workers", type=int, default=1)
     bench.add_argument("--json", action="store_true")
     bench.set_defaults(func=run_benchmark)
@@ -174,11 +182,10 @@ def run_benchmark(args: argparse.Namespace) -> int:
     ``--policy``, refuse: no skills are shipped yet (``NoPolicyError``)."""
     max_steps(args.suite)
     states = init_state_range(args)
-    from osg_control.libero.scripted import ScriptedPickPlace
-
-    if args.policy not in (None, ScriptedPickPlace.name):
-        known = ScriptedPickPlace.name
-        raise UsageError(f"--policy: unknown policy {args.policy!r}; known: {known}")
+    if args.policy is not None and args.policy not in POLICIES:
+        raise UsageError(f"--policy: unknown policy {args.policy!r}; known: {', '.join(POLICIES)}")
+    if args.workers < 1:
+        raise UsageError(f"--workers must be at least 1, got {args.workers}")
     from osg_control.libero.tasks import check_task_indices
 
     tasks = check_task_indices(args.suite, args.task)
@@ -186,9 +193,10 @@ def run_benchmark(args: argparse.Namespace) -> int:
         raise NoPolicyError(NO_POLICY)
     from osg_control.json_files import dump_json
     from osg_control.libero.benchmark import run_suite, summarise
+    from osg_control.libero.executor import PlanExecutor
 
-    episodes = run_suite(args.suite, tasks, list(states), ScriptedPickPlace, args.workers)
-    summary = summarise(args.suite, ScriptedPickPlace.name, episodes)
+    episodes = run_suite(args.suite, tasks, list(states), PlanExecutor, args.workers, args.seed)
+    summary = summarise(args.suite, PlanExecutor.name, episodes, args.seed)
     if args.json:
         print(dump_json(summary))
         return 0
@@ -196,7 +204,7 @@ def run_benchmark(args: argparse.Namespace) -> int:
         print(f"task {task}: {row['successes']}/{row['episodes']}")
     low, high = summary["interval_95"]
     print(
-        f"{args.suite} ({summary['policy']}, not a skill graph's result): "
+        f"{args.suite} ({summary['policy']}: scripted operators, not learned skills): "
         f"{100 * summary['success_rate']:.1f} % of {summary['episodes']} episodes "
         f"[95 % {100 * low:.1f}-{100 * high:.1f}], at most {summary['max_steps']} steps each"
     )

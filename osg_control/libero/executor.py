@@ -1,0 +1,162 @@
+"""Plan execution in LIBERO's envs: plan the task file's goal over ``osg-libero`` from the
+perceived state, run the plan operator by operator with the scripted controllers
+(``controllers``), check each operator's effect on the percept (``facts``), and on a failed
+effect let go, lift, and replan from what is perceived then.
+
+The policy ``scripted-plan`` of ``osg --domain libero evaluate benchmark``: its operators
+are scripted controllers, not learned skills. It decides from percepts only; the env's
+``check_success()`` scores it (``benchmark``).
+"""
+
+from __future__ import annotations
+
+from dataclasses import replace
+
+import numpy as np
+
+from osg_control.control.description import RobotDescription
+from osg_control.control.ik_backends import IKConfig
+from osg_control.libero.controllers import (
+    Context,
+    LegRunner,
+    hold,
+    holding_ok,
+    operator_legs,
+    up,
+)
+from osg_control.libero.drive import GRIPPER_OPEN, JointTargetDriver
+from osg_control.libero.facts import holds, perceived_init
+from osg_control.libero.perception import LiberoPercept
+from osg_control.libero.plan import plan_task
+from osg_control.libero.problem import Atom, LiberoProblem
+from osg_control.libero.scene import Scene
+from osg_control.planning.task import SearchLimits
+
+MAX_REPLANS = 4
+"""Replans an episode may make before the executor holds still."""
+POSTURE_COST = 0.001
+"""The IK's pull toward the arm's home posture (``control.ik_backends.IKConfig``): twenty
+times its default, so the elbow stays up over the whole plan (at the default the forearm
+drifted down onto the cabinet while pushing a bottom drawer shut)."""
+PLAN_TIME_S = 30.0
+"""A search's time limit [s]."""
+EFFECTS: dict[str, tuple[str, int]] = {
+    "place-on": ("on", 2), "place-in": ("in", 2), "open": ("open", 1), "close": ("close", 1),
+    "turn-on": ("turnon", 1), "turn-off": ("turnoff", 1),
+}  # fmt: skip
+"""Operator -> the goal predicate its effect makes true, and how many of its arguments
+that atom takes (``approach``/``retreat`` have no perceived effect; ``pick``'s is
+checked by ``controllers.holding_ok``)."""
+
+
+class PlanExecutor:
+    """The ``scripted-plan`` policy (see the module docstring).
+
+    Attributes:
+        trace: what happened in the episode, one line per operator, plan and recovery
+            (``"<step> pick bowl_1 plate_1: ok"``), for diagnosis.
+    """
+
+    name = "scripted-plan"
+
+    def __init__(self, planner: str = "auto") -> None:
+        self.planner = planner
+
+    def start(
+        self, problem: LiberoProblem, robot: RobotDescription, scene: Scene,
+        percept: LiberoPercept,
+    ) -> None:  # fmt: skip
+        """Plan the goal from the first percept."""
+        driver = JointTargetDriver(
+            robot, IKConfig(dt=1.0 / robot.control_hz, posture_cost=POSTURE_COST)
+        )
+        self.ctx = Context(scene, driver, driver.tcp_pose(percept.joints)[1],
+                           float(percept.tcp[2]), dict(problem.objects),
+                           np.r_[robot.mount[0][:2], 0.0])  # fmt: skip
+        self.problem = problem
+        self.trace: list[str] = []
+        self.step, self.replans = 0, 0
+        self.holding: str | None = None
+        self.runner: LegRunner | None = None
+        self.current: tuple[str, tuple[str, ...]] | None = None
+        self.queue: list[tuple[str, tuple[str, ...]]] = []
+        self._plan(percept)
+
+    def _plan(self, percept: LiberoPercept) -> None:
+        """Plan from the perceived state (the hand at home and empty)."""
+        perceived = replace(self.problem, init=perceived_init(self.problem, self.ctx.scene,
+                                                              percept))  # fmt: skip
+        result = plan_task(perceived, self.planner, SearchLimits(time_s=PLAN_TIME_S))
+        steps = [s.action.split() for s in result.steps or ()]
+        self.queue = [(s[0], tuple(s[1:])) for s in steps]
+        self.trace.append(f"{self.step} plan ({result.status}): {len(self.queue)} steps")
+
+    def _effect_holds(self, percept: LiberoPercept) -> bool:
+        assert self.current is not None
+        operator, args = self.current
+        if operator in ("pick", "pick-out"):
+            return holding_ok(self.ctx, percept, args[0], self.start_z)
+        if operator in EFFECTS:
+            predicate, arity = EFFECTS[operator]
+            return holds(self.ctx.scene, percept, Atom(predicate, args[:arity]))
+        return True
+
+    def _next(self, percept: LiberoPercept) -> bool:
+        """Start the next operator (replanning when the plan is spent and the goal is not
+        perceived); False when there is nothing left to run."""
+        if not self.queue:
+            if all(holds(self.ctx.scene, percept, a) for a in self.problem.goal):
+                return False
+            if self.replans >= MAX_REPLANS:
+                return False
+            self.replans += 1
+            self._plan(percept)
+            if not self.queue:
+                return False
+        self.current = self.queue.pop(0)
+        operator, args = self.current
+        try:
+            legs = operator_legs(self.ctx, operator, args, self.holding)
+        except KeyError as err:
+            self.trace.append(f"{self.step} {operator} {' '.join(args)}: {err}")
+            self.queue.clear()
+            self.replans = MAX_REPLANS
+            self.current = None
+            return False
+        self.start_z = float(percept.position(args[0])[2]) if args[0] in percept.objects else 0.0
+        self.runner = LegRunner(legs, self.ctx)
+        return True
+
+    def act(self, percept: LiberoPercept) -> np.ndarray:
+        """The next action: the running operator's, or the next one's; held still when
+        the plan is done or no plan is left."""
+        self.step += 1
+        for _ in range(len(self.queue) + MAX_REPLANS + 3):
+            if self.runner is None and not self._next(percept):
+                break
+            assert self.runner is not None
+            action = self.runner.act(percept)
+            if action is not None:
+                return action
+            self._finish(percept)
+        return np.r_[np.zeros(7), GRIPPER_OPEN]
+
+    def _finish(self, percept: LiberoPercept) -> None:
+        """An operator's (or a recovery's) legs are done: check its effect; on failure
+        let go and lift, then replan."""
+        self.runner = None
+        if self.current is None:  # a recovery ended: replan from what is perceived
+            self.holding = None
+            self.queue.clear()
+            return
+        operator, args = self.current
+        ok = self._effect_holds(percept)
+        self.trace.append(f"{self.step} {operator} {' '.join(args)}: {'ok' if ok else 'FAILED'}")
+        if ok:
+            if operator in ("pick", "pick-out"):
+                self.holding = args[0]
+            elif operator in ("place-on", "place-in"):
+                self.holding = None
+            return
+        self.current = None
+        self.runner = LegRunner([hold(GRIPPER_OPEN, 8), up(0.10, GRIPPER_OPEN)], self.ctx)

@@ -1,0 +1,123 @@
+"""Plans executed in LIBERO's envs from percepts (the ``libero`` extra; skipped without
+it): the fixture sensor, the facts read from percepts, an operator's controller, and the
+``scripted-plan`` policy end to end, scored by the env's ``check_success()``."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+
+pytest.importorskip("libero.libero", reason="needs the libero extra: pip install -e .[libero]")
+
+from osg_control import cli  # noqa: E402
+from osg_control.libero.controllers import (  # noqa: E402
+    Context,
+    LegRunner,
+    holding_ok,
+    operator_legs,
+)
+from osg_control.libero.drive import JointTargetDriver  # noqa: E402
+from osg_control.libero.env import LiberoEnv  # noqa: E402
+from osg_control.libero.facts import holds, perceived_init  # noqa: E402
+from osg_control.libero.perception import FIXTURE_NOISE, LiberoPerception  # noqa: E402
+from osg_control.libero.problem import Atom  # noqa: E402
+from osg_control.libero.robot import mounted_panda  # noqa: E402
+
+DRAWER_JOINT = "white_cabinet_1_bottom_level"
+
+
+@pytest.fixture(scope="module")
+def drawer_env():
+    """LIBERO-10 task 3: the bowl into the open bottom drawer, then close it."""
+    env = LiberoEnv("libero_10", 3)
+    yield env
+    env.close()
+
+
+def test_fixture_sensor_is_labelled_noisy_and_seeded(drawer_env: LiberoEnv) -> None:
+    """Each reading names its joint and unit; its noise has the stated deviation around the
+    simulator's value; the same seed draws the same noise, another seed other noise."""
+    obs = drawer_env.reset(0)
+    perception = LiberoPerception(drawer_env, seed=3)
+    scene, percept = perception.reset(obs, 0)
+    reading = percept.fixtures[DRAWER_JOINT]
+    assert reading.label == f"fixture-joint/{DRAWER_JOINT}" and reading.unit == "m"
+    assert reading.sigma == FIXTURE_NOISE["slide"] == 0.005
+    truth = scene.joints[DRAWER_JOINT].q0  # read once as the scene's description
+    values = np.array([perception.percept(obs).joint(DRAWER_JOINT) for _ in range(400)])
+    assert abs(values.mean() - truth) < 4 * 0.005 / np.sqrt(400)
+    assert 0.0045 < values.std() < 0.0055
+    again = LiberoPerception(drawer_env, seed=3)
+    other = LiberoPerception(drawer_env, seed=4)
+    first = again.reset(obs, 0)[1].joint(DRAWER_JOINT)
+    assert first == reading.value != other.reset(obs, 0)[1].joint(DRAWER_JOINT)
+
+
+def test_facts_are_read_from_the_percept(drawer_env: LiberoEnv) -> None:
+    """The drawer starts open (LIBERO's -0.14 m threshold on the sensed slide), the bowl is
+    not in it; the state to plan from says so."""
+    obs = drawer_env.reset(0)
+    scene, percept = LiberoPerception(drawer_env).reset(obs, 0)
+    region = "white_cabinet_1_bottom_region"
+    assert holds(scene, percept, Atom("open", (region,)))
+    assert not holds(scene, percept, Atom("close", (region,)))
+    assert not holds(scene, percept, Atom("in", ("akita_black_bowl_1", region)))
+    init = perceived_init(drawer_env.problem, scene, percept)
+    assert Atom("open", (region,)) in init
+    assert not any(a.predicate == "in" and a.args[0] == "akita_black_bowl_1" for a in init)
+
+
+def test_pick_controller_lifts_the_object() -> None:
+    """``approach`` then ``pick`` of the alphabet soup (LIBERO-Object task 0), deciding from
+    percepts: the percept says it is held and lifted, and so does the simulator."""
+    env = LiberoEnv("libero_object", 0)
+    try:
+        obs = env.reset(0)
+        perception = LiberoPerception(env)
+        scene, percept = perception.reset(obs, 0)
+        robot = mounted_panda(env.sim)
+        driver = JointTargetDriver(robot)
+        ctx = Context(scene, driver, driver.tcp_pose(percept.joints)[1], float(percept.tcp[2]),
+                      dict(env.problem.objects), np.r_[robot.mount[0][:2], 0.0])  # fmt: skip
+        start_z = float(obs["alphabet_soup_1_pos"][2])
+        for operator in ("approach", "pick"):
+            runner = LegRunner(operator_legs(ctx, operator, ("alphabet_soup_1",), None), ctx)
+            while (action := runner.act(percept)) is not None:
+                assert env.steps < 200
+                obs = env.step(action)
+                percept = perception.percept(obs)
+        assert holding_ok(ctx, percept, "alphabet_soup_1", start_z)
+        assert obs["alphabet_soup_1_pos"][2] > start_z + 0.05  # the simulator agrees
+    finally:
+        env.close()
+
+
+def test_scripted_plan_puts_the_soup_in_the_basket(capsys) -> None:
+    """The plan executor on LIBERO-Object task 0, initial states 0-1: planned from the
+    percept, run operator by operator within 280 steps, scored by check_success()."""
+    argv = ["--domain", "libero", "evaluate", "benchmark", "--suite", "libero_object", "--task",
+            "0", "--init-states", "0:2", "--policy", "scripted-plan", "--seed", "1",
+            "--json"]  # fmt: skip
+    assert cli.main(argv) == 0
+    summary = json.loads(capsys.readouterr().out)
+    assert summary["policy"] == "scripted-plan" and summary["max_steps"] == 280
+    assert summary["seed"] == 1 and summary["fixture_noise"] == FIXTURE_NOISE
+    for episode in summary["episode_log"]:
+        assert episode["success"] and episode["steps"] < 280
+        assert any("pick-out alphabet_soup_1" in line and line.endswith("ok")
+                   for line in episode["trace"])  # fmt: skip
+
+
+@pytest.mark.slow
+def test_scripted_plan_closes_the_drawer_on_the_bowl(capsys) -> None:
+    """LIBERO-10 task 3, initial state 0: the bowl into the open drawer, then the drawer
+    pushed shut (its joint sensed with noise), within 520 steps."""
+    argv = ["--domain", "libero", "evaluate", "benchmark", "--suite", "libero_10", "--task",
+            "3", "--init-states", "0:1", "--policy", "scripted-plan", "--json"]  # fmt: skip
+    assert cli.main(argv) == 0
+    (episode,) = json.loads(capsys.readouterr().out)["episode_log"]
+    assert episode["success"], episode["trace"]
+    assert any(line.endswith("place-in akita_black_bowl_1 white_cabinet_1_bottom_region: ok")
+               for line in episode["trace"])  # fmt: skip
