@@ -15,7 +15,7 @@ import pytest
 
 from osg_control.control.robot_model import GRIPPER_ACTUATOR, robot_spec
 from osg_control.domain.spec import TOP_DOWN_QUAT
-from osg_control.kitchen import skills
+from osg_control.kitchen import skills, valve
 from osg_control.kitchen.scene import ROBOT_MOUNTS
 from osg_control.kitchen.world import WorldState, world_facts
 from osg_control.robots import ur5_model
@@ -113,7 +113,7 @@ def test_the_ur5_does_the_kitchen_stages_in_kitchen_physics() -> None:
         ("home", None),
         ("above-valve", None),
         ("valve-lever", None),
-        *((skills.valve_push_point(angle), None) for angle in skills.VALVE_PUSH_ANGLES),
+        *((valve.valve_push_point(angle), None) for angle in valve.VALVE_PUSH_ANGLES),
     ]
     held = []  # the gripper's width after each close: on the handle's fin, on the cube
     for target, grip in steps:

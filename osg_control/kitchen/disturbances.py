@@ -1,5 +1,5 @@
 """Disturbances of the kitchen's world: the cube knocked away after a grasp, the door left
-part open.
+part open, the valve moved from its file place.
 
 The executor must notice from its percepts alone (the grasp detector loses the cube, the
 pose estimator sees it elsewhere; the pose estimator reads the door's travel) and act on
@@ -19,6 +19,7 @@ from osg_control.domain.frames import sample_placements
 from osg_control.execution.executor import Executor
 from osg_control.kitchen.env import KitchenEnv
 from osg_control.kitchen.skills import CUBE
+from osg_control.kitchen.valve import VALVE_HINGE, VALVE_SHIFT
 
 GOAL = ("cube-lifted",)
 """The task of a knocked-cube episode."""
@@ -122,3 +123,34 @@ def part_open_door_episode(
     return PartOpenEpisode(
         travel, set(DOOR_GOAL) <= env.facts(), len(grabs), sum(o.success for o in grabs)
     )
+
+
+VALVE_GOAL = ("valve-open", "hand-empty")
+"""The task of a moved-valve episode (``turn-valve``'s goal)."""
+
+
+@dataclass(frozen=True)
+class MovedValveEpisode:
+    """How one moved-valve episode went (scored on the simulator's truth)."""
+
+    shift: tuple[float, float]
+    opened: bool
+    replans: int
+
+
+def moved_valve_episode(
+    executor: Executor, env: KitchenEnv, rng: np.random.Generator, shift: float = VALVE_SHIFT
+) -> MovedValveEpisode:
+    """Move the valve by a shift uniform in [-``shift``, ``shift``] m along x and y from its
+    file place (the ``valve_pos`` option), start within 5 cm of ``home`` with the hand
+    empty and run ``VALVE_GOAL``."""
+    dx, dy = (float(v) for v in rng.uniform(-shift, shift, 2))
+    options = {
+        "position": executor.domain.nodes["home"].position,
+        "radius": 0.05,
+        "gripper": "open",
+        "world": {"valve_pos": [VALVE_HINGE[0] + dx, VALVE_HINGE[1] + dy]},
+    }
+    obs, _ = env.reset(seed=int(rng.integers(2**31)), options=options)
+    result = executor.execute(list(VALVE_GOAL), env, obs)
+    return MovedValveEpisode((dx, dy), set(VALVE_GOAL) <= env.facts(), result.replans)

@@ -6,9 +6,9 @@ scene holds ``cubes`` cubes (1 to ``objects.MAX_CUBES``; a constructor argument,
 cubes are bodies of the compiled model and the world vector's width follows them). A start
 world is given by facts (``door-open`` slides the door to ``skills.DOOR_OPENED``) or
 explicitly with the ``world`` reset option (``door_opening`` [m], ``cube_pos``,
-``cube2_pos`` ...); ``holding`` is ``"cube"`` (cube 1) or ``"handle"``. The robot is
-``DEFAULT_ROBOT`` unless another is given (any registered ``RobotDescription`` with a
-two-finger gripper).
+``cube2_pos`` ..., ``valve_pos``: the valve's (x, y), ``valve.py``); ``holding`` is
+``"cube"`` (cube 1) or ``"handle"``. The robot is ``DEFAULT_ROBOT`` unless another is
+given (any registered ``RobotDescription`` with a two-finger gripper).
 """
 
 from __future__ import annotations
@@ -32,6 +32,7 @@ from osg_control.kitchen.objects import world_fact_names
 from osg_control.kitchen.options import check_world_options, cube_option, world_options
 from osg_control.kitchen.scene import SceneIndex, build_kitchen_model, kitchen_robot
 from osg_control.kitchen.skills import DOOR, DOOR_OPENED, NODES, SKILLS_BY_NAME
+from osg_control.kitchen.valve import valve_position
 from osg_control.kitchen.world import CUBE_HALF_SIZE, WorldState
 
 HANDLE_GRASP_SLACK = 0.015
@@ -150,8 +151,10 @@ class KitchenEnv(ArmEnv):
     def place_world(
         self, world: dict[str, Any], facts: frozenset[str], holding: str | None
     ) -> None:
-        """Slide the door (open if ``door-open`` is a start fact) and place the cubes (cube
-        1 in the fingers when held)."""
+        """Put the valve where ``valve_pos`` says (else at the file's place: the model's
+        body moves back every reset), slide the door (open if ``door-open`` is a start
+        fact) and place the cubes (cube 1 in the fingers when held)."""
+        self.model.body_pos[self.scene.valve_body] = valve_position(world)
         self.data.qpos[self.scene.door_qpos] = _door_opening(world, facts)
         options = self._cube_options().values()
         for adr, option in zip(self.scene.cube_qposes, options, strict=True):

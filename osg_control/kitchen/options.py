@@ -1,8 +1,11 @@
-"""Validation of the kitchen's ``world`` reset options (door travel, cube positions).
+"""Validation of the kitchen's ``world`` reset options (door travel, cube positions, the
+valve's place).
 
 A cube position must be one where the cube rests and the arm can reach it: on the counter's
-top, clear of the cabinet's plinth and the valve, or on the cabinet's floor, and within the
-robot's workspace (``robot_model.workspace``). The scene's dimensions are ``robots/kitchen.xml``'s.
+top, clear of the cabinet's plinth and the valve (where ``valve_pos`` puts it), or on the
+cabinet's floor, and within the robot's workspace (``robot_model.workspace``). The valve's
+place is checked by ``valve.check_valve_option``. The scene's dimensions are
+``robots/kitchen.xml``'s.
 """
 
 from __future__ import annotations
@@ -15,11 +18,12 @@ from osg_control.environment.options import Sphere, check_reach, finite_option
 from osg_control.errors import EnvOptionError, PlacementError
 from osg_control.kitchen.cubes import REST_PLACES
 from osg_control.kitchen.objects import cube_prefix
+from osg_control.kitchen.valve import check_valve_option, valve_footprint
 from osg_control.kitchen.world import CABINET_INTERIOR_HIGH, CABINET_INTERIOR_LOW, CUBE_HALF_SIZE
 
 DOOR_TRAVEL = 0.45
 """The door slide's range [m] (``robots/kitchen.xml``)."""
-WORLD_OPTIONS = ("door_opening", "cube_pos")
+WORLD_OPTIONS = ("door_opening", "cube_pos", "valve_pos")
 """The kitchen's ``world`` reset options with one cube (``world_options``)."""
 
 
@@ -41,11 +45,9 @@ CUBE_RESTS = {
     ),
 }
 """Where the cube may rest: each surface's lower corner (x, y, top z) and upper (x, y) [m]."""
-COUNTER_OBSTACLES = {
-    "the cabinet's plinth": ((0.50, 0.08), (0.86, 0.58)),
-    "the valve": ((0.31, -0.49), (0.44, -0.41)),
-}
-"""Footprints (x, y) [m] on the counter's top that the cube would cut into."""
+COUNTER_OBSTACLES = {"the cabinet's plinth": ((0.50, 0.08), (0.86, 0.58))}
+"""Fixed footprints (x, y) [m] on the counter's top that the cube would cut into (and the
+valve's, ``valve.valve_footprint``, where the options place it)."""
 REST_TOLERANCE = 0.005
 """How far [m] above its surface a cube position may lie (it settles in the start's 0.1 s)."""
 
@@ -61,6 +63,7 @@ def check_world_options(
         EnvOptionError: naming the option and its value.
         PlacementError: naming the two overlapping cubes and their places.
     """
+    check_valve_option(world)
     door = float(finite_option("world.door_opening", world.get("door_opening", 0.0)))
     if not 0.0 <= door <= DOOR_TRAVEL:
         raise EnvOptionError(
@@ -72,7 +75,8 @@ def check_world_options(
                 "reset options contradict each other: world.cube_pos while holding 'cube' "
                 "(a held cube is placed in the fingers)"
             )
-        check_cube_position(finite_option("world.cube_pos", world["cube_pos"], (3,)), reach)
+        pos = finite_option("world.cube_pos", world["cube_pos"], (3,))
+        check_cube_position(pos, reach, valve=valve_footprint(world))
     places = []
     for k in range(1, cubes + 1):
         option = cube_option(k)
@@ -82,7 +86,7 @@ def check_world_options(
             continue
         if k > 1:
             pos = finite_option(f"world.{option}", world[option], (3,))
-            check_cube_position(pos, reach, option)
+            check_cube_position(pos, reach, option, valve_footprint(world))
         places.append((option, np.asarray(world[option], dtype=float)))
     check_apart(places)
 
@@ -103,9 +107,15 @@ def check_apart(places: list[tuple[str, np.ndarray]]) -> None:
                 )
 
 
-def check_cube_position(pos: np.ndarray, reach: Sphere, option: str = "cube_pos") -> None:
+def check_cube_position(
+    pos: np.ndarray,
+    reach: Sphere,
+    option: str = "cube_pos",
+    valve: tuple[tuple[float, float], tuple[float, float]] | None = None,
+) -> None:
     """Refuse a cube position (the ``world`` option ``option``) where it does not rest on
-    a surface or out of reach.
+    a surface or out of reach (``valve``: the valve's footprint, default at its file
+    place).
 
     Raises:
         EnvOptionError: naming the option, the value and the rule broken.
@@ -119,7 +129,8 @@ def check_cube_position(pos: np.ndarray, reach: Sphere, option: str = "cube_pos"
             f"{CUBE_HALF_SIZE} m above, within {REST_TOLERANCE} m, clear of the edges)"
         )
     if surface == "the counter":
-        for obstacle, (low, high) in COUNTER_OBSTACLES.items():
+        obstacles = {**COUNTER_OBSTACLES, "the valve": valve or valve_footprint({})}
+        for obstacle, (low, high) in obstacles.items():
             if all(low[i] - CUBE_HALF_SIZE < pos[i] < high[i] + CUBE_HALF_SIZE for i in (0, 1)):
                 raise EnvOptionError(f"{where} cuts into {obstacle}")
 

@@ -94,6 +94,7 @@ class SceneIndex:
     def __init__(self, model: mujoco.MjModel, robot: RobotDescription, cubes: int = 1) -> None:
         self.door_qpos = model.joint("door_slide").qposadr[0]
         self.valve_qpos = model.joint("valve_hinge").qposadr[0]
+        self.valve_body = model.body("valve").id
         names = [cube_prefix(k) for k in range(1, cubes + 1)]
         self.cube_qposes = [model.joint(f"{name}_free").qposadr[0] for name in names]
         """Each cube's free joint's first qpos address, cube 1 first."""

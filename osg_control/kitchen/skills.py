@@ -30,38 +30,9 @@ from osg_control.domain.spec import (
 from osg_control.domain.spec import nearest_start as _nearest_start
 from osg_control.errors import SkillSpecError, lookup
 from osg_control.kitchen.objects import SKILL_PARAMETERS, WORLD_FACTS
+from osg_control.kitchen.valve import VALVE_NODES, VALVE_PUSH_ANGLES, valve_push_point
 
 __all__ = ["NODES", "SKILLS", "TOP_DOWN_QUAT", "WORLD_FACTS", "Node", "SkillSpec", "get_skill"]
-
-VALVE_HINGE = (0.35, -0.45)
-"""The valve's hinge axis (x, y) [m]: a vertical axis through the knob's centre."""
-VALVE_PUSH_Z = 0.07
-"""TCP height [m] of the valve push: the fingertip pads (TCP z +- 9 mm) overlap the lever
-(z 0.06-0.08) and stay above the counter; below the knob's top (0.06) only outside its rim."""
-VALVE_PUSH_RADIUS = 0.075
-"""Distance [m] from the hinge at which the +y finger pushes the lever: beyond the knob's rim
-(4 cm, plus the pad's 9 mm half-width) and short of the lever's tip (9 cm)."""
-VALVE_PUSH_ANGLES = (-0.35, -0.70, -1.05)
-"""Lever angles [rad] of the push's arc waypoints: clockwise (the lever swings to -y, away
-from the cube, the cabinet and every other skill's path) to about 1 rad."""
-
-
-PUSH_FINGER_TRAVEL = 0.04
-"""The open finger's inner face's distance from the TCP [m] the push point is laid out for:
-the Panda's. The nodes are one graph for every robot, so a gripper that opens wider (the
-UR5's 2F-85-like 0.0425 m) meets the lever that much deeper along the push (2.5 mm: the
-push's arc tolerates it; ``tests/test_ur5_kitchen.py`` turns the valve with it)."""
-
-
-def valve_push_point(angle: float) -> tuple[float, float, float]:
-    """The TCP position [m] that puts the +y finger's inner face (``PUSH_FINGER_TRAVEL``
-    from the TCP along y) on the lever's +y face (1 cm off its axis) at
-    ``VALVE_PUSH_RADIUS`` when the lever is at ``angle`` [rad] about z."""
-    c, s = np.cos(angle), np.sin(angle)
-    x = VALVE_HINGE[0] + VALVE_PUSH_RADIUS * c - 0.01 * s
-    y = VALVE_HINGE[1] + VALVE_PUSH_RADIUS * s + 0.01 * c - PUSH_FINGER_TRAVEL
-    return (round(float(x), 4), round(float(y), 4), VALVE_PUSH_Z)
-
 
 NODES: dict[str, Node] = {
     node.name: node
@@ -76,9 +47,7 @@ NODES: dict[str, Node] = {
         Node("cube-lifted", (0.50, -0.20, 0.20), "closed", anchor="cube"),
         Node("place-front", (0.40, 0.30, 0.20), "closed"),
         Node("cube-inside", (0.64, 0.30, 0.135), "closed"),
-        Node("above-valve", (VALVE_HINGE[0] + VALVE_PUSH_RADIUS, VALVE_HINGE[1], 0.25)),
-        Node("valve-lever", (VALVE_HINGE[0] + VALVE_PUSH_RADIUS, VALVE_HINGE[1], VALVE_PUSH_Z)),
-        Node("valve-pushed", valve_push_point(VALVE_PUSH_ANGLES[-1])),
+        *VALVE_NODES,
     )
 }
 """Every node of the skill graph. The first four are where the movement skills meet. The
@@ -87,9 +56,10 @@ cube's nodes are anchored to it (``CUBE``): they move with the cube in the plane
 travel, so a grab after a slide that lost the handle heads for the handle where the door
 now is. ``handle-open`` (the slide's goal: the handle at ``DOOR_OPENED``) and
 ``door-front`` (where the movement skills meet, reached with the door open or shut) are
-places along the door's fixed track, not on the door: they stay. The valve's nodes are
-fixed because the valve is: the scene has no field for its place (it cannot be moved), so
-an anchor would never shift them."""
+places along the door's fixed track, not on the door: they stay. The valve's nodes
+(``valve.VALVE_NODES``) are given for the valve at its file place; the ``valve_pos`` reset
+option moves the valve, but no world field perceives its place yet, so they do not follow
+it."""
 
 CUBE = ObjectFrame(
     name="cube",
