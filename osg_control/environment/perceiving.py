@@ -9,7 +9,7 @@ import numpy as np
 
 from osg_control.environment.camera_sensing import CameraPerception, CameraSensing
 from osg_control.environment.config import EnvConfig
-from osg_control.environment.episode import EpisodeState
+from osg_control.environment.skill_step import SkillStepper
 from osg_control.environment.truth import TruthReadouts
 from osg_control.errors import EnvOptionError
 from osg_control.perception.percept import Percept
@@ -17,9 +17,10 @@ from osg_control.perception.sensors import noisy_world
 from osg_control.perception.spec import SIMULATED_PERCEPTIONS
 
 
-class Perceiving(EpisodeState, TruthReadouts):
+class Perceiving(TruthReadouts, SkillStepper):
     """The percept part of ``ArmEnv`` (``ArmEnv.__init__`` sets the attributes below); the
-    ``sim`` perception reads the truth (``TruthReadouts``) exactly."""
+    ``sim`` perception reads the truth (``TruthReadouts``) exactly. ``TruthReadouts`` comes
+    first: its readouts are the hooks ``SkillStepper``'s step loop asks for."""
 
     config: EnvConfig
     model: mujoco.MjModel

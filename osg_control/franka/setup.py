@@ -187,7 +187,7 @@ def joint_reset(adapter: Any, max_steps: int, tolerance: float) -> int:
         if non_finite_state(adapter.data, ("qpos",)) is None:
             velocity = adapter.reset_ik.solve_velocity(q, pos, rot)
             action = adapter.arm_action(velocity, bias)
-        *_, terminated, truncated, info = adapter._env_step(action, np.zeros(7))
+        *_, terminated, truncated, info = adapter.advance(action, np.zeros(7))
         if "failure" in info:
             raise SimulationError(f"joint reset: {info['failure']}")
         if terminated or truncated:
