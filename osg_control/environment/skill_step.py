@@ -14,9 +14,9 @@ import mujoco
 import numpy as np
 
 from osg_control.control.divergence import non_finite_state
-from osg_control.domain.spec import SkillSpec
 from osg_control.environment.actions import latched_gripper
 from osg_control.environment.episode import EpisodeState
+from osg_control.environment.truth import TruthReadouts
 from osg_control.perception.percept import Percept
 
 StepResult = tuple[np.ndarray, float, bool, bool, dict[str, Any]]
@@ -54,9 +54,10 @@ class Actuation(Protocol):
         ...
 
 
-class SkillStepper(EpisodeState):
+class SkillStepper(EpisodeState, TruthReadouts):
     """The step part of a skill env (``SkillEnv``): the env sets ``data``, ``actuation``
-    and ``_gripper_cmd`` and implements the hooks below."""
+    and ``_gripper_cmd`` and implements the hooks below; the step is scored and reported
+    on its truth (``TruthReadouts``)."""
 
     data: mujoco.MjData
     actuation: Actuation
@@ -115,24 +116,8 @@ class SkillStepper(EpisodeState):
         """The plant's command for a checked action, from the perceived state (the IK)."""
         raise NotImplementedError
 
-    def world_state(self) -> np.ndarray:
-        """Truth: the domain's world-state vector."""
-        raise NotImplementedError
-
-    def facts_of(self, world: np.ndarray) -> frozenset[str]:
-        """The domain's facts of a world-state vector."""
-        raise NotImplementedError
-
-    def _truth_success(self, skill: SkillSpec, facts: frozenset[str]) -> bool:
-        """The skill's success predicate on the truth, with the true world's ``facts``."""
-        raise NotImplementedError
-
     def _step_budget(self) -> int | None:
         """The steps after which a step is truncated (None: no budget of the env's own)."""
-        raise NotImplementedError
-
-    def _info(self, world: np.ndarray, facts: frozenset[str]) -> dict[str, Any]:
-        """The step's truth information (``truth.truth_info`` and the env's own keys)."""
         raise NotImplementedError
 
     def _step_percept(self, world: np.ndarray, facts: frozenset[str]) -> Percept:

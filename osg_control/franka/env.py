@@ -48,8 +48,7 @@ from osg_control.domain.spec import Node, SkillSpec
 from osg_control.environment.options import check_env_arguments, check_facts_hold
 from osg_control.environment.poses import quat_rotation, sample_start_pose
 from osg_control.environment.skill_step import SkillStepper
-from osg_control.environment.success import GRIPPER_CLOSED_CMD, GRIPPER_OPEN_CMD, success_holds
-from osg_control.environment.truth import truth_info
+from osg_control.environment.success import GRIPPER_CLOSED_CMD, GRIPPER_OPEN_CMD
 from osg_control.errors import DomainError
 from osg_control.franka import poses, setup
 from osg_control.franka.actuation import KitchenStepActuation
@@ -158,6 +157,7 @@ class FrankaKitchenAdapter(SkillStepper, gym.Env):
         self._arm_dof = np.array([self.model.joint(j).dofadr[0] for j in self.robot.arm.names])
         self.sensors = FrankaSensors(self.kitchen, self.robot, self.ik.tcp_pose, world_of, facts_of)
         self._arm_qpos = self.sensors.arm_qpos
+        self._tcp = self.sensors.tcp
         self.observation_space = gym.spaces.Box(*unbounded_observation(), (OBS_DIM,), np.float64)
         self.action_bounds = np.array(poses.ACTION_BOUNDS)
         """The domain's ``action_bounds``: steps clip to them."""
@@ -178,15 +178,6 @@ class FrankaKitchenAdapter(SkillStepper, gym.Env):
         self._noise_rng = np.random.default_rng()
 
     # ----------------------------------------------------------------- truth
-    @property
-    def arm_q(self) -> np.ndarray:
-        """Truth: the arm's joint positions [rad] (a copy)."""
-        return self.data.qpos[self._arm_qpos].copy()
-
-    def tcp_pose(self) -> tuple[np.ndarray, np.ndarray]:
-        """Truth: the TCP position [m] and rotation matrix."""
-        return self.sensors.true_tcp()
-
     def finger_forces(self) -> tuple[float, float]:
         """Truth: summed normal contact force [N] on each finger from things not the robot."""
         return self.sensors.finger_forces()
@@ -208,25 +199,6 @@ class FrankaKitchenAdapter(SkillStepper, gym.Env):
     def facts_of(self, world: np.ndarray) -> frozenset[str]:
         """The domain's facts of a world-state vector."""
         return frozenset(self._facts_of(world))
-
-    def facts(self) -> frozenset[str]:
-        """Truth: the facts that hold now in the simulator."""
-        return self.facts_of(self.world_state())
-
-    def skill_success(
-        self, skill: SkillSpec | None = None, world: np.ndarray | None = None
-    ) -> bool:
-        """Truth: TCP within tolerance of the skill's end node, its gripper state, effects."""
-        skill = skill or self.skill
-        if skill is None:
-            return False
-        world = self.world_state() if world is None else world
-        return self._truth_success(skill, self.facts_of(world))
-
-    def _truth_success(self, skill: SkillSpec, facts: frozenset[str]) -> bool:
-        return success_holds(
-            skill, self.nodes[skill.end], self.tcp_pose()[0], self._gripper_cmd, facts
-        )
 
     # ----------------------------------------------------------------- percepts
     def env_observation(self) -> np.ndarray:
@@ -253,9 +225,11 @@ class FrankaKitchenAdapter(SkillStepper, gym.Env):
         pos, rot = self.ik.tcp_pose(q)
         return q, pos, rot, self.command.bias(q, observation[ROBOT_QVEL][:7])
 
-    def _info(self, world: np.ndarray, facts: frozenset[str] | None = None) -> dict[str, Any]:
-        facts = self.facts_of(world) if facts is None else facts
-        info = truth_info(world, facts, self._steps, self._succeeded, self.arm_q)
+    def _info(
+        self, world: np.ndarray | None = None, facts: frozenset[str] | None = None
+    ) -> dict[str, Any]:
+        """``TruthReadouts._info`` with the env's own task completions."""
+        info = super()._info(world, facts)
         info["episode_task_completions"] = self.completed_tasks()
         return info
 
