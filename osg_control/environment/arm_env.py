@@ -85,9 +85,10 @@ class ArmEnv(Perceiving, StartPlacement, gym.Env):
     Subclasses implement the scene's hooks (``scene_hooks.SceneHooks``): ``build_model``,
     ``read_world``, ``facts_of``; they may override ``check_world``, ``place_world``,
     ``snap_start``, ``held_geoms`` and ``finger_opening``, and declare ``world_facts``,
-    ``world_options``, ``holdable``, ``objects`` and ``world_sensors``. Its percepts
-    (``perceiving``), truth readouts (``truth``) and start placement (``start_placement``)
-    are the bases' jobs.
+    ``world_options``, ``holdable``, ``objects`` and ``world_sensors``. Its step loop
+    (``skill_step``, the plant ``stepping.MujocoActuation``), percepts (``perceiving``),
+    truth readouts (``truth``) and start placement (``start_placement``) are the bases'
+    and parts' jobs.
 
     Args:
         nodes: the domain's nodes (start poses and skills' termination poses).

@@ -3,7 +3,8 @@
 Wraps an env made with ``gymnasium.make("FrankaKitchen-v1", tasks_to_complete=[...])``
 (any of its options, any wrapper of the caller's); its ``step``, reward, observation noise,
 time limit and task completion run as the library ships them: the adapter only chooses
-the 9-D action.
+the 9-D action. The step loop is the core's (``environment.skill_step.SkillStepper``, as
+``ArmEnv``'s), with the env's ``step`` as the plant (``franka.actuation``).
 
 Percept (``percept()``, computed once at the end of ``reset``, after each step and so
 within ``joint_reset``; ``observe()`` is its state): by ``FrankaConfig.perception``,
