@@ -90,7 +90,7 @@ class SkillStepper(EpisodeState, TruthReadouts):
             actuated = self.actuation.apply(command, self._gripper_cmd)
             failure = actuated.failure
         self._steps += 1
-        world = self.world_state()
+        world = self._true_world()
         facts = self.facts_of(world)
         skill = self.skill
         reward, terminated, truncated = self.step_outcome(

@@ -20,7 +20,7 @@ from osg_control.environment.success import success_holds
 
 class TruthReadouts:
     """The truth part of a skill env (its ``__init__`` sets the attributes below; it
-    implements ``world_state``, ``facts_of`` and ``true_state``)."""
+    implements ``_true_world``, ``facts_of`` and ``true_state``)."""
 
     data: mujoco.MjData
     nodes: dict[str, Node]
@@ -32,11 +32,16 @@ class TruthReadouts:
     _steps: int
     _succeeded: bool
 
+    def _true_world(self) -> np.ndarray:
+        """The domain's world-state vector read from the simulator, a fresh array (the env's
+        own; its step scores with it)."""
+        raise NotImplementedError
+
     def world_state(self) -> np.ndarray:
         """The scene's true state beyond the robot (the domain's world-state vector): for
         scoring and labels, never for deciding (``percept().world`` is what the robot
         perceives)."""
-        raise NotImplementedError
+        return self._true_world()
 
     def facts_of(self, world: np.ndarray) -> frozenset[str]:
         """The domain's facts that hold in a world-state vector."""
@@ -63,7 +68,7 @@ class TruthReadouts:
     def facts(self) -> frozenset[str]:
         """The world facts that hold now in the simulator (scoring; ``percept().facts`` is
         what the robot believes)."""
-        return self.facts_of(self.world_state())
+        return self.facts_of(self._true_world())
 
     def node_position(self, name: str) -> np.ndarray:
         """Where a node is in the world as reset (its anchor's true displacement applied)."""
@@ -82,7 +87,7 @@ class TruthReadouts:
         skill = skill or self.skill
         if skill is None:
             return False
-        facts = self.facts_of(self.world_state() if world is None else world)
+        facts = self.facts_of(self._true_world() if world is None else world)
         return self._truth_success(skill, facts)
 
     def _truth_success(self, skill: SkillSpec, facts: frozenset[str]) -> bool:
@@ -102,7 +107,7 @@ class TruthReadouts:
         """The step's information: ``world`` and ``world_facts`` are the simulator's truth,
         for scoring and for labelling scripted data, never for deciding (``percept``);
         ``facts``: ``world``'s, if the caller has them already."""
-        world = self.world_state() if world is None else world
+        world = self._true_world() if world is None else world
         facts = self.facts_of(world) if facts is None else facts
         return truth_info(world, facts, self._steps, self._succeeded, self.arm_q)
 
@@ -113,7 +118,7 @@ class SceneTruth(TruthReadouts, SceneHooks):
 
     sensors: ArmSensors
 
-    def world_state(self) -> np.ndarray:
+    def _true_world(self) -> np.ndarray:
         return self.read_world()
 
     def true_state(self) -> np.ndarray:

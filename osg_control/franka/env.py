@@ -187,7 +187,7 @@ class FrankaKitchenAdapter(SkillStepper, gym.Env):
         """Truth: the 10-D state of the simulator (the ``sim`` percept's state)."""
         return self.sensors.true_state(self._gripper_cmd)
 
-    def world_state(self) -> np.ndarray:
+    def _true_world(self) -> np.ndarray:
         """Truth: the domain's world-state vector (true object qpos, contact grasp)."""
         return self.sensors.true_world()
 
