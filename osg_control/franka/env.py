@@ -306,11 +306,6 @@ class FrankaKitchenAdapter(SkillStepper, gym.Env):
         (``info["episode_task_completions"]``)."""
         return list(self.actuation.env_info.get("episode_task_completions", []))
 
-    @property
-    def last_env_info(self) -> dict[str, Any]:
-        """The info the caller's env returned last."""
-        return self.actuation.env_info
-
     def _command(self, action: np.ndarray) -> np.ndarray:
         """The env's 9-D action for a (clipped) 7-D TCP action at the perceived state."""
         q, pos, rot, bias = self._controlled()
