@@ -153,6 +153,27 @@ def test_bad_input_is_refused(adapter) -> None:
     assert make_franka_env(env=own, tasks=["microwave"]).kitchen is own.unwrapped
 
 
+def test_a_non_finite_joint_state_ends_the_episode_without_stepping_the_env(adapter) -> None:
+    """The shared step loop (``SkillStepper``, as ``ArmEnv``'s): a NaN joint position set
+    from outside is a divergence naming the joint; the library env is not stepped and the
+    gripper command is not latched (nothing reaches the actuators)."""
+    from osg_control.control.divergence import is_divergence
+
+    adapter.reset(seed=0)
+    adapter.step(np.zeros(7))
+    elapsed = adapter.env._elapsed_steps  # the library's TimeLimit wrapper
+    before = adapter.env_observation()
+    joint = adapter.robot.arm.names[2]
+    adapter.data.qpos[adapter.model.joint(joint).qposadr[0]] = np.nan
+    _obs, reward, terminated, truncated, info = adapter.step(np.array([0, 0, 0, 0, 0, 0, -1.0]))
+    assert terminated and not truncated and reward == 0.0
+    assert is_divergence(info["failure"]) and repr(joint) in info["failure"]
+    assert adapter.env._elapsed_steps == elapsed and info["env_reward"] == 0.0
+    np.testing.assert_array_equal(adapter.env_observation(), before)
+    assert adapter.percept().state[7] == 1.0  # still open: the close was not latched
+    assert adapter.episode_over
+
+
 def test_reward_is_the_skills_own_and_completions_are_the_envs() -> None:
     """With a skill the reward is its sparse beta reward; the env's own task reward and
     completions are kept in ``info``; the adapter's own step limit counts from the start."""

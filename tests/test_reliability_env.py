@@ -294,7 +294,7 @@ def test_a_control_step_in_one_call_is_the_substep_loop_bit_for_bit() -> None:
     joint over its limit the env reruns up to that substep and saturates: the physics and
     the reported peaks equal a substep-by-substep loop's (full-speed moves saturate)."""
     fast, loop = KitchenEnv(), KitchenEnv()
-    loop._control_step._speed_watch.available = False  # the fallback: substep by substep
+    loop.actuation.control_step._speed_watch.available = False  # the fallback: substep by substep
     fast.reset(seed=3)
     loop.reset(seed=3)
     rng = np.random.default_rng(1)

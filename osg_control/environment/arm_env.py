@@ -35,7 +35,6 @@ import mujoco
 import numpy as np
 
 from osg_control.control.description import RobotDescription
-from osg_control.control.divergence import non_finite_state
 from osg_control.control.ik import DiffIKController
 from osg_control.control.robot_model import GRIPPER_ACTUATOR
 from osg_control.control.servo import uncap_drive
@@ -47,7 +46,6 @@ from osg_control.domain.spaces import (
     observation_bounds,
 )
 from osg_control.domain.spec import Node, SkillSpec
-from osg_control.environment.actions import latched_gripper
 from osg_control.environment.camera_sensing import CameraSensing
 from osg_control.environment.config import RESET_OPTIONS, EnvConfig, as_slice
 from osg_control.environment.joint_reset import JointReset
@@ -66,7 +64,7 @@ from osg_control.environment.perceiving import Perceiving
 from osg_control.environment.poses import quat_rotation, sample_start_pose
 from osg_control.environment.sensing import ArmSensors
 from osg_control.environment.start_placement import StartPlacement
-from osg_control.environment.stepping import ArmControlStep
+from osg_control.environment.stepping import ArmControlStep, MujocoActuation
 from osg_control.environment.success import GRIPPER_CLOSED_CMD, GRIPPER_OPEN_CMD, success_holds
 from osg_control.errors import EnvOptionError, SimulationError
 from osg_control.perception.percept import Percept
@@ -87,9 +85,10 @@ class ArmEnv(Perceiving, StartPlacement, gym.Env):
     Subclasses implement the scene's hooks (``scene_hooks.SceneHooks``): ``build_model``,
     ``read_world``, ``facts_of``; they may override ``check_world``, ``place_world``,
     ``snap_start``, ``held_geoms`` and ``finger_opening``, and declare ``world_facts``,
-    ``world_options``, ``holdable``, ``objects`` and ``world_sensors``. Its percepts
-    (``perceiving``), truth readouts (``truth``) and start placement (``start_placement``)
-    are the bases' jobs.
+    ``world_options``, ``holdable``, ``objects`` and ``world_sensors``. Its step loop
+    (``skill_step``, the plant ``stepping.MujocoActuation``), percepts (``perceiving``),
+    truth readouts (``truth``) and start placement (``start_placement``) are the bases'
+    and parts' jobs.
 
     Args:
         nodes: the domain's nodes (start poses and skills' termination poses).
@@ -103,6 +102,7 @@ class ArmEnv(Perceiving, StartPlacement, gym.Env):
     """
 
     metadata = {"render_modes": ["rgb_array"]}
+    actuation: MujocoActuation
     camera = "overview"
     """The model camera ``render`` uses."""
 
@@ -141,24 +141,25 @@ class ArmEnv(Perceiving, StartPlacement, gym.Env):
         self._arm_act = as_slice([self.model.actuator(j).id for j in joints])
         if not self.config.limit_joint_speed:
             uncap_drive(self.model, joints)
-        self._control_step = ArmControlStep(
-            self.model,
-            self.data,
-            robot,
-            self._arm_qpos,
-            self._arm_dof,
-            self._arm_act,
-            self.n_substeps,
-            self.config.limit_joint_speed,
-        )
-        self._step_speed_ratio = 0.0
-        self.peak_joint_speed_ratio = 0.0
-        """Peak |arm joint velocity| / its limit over every simulated substep since the last
-        reset (steps and joint resets; the start's settling is not commanded motion)."""
         gripper = robot.gripper
-        self._finger_qpos = np.array([self.model.joint(j).qposadr[0] for j in gripper.joints])
         self._finger_open = gripper.open_position
         self._gripper_act = self.model.actuator(GRIPPER_ACTUATOR).id
+        self.actuation = MujocoActuation(
+            ArmControlStep(
+                self.model,
+                self.data,
+                robot,
+                self._arm_qpos,
+                self._arm_dof,
+                self._arm_act,
+                self.n_substeps,
+                self.config.limit_joint_speed,
+            ),
+            self._gripper_act,
+            self._finger_open,
+        )
+        """The plant: the scene's physics, one control step per ``step``."""
+        self._finger_qpos = np.array([self.model.joint(j).qposadr[0] for j in gripper.joints])
         self._tcp = self.model.site(robot.tcp.site).id
         base = self.model.body_rootid[self.model.jnt_bodyid[self.model.joint(joints[0]).id]]
         self._robot_bodies = {
@@ -264,7 +265,7 @@ class ArmEnv(Perceiving, StartPlacement, gym.Env):
         self._steps = 0
         self._succeeded = False
         self._episode_over = False
-        self.peak_joint_speed_ratio = 0.0
+        self.actuation.peak = 0.0
         if self.cameras is not None:
             self.cameras.reset()
         world = self.read_world()
@@ -273,58 +274,31 @@ class ArmEnv(Perceiving, StartPlacement, gym.Env):
         return self.observe(), self._info(world)
 
     # ----------------------------------------------------------------- step
-    def step(self, action: np.ndarray) -> tuple[np.ndarray, float, bool, bool, dict[str, Any]]:
-        """Apply one 50 ms control step (see module docstring).
+    @property
+    def peak_joint_speed_ratio(self) -> float:
+        """Peak |arm joint velocity| / its limit over every simulated substep since the last
+        reset (steps and joint resets; the start's settling is not commanded motion)."""
+        return self.actuation.peak
 
-        A non-finite joint position (set from outside since the last step) ends the
-        episode as a divergence: ``terminated``, ``info["failure"]`` naming the joint,
-        nothing simulated and nothing sent to the actuators (a non-finite velocity MuJoCo
-        reports itself, as ``BADQVEL``).
+    def _command(self, action: np.ndarray) -> np.ndarray:
+        """The IK's joint targets from the encoders (the perceived joints)."""
+        return self.ik.relative_step(self.percept().joints, action[:6])
 
-        Raises:
-            ValueError: a malformed action (``check_action``).
-        """
-        action = self.check_action(action)
-        failure = non_finite_state(self.data, ("qpos",))  # MuJoCo answers a bad qvel itself
-        if failure is None:
-            self._gripper_cmd = latched_gripper(self._gripper_cmd, action[6])
-            # The controller reads the encoders: the perceived joints.
-            q_target = self.ik.relative_step(self.percept().joints, action[:6])
-            self.data.ctrl[self._gripper_act] = (
-                self._finger_open if self._gripper_cmd == GRIPPER_OPEN_CMD else 0.0
-            )
-            failure = self._simulate(q_target)
-        else:
-            self._step_speed_ratio = 0.0  # nothing simulated
-        self._steps += 1
-        world = self.read_world()
-        facts = self.facts_of(world)
-        skill = self.skill
-        reward, terminated, truncated = self.step_outcome(
-            failure,
-            lambda: skill is not None and self._truth_success(skill, facts),
-            skill.max_steps if skill else self.config.max_steps,
-        )
-        info = self._info(world, facts)
-        info["percept"] = self._perceive(world, facts, decision=False)
-        if self.cameras is not None:
-            info["camera"] = self.cameras.report(float(self.data.time))
-        info["action_applied"] = action
-        info["joint_speed_ratio"] = self._step_speed_ratio
-        if failure is not None:
-            info["failure"] = failure
-        return self.observe(), reward, terminated, truncated, info
+    def _step_budget(self) -> int | None:
+        return self.skill.max_steps if self.skill else self.config.max_steps
+
+    def _step_percept(self, world: np.ndarray, facts: frozenset[str]) -> Percept:
+        return self._perceive(world, facts, decision=False)
+
+    def _sensor_info(self) -> dict[str, Any]:
+        if self.cameras is None:
+            return {}
+        return {"camera": self.cameras.report(float(self.data.time))}
 
     def _simulate(self, arm_target: np.ndarray) -> str | None:
-        """Run one control step of physics toward ``arm_target`` (``stepping.ArmControlStep``)
-        and record its peak joint speed; return a failure reason if the simulation diverged."""
-        failure, peak = self._control_step.run(arm_target)
-        self._record_peak(peak)
-        return failure
-
-    def _record_peak(self, peak: float) -> None:
-        self.peak_joint_speed_ratio = max(self.peak_joint_speed_ratio, peak)
-        self._step_speed_ratio = peak
+        """Run one control step of physics toward ``arm_target`` (``MujocoActuation``);
+        return a failure reason if the simulation diverged."""
+        return self.actuation.simulate(arm_target)[0]
 
     # ----------------------------------------------------------------- joint reset
     def joint_reset(self, max_steps: int = 40, tolerance: float = 0.05) -> int:

@@ -70,19 +70,45 @@ class JointReset:
             return 0
         if self._controller is None:
             self._controller = joint_reset_controller(self.robot, self.ik)
-        joints = encoders()
+        controller = self._controller
         held: tuple[np.ndarray, np.ndarray] | None = None  # the TCP pose to hold
-        previous = np.inf
-        for step in range(max_steps):
-            error = float(np.abs(joints - posture).max())
-            if error < tolerance or error > previous - 1e-4:
-                return step
-            previous = error
+
+        def step(joints: np.ndarray) -> bool:
+            nonlocal held
             diverged = non_finite_state(data, ("qpos",))
             if diverged is None:
-                held = held or self._controller.tcp_pose(joints)
-                diverged = simulate(self._controller.reset_step(joints, *held))
+                held = held or controller.tcp_pose(joints)
+                diverged = simulate(controller.reset_step(joints, *held))
             if diverged is not None:
                 raise SimulationError(f"{diverged} during joint reset")
-            joints = encoders()
-        return max_steps
+            return False
+
+        return drive_to_posture(encoders, posture, step, max_steps, tolerance)
+
+
+def drive_to_posture(
+    joints: Callable[[], np.ndarray],
+    posture: np.ndarray,
+    step: Callable[[np.ndarray], bool],
+    max_steps: int,
+    tolerance: float,
+) -> int:
+    """The joint reset's loop, every env's: read the perceived ``joints``; stop when every
+    joint is within ``tolerance`` [rad] of ``posture`` or the error stopped shrinking (by
+    1e-4 rad); else run one control ``step`` from the joints read (True: the episode
+    ended, stop). The control steps used.
+
+    Raises:
+        SimulationError: from ``step``, the physics diverged.
+    """
+    current = joints()
+    previous = np.inf
+    for count in range(max_steps):
+        error = float(np.abs(current - posture).max())
+        if error < tolerance or error > previous - 1e-4:
+            return count
+        previous = error
+        if step(current):
+            return count + 1
+        current = joints()
+    return max_steps

@@ -9,17 +9,17 @@ import numpy as np
 
 from osg_control.environment.camera_sensing import CameraPerception, CameraSensing
 from osg_control.environment.config import EnvConfig
-from osg_control.environment.episode import EpisodeState
-from osg_control.environment.truth import TruthReadouts
+from osg_control.environment.skill_step import SkillStepper
+from osg_control.environment.truth import SceneTruth
 from osg_control.errors import EnvOptionError
 from osg_control.perception.percept import Percept
 from osg_control.perception.sensors import noisy_world
 from osg_control.perception.spec import SIMULATED_PERCEPTIONS
 
 
-class Perceiving(EpisodeState, TruthReadouts):
+class Perceiving(SceneTruth, SkillStepper):
     """The percept part of ``ArmEnv`` (``ArmEnv.__init__`` sets the attributes below); the
-    ``sim`` perception reads the truth (``TruthReadouts``) exactly."""
+    ``sim`` perception reads the truth (``SceneTruth``) exactly."""
 
     config: EnvConfig
     model: mujoco.MjModel
@@ -59,7 +59,7 @@ class Perceiving(EpisodeState, TruthReadouts):
                 f"read_world gives {truth.shape}; declare a sensor for every world field"
             )
         if spec.name == "sim":
-            state = self.sensors.true_state(self.data, self._gripper_cmd)
+            state = self.true_state()
             facts = self.facts_of(truth) if truth_facts is None else truth_facts
             self._percept = Percept(state, self.arm_q, truth, facts)
         else:

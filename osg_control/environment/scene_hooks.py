@@ -10,7 +10,6 @@ import mujoco
 import numpy as np
 
 from osg_control.control.description import RobotDescription
-from osg_control.domain.frames import node_position
 from osg_control.domain.spec import Node, ObjectFrame
 
 
@@ -22,7 +21,6 @@ class SceneHooks:
 
     robot: RobotDescription
     nodes: dict[str, Node]
-    anchor_offsets: dict[str, np.ndarray]
 
     world_facts: tuple[str, ...] = ()
     """The facts ``facts_of`` can give: the ``facts`` reset option may name only these
@@ -75,10 +73,6 @@ class SceneHooks:
         """The ``world`` reset options that put the objects at ``placements`` (those not
         held: a held object is placed in the fingers)."""
         return {}
-
-    def node_position(self, name: str) -> np.ndarray:
-        """Where a node is in the world as reset (its anchor's true displacement applied)."""
-        return node_position(self.nodes, name, self.anchor_offsets)
 
     def detect_world(self, state: np.ndarray, world: np.ndarray) -> np.ndarray:
         """The perceived world with its ``detected`` fields recomputed from the percepts

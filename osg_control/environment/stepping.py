@@ -1,6 +1,7 @@
 """The physics of one control step of the arm: the substeps toward a joint target, with
 the drive's speed cap and the speed saturation of ``control.servo``, and a divergence
-check. ``ArmEnv`` runs every step and joint-reset step through it."""
+check; and ``MujocoActuation``, the ``skill_step.Actuation`` of a scene simulated here.
+``ArmEnv`` runs every step and joint-reset step through them."""
 
 from __future__ import annotations
 
@@ -10,6 +11,8 @@ import numpy as np
 from osg_control.control.description import RobotDescription
 from osg_control.control.divergence import DivergenceWatch
 from osg_control.control.servo import SpeedWatch, saturate_joint_speeds
+from osg_control.environment.skill_step import Actuated
+from osg_control.environment.success import GRIPPER_OPEN_CMD
 
 _STEP_STATE = mujoco.mjtState.mjSTATE_INTEGRATION
 """The state a control step is rerun from: everything ``mj_step`` reads."""
@@ -97,3 +100,41 @@ class ArmControlStep:
                 fastest = self._saturate()
             peak = max(peak, fastest)
         return watch.check(), peak
+
+
+class MujocoActuation:
+    """``skill_step.Actuation`` of a scene simulated here: the gripper actuator set from the
+    latched command, then ``ArmControlStep`` toward the IK's joint targets; it keeps the
+    peak joint speed ratio (``|speed| / limit``) since ``peak`` was last zeroed.
+
+    Args:
+        control_step: the arm's control step on the scene.
+        gripper_act: the gripper actuator's index.
+        finger_open: its target when open (0 when closed).
+    """
+
+    def __init__(self, control_step: ArmControlStep, gripper_act: int, finger_open: float) -> None:
+        self.control_step = control_step
+        self._gripper_act = gripper_act
+        self._finger_open = finger_open
+        self.peak = 0.0
+        """Peak joint speed ratio over every substep run since it was last zeroed."""
+
+    def apply(self, command: np.ndarray, gripper_cmd: float) -> Actuated:
+        """The gripper's target, then one control step toward the joint targets
+        ``command``; ``info["joint_speed_ratio"]``: the step's peak speed ratio."""
+        self.control_step.data.ctrl[self._gripper_act] = (
+            self._finger_open if gripper_cmd == GRIPPER_OPEN_CMD else 0.0
+        )
+        failure, peak = self.simulate(command)
+        return Actuated(failure, info={"joint_speed_ratio": peak})
+
+    def halt(self, failure: str) -> Actuated:
+        """Nothing simulated: a speed ratio of 0."""
+        return Actuated(failure, info={"joint_speed_ratio": 0.0})
+
+    def simulate(self, arm_target: np.ndarray) -> tuple[str | None, float]:
+        """``ArmControlStep.run`` (a step's or a joint reset's), its peak recorded."""
+        failure, peak = self.control_step.run(arm_target)
+        self.peak = max(self.peak, peak)
+        return failure, peak

@@ -1,6 +1,8 @@
-"""``TruthReadouts``: ``ArmEnv``'s readouts of the simulator's truth (arm joints, TCP pose,
-10-D state, world state and facts), the skill success predicate on it and the step info:
-for scoring, labels and set-ups, never for deciding (that reads ``Perceiving.percept``)."""
+"""``TruthReadouts``: a skill env's readouts of the simulator's truth (arm joints, TCP pose,
+facts, where a node is now), the skill success predicate on it and the step info, whatever
+the plant: for scoring, labels and set-ups, never for deciding (that reads ``percept``).
+The env supplies the world-state vector, its facts and the true 10-D state;
+``SceneTruth`` does so for ``ArmEnv`` from its scene's hooks."""
 
 from __future__ import annotations
 
@@ -9,23 +11,45 @@ from typing import Any
 import mujoco
 import numpy as np
 
-from osg_control.domain.spec import SkillSpec
+from osg_control.domain.frames import node_position
+from osg_control.domain.spec import Node, SkillSpec
 from osg_control.environment.scene_hooks import SceneHooks
 from osg_control.environment.sensing import ArmSensors
 from osg_control.environment.success import success_holds
 
 
-class TruthReadouts(SceneHooks):
-    """The truth part of ``ArmEnv`` (``ArmEnv.__init__`` sets the attributes below)."""
+class TruthReadouts:
+    """The truth part of a skill env (its ``__init__`` sets the attributes below; it
+    implements ``_true_world``, ``facts_of`` and ``true_state``)."""
 
     data: mujoco.MjData
-    sensors: ArmSensors
+    nodes: dict[str, Node]
+    anchor_offsets: dict[str, np.ndarray]
     skill: SkillSpec | None
     _arm_qpos: slice | np.ndarray
     _tcp: int
     _gripper_cmd: float
     _steps: int
     _succeeded: bool
+
+    def _true_world(self) -> np.ndarray:
+        """The domain's world-state vector read from the simulator, a fresh array (the env's
+        own; its step scores with it)."""
+        raise NotImplementedError
+
+    def world_state(self) -> np.ndarray:
+        """The scene's true state beyond the robot (the domain's world-state vector): for
+        scoring and labels, never for deciding (``percept().world`` is what the robot
+        perceives)."""
+        return self._true_world()
+
+    def facts_of(self, world: np.ndarray) -> frozenset[str]:
+        """The domain's facts that hold in a world-state vector."""
+        raise NotImplementedError
+
+    def true_state(self) -> np.ndarray:
+        """Truth (scoring): the 10-D state of the simulator (the ``sim`` percept's state)."""
+        raise NotImplementedError
 
     @property
     def arm_q(self) -> np.ndarray:
@@ -41,19 +65,14 @@ class TruthReadouts(SceneHooks):
             self.data.site_xmat[self._tcp].reshape(3, 3).copy(),
         )
 
-    def true_state(self) -> np.ndarray:
-        """Truth (scoring): the 10-D state of the simulator (the ``sim`` percept's state)."""
-        return self.sensors.true_state(self.data, self._gripper_cmd)
-
-    def world_state(self) -> np.ndarray:
-        """The scene's true state beyond the robot: for scoring and labels, never for
-        deciding (``percept().world`` is what the robot perceives)."""
-        return self.read_world()
-
     def facts(self) -> frozenset[str]:
         """The world facts that hold now in the simulator (scoring; ``percept().facts`` is
         what the robot believes)."""
-        return self.facts_of(self.read_world())
+        return self.facts_of(self._true_world())
+
+    def node_position(self, name: str) -> np.ndarray:
+        """Where a node is in the world as reset (its anchor's true displacement applied)."""
+        return node_position(self.nodes, name, self.anchor_offsets)
 
     def skill_success(
         self, skill: SkillSpec | None = None, world: np.ndarray | None = None
@@ -68,7 +87,7 @@ class TruthReadouts(SceneHooks):
         skill = skill or self.skill
         if skill is None:
             return False
-        facts = self.facts_of(self.read_world() if world is None else world)
+        facts = self.facts_of(self._true_world() if world is None else world)
         return self._truth_success(skill, facts)
 
     def _truth_success(self, skill: SkillSpec, facts: frozenset[str]) -> bool:
@@ -88,9 +107,22 @@ class TruthReadouts(SceneHooks):
         """The step's information: ``world`` and ``world_facts`` are the simulator's truth,
         for scoring and for labelling scripted data, never for deciding (``percept``);
         ``facts``: ``world``'s, if the caller has them already."""
-        world = self.read_world() if world is None else world
+        world = self._true_world() if world is None else world
         facts = self.facts_of(world) if facts is None else facts
         return truth_info(world, facts, self._steps, self._succeeded, self.arm_q)
+
+
+class SceneTruth(TruthReadouts, SceneHooks):
+    """``TruthReadouts`` of ``ArmEnv``'s own scene: the world read by its ``read_world``
+    hook, the true state by its simulated sensors."""
+
+    sensors: ArmSensors
+
+    def _true_world(self) -> np.ndarray:
+        return self.read_world()
+
+    def true_state(self) -> np.ndarray:
+        return self.sensors.true_state(self.data, self._gripper_cmd)
 
 
 def truth_info(

@@ -3,7 +3,8 @@
 Wraps an env made with ``gymnasium.make("FrankaKitchen-v1", tasks_to_complete=[...])``
 (any of its options, any wrapper of the caller's); its ``step``, reward, observation noise,
 time limit and task completion run as the library ships them: the adapter only chooses
-the 9-D action.
+the 9-D action. The step loop is the core's (``environment.skill_step.SkillStepper``, as
+``ArmEnv``'s), with the env's ``step`` as the plant (``franka.actuation``).
 
 Percept (``percept()``, computed once at the end of ``reset``, after each step and so
 within ``joint_reset``; ``observe()`` is its state): by ``FrankaConfig.perception``,
@@ -42,18 +43,16 @@ from typing import Any
 import gymnasium as gym
 import numpy as np
 
-from osg_control.control.divergence import DivergenceWatch, non_finite_state
 from osg_control.control.rotations import rotation_step
 from osg_control.domain.spaces import ACTION_DIM, OBS_DIM, unbounded_observation
 from osg_control.domain.spec import Node, SkillSpec
-from osg_control.environment.actions import latched_gripper
-from osg_control.environment.episode import EpisodeState
 from osg_control.environment.options import check_env_arguments, check_facts_hold
 from osg_control.environment.poses import quat_rotation, sample_start_pose
-from osg_control.environment.success import GRIPPER_CLOSED_CMD, GRIPPER_OPEN_CMD, success_holds
-from osg_control.environment.truth import truth_info
+from osg_control.environment.skill_step import SkillStepper
+from osg_control.environment.success import GRIPPER_CLOSED_CMD, GRIPPER_OPEN_CMD
 from osg_control.errors import DomainError
 from osg_control.franka import poses, setup
+from osg_control.franka.actuation import KitchenStepActuation
 from osg_control.franka.arm import (
     ROBOT,
     FrankaConfig,
@@ -68,7 +67,6 @@ from osg_control.franka.perception import (
     REFERENCE_QUAT,
     ROBOT_QVEL,
     FrankaSensors,
-    observation_vector,
 )
 from osg_control.perception.percept import Percept
 from osg_control.robots.registry import get_robot
@@ -94,7 +92,7 @@ def check_kitchen(env: Any) -> Any:
     return kitchen
 
 
-class FrankaKitchenAdapter(EpisodeState, gym.Env):
+class FrankaKitchenAdapter(SkillStepper, gym.Env):
     """A FrankaKitchen-v1 driven by relative TCP commands (see module docstring).
 
     Args:
@@ -117,6 +115,7 @@ class FrankaKitchenAdapter(EpisodeState, gym.Env):
     """
 
     metadata = {"render_modes": ["rgb_array"], "render_fps": int(CONTROL_HZ)}
+    actuation: KitchenStepActuation
     perceptions = PERCEPTIONS
     """The perceptions it supports (``franka.perception``)."""
 
@@ -159,6 +158,7 @@ class FrankaKitchenAdapter(EpisodeState, gym.Env):
         self._arm_dof = np.array([self.model.joint(j).dofadr[0] for j in self.robot.arm.names])
         self.sensors = FrankaSensors(self.kitchen, self.robot, self.ik.tcp_pose, world_of, facts_of)
         self._arm_qpos = self.sensors.arm_qpos
+        self._tcp = self.sensors.tcp
         self.observation_space = gym.spaces.Box(*unbounded_observation(), (OBS_DIM,), np.float64)
         self.action_bounds = np.array(poses.ACTION_BOUNDS)
         """The domain's ``action_bounds``: steps clip to them."""
@@ -169,9 +169,9 @@ class FrankaKitchenAdapter(EpisodeState, gym.Env):
         self._succeeded = False
         self._steps = 0
         self._episode_over = False
-        self._observation: np.ndarray | None = None
+        self.actuation = KitchenStepActuation(env, self.data)
+        """The plant: the caller's env, one ``env.step`` per ``step``."""
         self._percept: Percept | None = None
-        self.last_env_info: dict[str, Any] = {}
         self.anchor_offsets: dict[str, np.ndarray] = {}
         """Object frames' displacements (``domain.frames``): none, the kitchen's fixtures
         and its nodes do not move."""
@@ -179,15 +179,6 @@ class FrankaKitchenAdapter(EpisodeState, gym.Env):
         self._noise_rng = np.random.default_rng()
 
     # ----------------------------------------------------------------- truth
-    @property
-    def arm_q(self) -> np.ndarray:
-        """Truth: the arm's joint positions [rad] (a copy)."""
-        return self.data.qpos[self._arm_qpos].copy()
-
-    def tcp_pose(self) -> tuple[np.ndarray, np.ndarray]:
-        """Truth: the TCP position [m] and rotation matrix."""
-        return self.sensors.true_tcp()
-
     def finger_forces(self) -> tuple[float, float]:
         """Truth: summed normal contact force [N] on each finger from things not the robot."""
         return self.sensors.finger_forces()
@@ -196,7 +187,7 @@ class FrankaKitchenAdapter(EpisodeState, gym.Env):
         """Truth: the 10-D state of the simulator (the ``sim`` percept's state)."""
         return self.sensors.true_state(self._gripper_cmd)
 
-    def world_state(self) -> np.ndarray:
+    def _true_world(self) -> np.ndarray:
         """Truth: the domain's world-state vector (true object qpos, contact grasp)."""
         return self.sensors.true_world()
 
@@ -210,47 +201,36 @@ class FrankaKitchenAdapter(EpisodeState, gym.Env):
         """The domain's facts of a world-state vector."""
         return frozenset(self._facts_of(world))
 
-    def facts(self) -> frozenset[str]:
-        """Truth: the facts that hold now in the simulator."""
-        return self.facts_of(self.world_state())
-
-    def skill_success(
-        self, skill: SkillSpec | None = None, world: np.ndarray | None = None
-    ) -> bool:
-        """Truth: TCP within tolerance of the skill's end node, its gripper state, effects."""
-        skill = skill or self.skill
-        if skill is None:
-            return False
-        facts = self.facts_of(self.world_state() if world is None else world)
-        return success_holds(
-            skill, self.nodes[skill.end], self.tcp_pose()[0], self._gripper_cmd, facts
-        )
-
     # ----------------------------------------------------------------- percepts
     def env_observation(self) -> np.ndarray:
         """The env's latest 59-D ``observation`` array, as the caller's env returned it."""
-        if self._observation is None:
+        observation = self.actuation.observation
+        if observation is None:
             raise RuntimeError("the env has not been reset")
-        return self._observation.copy()
+        return observation.copy()
 
     def _perceive(self) -> Percept:
         self._percept = self.sensors.perceive(
-            self.perception, self._observation, self._gripper_cmd, self._noise_rng
+            self.perception, self.actuation.observation, self._gripper_cmd, self._noise_rng
         )
         return self._percept
 
     def _controlled(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
         """What the controller reads: the joints, their TCP pose and the bias torques;
         ``env``: the observed joints and speeds on the arm model, ``sim``: the truth."""
-        if self.perception.name == "sim" or self._observation is None:
+        observation = self.actuation.observation
+        if self.perception.name == "sim" or observation is None:
             pos, rot = self.tcp_pose()
             return self.arm_q, pos, rot, self.data.qfrc_bias[self._arm_dof].copy()
-        q = self._observation[ARM].copy()
+        q = observation[ARM].copy()
         pos, rot = self.ik.tcp_pose(q)
-        return q, pos, rot, self.command.bias(q, self._observation[ROBOT_QVEL][:7])
+        return q, pos, rot, self.command.bias(q, observation[ROBOT_QVEL][:7])
 
-    def _info(self, world: np.ndarray) -> dict[str, Any]:
-        info = truth_info(world, self.facts_of(world), self._steps, self._succeeded, self.arm_q)
+    def _info(
+        self, world: np.ndarray | None = None, facts: frozenset[str] | None = None
+    ) -> dict[str, Any]:
+        """``TruthReadouts._info`` with the env's own task completions."""
+        info = super()._info(world, facts)
         info["episode_task_completions"] = self.completed_tasks()
         return info
 
@@ -302,9 +282,7 @@ class FrankaKitchenAdapter(EpisodeState, gym.Env):
 
     def reset_env(self, seed: int | None) -> None:
         """The caller's env's own ``reset``, its observation kept, the gripper open."""
-        obs, env_info = self.env.reset(seed=seed)
-        self._observation = observation_vector(obs)
-        self.last_env_info = dict(env_info)
+        self.actuation.reset(seed)
         self._gripper_cmd = GRIPPER_OPEN_CMD
         self.sensors.forget()
 
@@ -326,9 +304,9 @@ class FrankaKitchenAdapter(EpisodeState, gym.Env):
     def completed_tasks(self) -> list[str]:
         """The env's own record of the tasks completed this episode
         (``info["episode_task_completions"]``)."""
-        return list(self.last_env_info.get("episode_task_completions", []))
+        return list(self.actuation.env_info.get("episode_task_completions", []))
 
-    def env_action(self, action: np.ndarray) -> np.ndarray:
+    def _command(self, action: np.ndarray) -> np.ndarray:
         """The env's 9-D action for a (clipped) 7-D TCP action at the perceived state."""
         q, pos, rot, bias = self._controlled()
         target = rotation_step(rot, action[3:6])
@@ -339,45 +317,11 @@ class FrankaKitchenAdapter(EpisodeState, gym.Env):
         """``ServoCommand.action`` with the gripper's command."""
         return self.command.action(velocity, bias, self._gripper_cmd == GRIPPER_CLOSED_CMD)
 
-    def step(self, action: np.ndarray) -> tuple[np.ndarray, float, bool, bool, dict[str, Any]]:
-        """One 80 ms step of the env with the IK's action (see module docstring); a
-        non-finite joint position (set from outside since the last step) ends the episode
-        as a divergence (``info["failure"]`` naming the joint), the env not stepped."""
-        action = self.check_action(action)
-        self._gripper_cmd = latched_gripper(self._gripper_cmd, action[6])
-        if non_finite_state(self.data, ("qpos",)) is not None:
-            return self._env_step(None, action)
-        return self._env_step(self.env_action(action), action)
+    def _step_budget(self) -> int | None:
+        return self.step_limit
 
-    def _env_step(
-        self, env_action: np.ndarray | None, applied: np.ndarray
-    ) -> tuple[np.ndarray, float, bool, bool, dict[str, Any]]:
-        """Step the env with ``env_action`` (None: a non-finite state, not stepped) and
-        report it in the adapter's terms."""
-        if env_action is None:
-            env_reward, terminated, truncated = 0.0, True, False
-            failure = non_finite_state(self.data, ("qpos",))
-        else:
-            watch = DivergenceWatch(self.data)
-            obs, env_reward, terminated, truncated, env_info = self.env.step(env_action)
-            self._observation = observation_vector(obs)
-            self.last_env_info = dict(env_info)
-            failure = watch.check()
-        self._steps += 1
-        world = self.world_state()
-        reward, terminated, truncated = self.step_outcome(
-            failure, lambda: self.skill_success(world=world), self.step_limit, terminated, truncated
-        )
-        if self.skill is None:
-            reward = float(env_reward)  # without a skill, the env's own reward
-        info = self._info(world)
-        info["env_reward"] = float(env_reward)
-        info["env_info"] = self.last_env_info
-        info["action_applied"] = applied
-        info["percept"] = self._perceive()
-        if failure is not None:
-            info["failure"] = failure
-        return self.observe(), reward, bool(terminated), bool(truncated), info
+    def _step_percept(self, world: np.ndarray, facts: frozenset[str]) -> Percept:
+        return self._perceive()
 
     # ----------------------------------------------------------------- joint reset
     def joint_reset(self, max_steps: int = 20, tolerance: float = 0.05) -> int:

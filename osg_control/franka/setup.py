@@ -174,22 +174,21 @@ def joint_reset(adapter: Any, max_steps: int, tolerance: float) -> int:
         SimulationError: the physics diverged.
     """
     from osg_control.control.divergence import non_finite_state
+    from osg_control.environment.joint_reset import drive_to_posture
 
     _q, pos, rot, _bias = adapter._controlled()
-    previous = np.inf
-    for step in range(max_steps):
-        q, _pos, _rot, bias = adapter._controlled()
-        error = float(np.abs(q - adapter.posture).max())
-        if error < tolerance or error > previous - 1e-4:
-            return step
-        previous = error
+
+    def step(q: np.ndarray) -> bool:
         action = None
         if non_finite_state(adapter.data, ("qpos",)) is None:
+            bias = adapter._controlled()[3]
             velocity = adapter.reset_ik.solve_velocity(q, pos, rot)
             action = adapter.arm_action(velocity, bias)
-        *_, terminated, truncated, info = adapter._env_step(action, np.zeros(7))
+        *_, terminated, truncated, info = adapter.advance(action, np.zeros(7))
         if "failure" in info:
             raise SimulationError(f"joint reset: {info['failure']}")
-        if terminated or truncated:
-            return step + 1
-    return max_steps
+        return bool(terminated or truncated)
+
+    return drive_to_posture(
+        lambda: adapter._controlled()[0], adapter.posture, step, max_steps, tolerance
+    )
