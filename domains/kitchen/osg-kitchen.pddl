@@ -76,7 +76,7 @@
      (:action pick-up-cube
         :parameters (?c - cube)
         :precondition (and (at-object cube-grasped ?c) (on-counter ?c) (holding ?c))
-        :effect (and (lifted ?c) (not (on-counter ?c)) (at-object cube-lifted ?c) (not (at-object cube-grasped ?c)) (increase (total-cost) 73))
+        :effect (and (lifted ?c) (not (on-counter ?c)) (at-object cube-lifted ?c) (not (at-object cube-grasped ?c)) (increase (total-cost) 174))
     )
      (:action place-cube-in-cabinet
         :parameters (?c - cube)
