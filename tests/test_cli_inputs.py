@@ -36,6 +36,8 @@ BAD_VALUES = [
     (["collect", "--workers", "0"], "--workers"),
     (["collect", "--episodes", "-3"], "--episodes"),
     (["classifier", "reach", "--noise", "-1"], "--noise"),
+    (["train", "--skill", "grab-cube", "--obs-noise", "-0.01"], "--obs-noise"),
+    (["train", "--skill", "grab-cube", "--obs-noise", "nan"], "--obs-noise"),
     (["classifier", "train", "--validation-fraction", "1"], "--validation-fraction"),
     (["classifier", "train", "--validation-fraction", "-0.1"], "--validation-fraction"),
     (["classifier", "train", "--validation-fraction", "nan"], "--validation-fraction"),

@@ -70,3 +70,18 @@ def test_early_stopped_checkpoints_are_kept_only_under_the_same_rule_and_budget(
     assert untrained_skills(domain, data, skills, 10000, 0, {**rule, "patience": 3}) == everything
     assert untrained_skills(domain, data, skills, 10000, 0) == everything  # a fixed-steps run
     assert untrained_skills(domain, data, skills, 3000, 0) == everything
+
+
+def test_a_checkpoint_trained_with_observation_noise_is_retrained(tmp_path) -> None:
+    """``osg reproduce`` trains without ``--obs-noise``: such a checkpoint is not its own."""
+    domain = get_domain("kitchen")
+    data, skills = _fake_run(tmp_path, domain)
+    first = domain.skills[0].name
+    path = skills / f"{first}.json"
+    sidecar = json.loads(path.read_text())
+    sidecar["train_config"] = {"obs_noise": 0.01}
+    path.write_text(json.dumps(sidecar))
+    assert untrained_skills(domain, data, skills, 300, 0) == [first]
+    sidecar["train_config"] = {"obs_noise": 0.0}  # recorded, but none
+    path.write_text(json.dumps(sidecar))
+    assert untrained_skills(domain, data, skills, 300, 0) == []

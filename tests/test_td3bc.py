@@ -271,3 +271,36 @@ def test_bc_weights_single_out_gripper_switches() -> None:
     expected[1:, -1] = 10.0
     torch.testing.assert_close(weights, expected)
     torch.testing.assert_close(bc_weights(actions, 1.0), torch.ones_like(actions))
+
+
+def test_observation_noise_perturbs_only_the_tcp_position(tmp_path: Path) -> None:
+    """``obs_noise`` adds seeded Gaussian noise of that std [m] to the TCP position of the
+    sampled observations and next observations and to nothing else; the batch indices and
+    smoothing noise are those of a replay without it, and 0 draws nothing."""
+    data = [toy_data(tmp_path), toy_data(tmp_path, OTHER_SKILL, seed=1)]
+    seeds = [3, 4]
+    sigma = 0.02
+    plain, zero = BatchedReplay(data, 4096, seeds), BatchedReplay(data, 4096, seeds, obs_noise=0.0)
+    noisy, again = (BatchedReplay(data, 4096, seeds, obs_noise=sigma) for _ in range(2))
+    for _ in range(2):  # the second draw too: the streams stay aligned
+        p, z, n, a = plain.sample(), zero.sample(), noisy.sample(), again.sample()
+        for field in dataclasses.fields(p):
+            assert torch.equal(getattr(p, field.name), getattr(z, field.name))
+            assert torch.equal(getattr(n, field.name), getattr(a, field.name))  # seeded
+        for field in ("actions", "rewards", "dones", "noise"):
+            assert torch.equal(getattr(p, field), getattr(n, field))
+        for key in ("observations", "next_observations"):
+            diff = (getattr(n, key) - getattr(p, key)).numpy()
+            assert not diff[..., 3:].any()
+            for k, skill in enumerate(data):
+                metres = diff[k, :, :3] * skill.obs_std[:3]  # back to physical units
+                assert np.allclose(metres.std(0), sigma, rtol=0.06)
+                assert np.allclose(metres.mean(0), 0.0, atol=0.002)
+        drawn = n.observations - p.observations
+        assert not torch.equal(drawn, n.next_observations - p.next_observations)  # independent
+
+
+@pytest.mark.parametrize("bad", [-0.01, float("nan"), float("inf")])
+def test_observation_noise_must_be_a_finite_std(tmp_path: Path, bad: float) -> None:
+    with pytest.raises(ValueError, match="obs_noise"):
+        BatchedReplay([toy_data(tmp_path)], 8, [0], obs_noise=bad)

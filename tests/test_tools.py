@@ -54,3 +54,35 @@ def test_bench_lifted_plans_three_cubes_alike_in_every_planner() -> None:
     costs = {row["planner"]: row["cost"] for row in report["planners"]}
     assert len(set(costs.values())) == 1 and all(r["steps"] == 22 for r in report["planners"])
     assert report["fast_downward_cost"] in (None, costs["auto"])  # None: not installed
+
+
+def test_skill_failures_reads_the_truth_of_table_i_episodes() -> None:
+    """Without noise the tracker's frame is right to millimetres (the cube settles in the
+    hand); with the filter warmed the summary says so and every failure ran within the
+    skill's budget."""
+    exact = _report("tools/skill_failures.py", "--skill", "pick-up-cube", "--episodes", "3",
+                    "--noise", "0", "--workers", "1")  # fmt: skip
+    assert exact["noise"] == 0.0 and exact["filter_gain"] is None
+    assert exact["success"] == 0.0 or exact["frame_error_succeeded"] < 0.005
+    warm = _report("tools/skill_failures.py", "--skill", "push-valve-open", "--episodes", "3",
+                   "--filter", "--warm-readings", "4", "--workers", "1")  # fmt: skip
+    assert warm["warm_readings"] == 4 and warm["filter_gain"] == 0.2
+    assert warm["frame_error_succeeded"] is None  # the valve's skills act in the world frame
+    assert all(f["steps"] <= 80 and not f["success"] for f in warm["failures"])
+    assert 0.0 <= warm["success"] <= 1.0 and len(warm["failures"]) <= 3
+
+
+def test_skill_failures_refuses_warm_readings_without_the_filter() -> None:
+    done = subprocess.run(
+        [sys.executable, "tools/skill_failures.py", "--skill", "grab-cube", "--warm-readings", "3"],
+        cwd=ROOT, capture_output=True, text=True, timeout=120, check=False,
+    )  # fmt: skip
+    assert done.returncode == 2 and "--filter" in done.stderr
+
+
+def test_task_failures_runs_the_paper_protocol() -> None:
+    """``--noise`` and ``--filter`` reach the episodes: the summary records them."""
+    report = _report("tools/task_failures.py", "--task", "turn-valve", "--episodes", "1",
+                     "--perception", "paper", "--noise", "0.02", "--filter")  # fmt: skip
+    assert report["perception"]["tcp_noise"] == 0.02 and report["filter_gain"] == 0.2
+    assert report["episodes"] == 8 and len(report["failures"]) == round(8 * (1 - report["success"]))

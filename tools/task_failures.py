@@ -1,7 +1,8 @@
 """Where a task's episodes fail: the skill that failed, its failure, and where the objects lay.
 
 Usage: ``python tools/task_failures.py --task open-pick-up [--episodes N] [--seed S]
-[--perception robot] [--randomize-objects] [--replans 2] [--models DIR] [--json]``.
+[--perception robot] [--noise SIGMA] [--filter [GAIN]] [--randomize-objects] [--replans 2]
+[--models DIR] [--json]`` (the paper protocol: ``--perception paper --noise 0.02 --filter``).
 Runs Tables IV/V's episodes (``evaluation.evaluate``: the same starts, regions and seeds as
 ``osg evaluate tasks``) one by one and, for each episode whose goal does not hold at the
 end (truth), prints the start region, the objects' placements (truth, at the start), the
@@ -19,6 +20,7 @@ from typing import Any
 
 import numpy as np
 
+from osg_control.commands import add_filter_argument
 from osg_control.domain.registry import get_domain
 from osg_control.evaluation.evaluate import (
     StartEpisode,
@@ -46,6 +48,10 @@ def main() -> None:
     parser.add_argument("--episodes", type=int, default=10, help="episodes per start region")
     parser.add_argument("--seed", type=int, default=0)
     parser.add_argument("--perception", default="robot")
+    parser.add_argument(
+        "--noise", type=float, default=0.0, help="the paper protocol's TCP noise [m] (default 0)"
+    )
+    add_filter_argument(parser)
     parser.add_argument("--randomize-objects", action="store_true")
     parser.add_argument("--replans", type=int, default=2)
     parser.add_argument("--models", default=None)
@@ -54,8 +60,8 @@ def main() -> None:
     domain = get_domain(args.domain)
     task = domain.task(args.task)
     domain = domain.for_task(task)  # the scene of its objects (e.g. two cubes)
-    perception = perception_spec(args.perception)
-    executor = cached_executor(domain.ref, args.models, args.replans, None)
+    perception = perception_spec(args.perception, args.noise)
+    executor = cached_executor(domain.ref, args.models, args.replans, args.filter)
     env = _plain_env(domain.ref, perception)
     failures: list[dict[str, Any]] = []
     placed: dict[bool, list[dict[str, list[float]]]] = {True: [], False: []}
@@ -105,6 +111,8 @@ def main() -> None:
         "task": task.name,
         "episodes": total,
         "seed": args.seed,
+        "perception": perception.to_dict(),
+        "filter_gain": args.filter,
         "success": 1.0 - len(failures) / total,
         "failed_skills": dict(by_skill),
         "mean_placement_failed": means[False],

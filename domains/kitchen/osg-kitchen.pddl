@@ -11,7 +11,7 @@
     (:action grab-cube
         :parameters (?c - cube)
         :precondition (and (at-object above-cube ?c) (on-counter ?c) (hand-empty))
-        :effect (and (holding ?c) (not (hand-empty)) (at-object cube-grasped ?c) (not (at-object above-cube ?c)) (increase (total-cost) 67))
+        :effect (and (holding ?c) (not (hand-empty)) (at-object cube-grasped ?c) (not (at-object above-cube ?c)) (increase (total-cost) 57))
     )
      (:action grab-handle
         :parameters (?d - door)
@@ -86,7 +86,7 @@
      (:action push-valve-open
         :parameters (?v - valve)
         :precondition (and (at valve-lever) (hand-empty) (valve-closed ?v))
-        :effect (and (valve-open ?v) (not (valve-closed ?v)) (at valve-pushed) (not (at valve-lever)) (increase (total-cost) 111))
+        :effect (and (valve-open ?v) (not (valve-closed ?v)) (at valve-pushed) (not (at valve-lever)) (increase (total-cost) 5))
     )
      (:action release-cube
         :parameters (?c - cube)

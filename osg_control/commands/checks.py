@@ -145,6 +145,7 @@ CHECKS: dict[str, Callable[[str, Any], None]] = {
     "max_states": _whole(1, MAX_STATES),
     "noise": _finite_range(0.0, MAX_NOISE),
     "object_noise": _finite_range(0.0, MAX_NOISE),
+    "obs_noise": _finite_range(0.0, MAX_NOISE),
     "time_limit": _finite_range(0.0, MAX_TIME_S, low_open=True),
     "filter": _finite_range(0.0, 1.0, low_open=True),
     "validation_fraction": _finite_range(0.0, 1.0, high_open=True),

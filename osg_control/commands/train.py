@@ -74,6 +74,15 @@ def register(subparsers: argparse._SubParsersAction) -> None:
         default=None,
         help="CPU threads for torch (default: torch's, one per core; use fewer on a busy machine)",
     )
+    parser.add_argument(
+        "--obs-noise",
+        type=float,
+        default=0.0,
+        metavar="SIGMA",
+        help="std [m] of Gaussian noise added to the TCP position of every sampled "
+        "observation, so the policy learns from readings as noisy as at run time (default 0: "
+        "the data as recorded)",
+    )
     add_early_stop_arguments(parser)
     parser.add_argument("--json", action="store_true", help="print the summary as JSON")
     parser.set_defaults(func=run)
@@ -161,6 +170,7 @@ def run(args: argparse.Namespace) -> int:
         args.device,
         args.threads,
         early_stop_of(args, domain, data_dir),
+        args.obs_noise,
     )
     print_summary(trained, args.json)
     return 0

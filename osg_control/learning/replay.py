@@ -11,12 +11,14 @@ import torch
 
 from osg_control.data.datasets import Dataset
 from osg_control.errors import DatasetError
-from osg_control.learning.checkpoints import normalise_observations
+from osg_control.learning.checkpoints import OBS_CLIP, normalise_observations
 
 ACTION_TOLERANCE = 1e-4
 """Relative amount by which a stored action may exceed its bound (float rounding) [-]."""
 OBS_NORM_EPS = 1e-2
 """Added to each observation std before normalising [-] (``TD3BCConfig.obs_norm_eps``)."""
+TCP_POSITION = slice(0, 3)
+"""The observation's TCP position [m]: the features ``TD3BCConfig.obs_noise`` perturbs."""
 
 
 def observation_stats(observations: np.ndarray, eps: float) -> tuple[np.ndarray, np.ndarray]:
@@ -131,7 +133,9 @@ class BatchedReplay:
     """The K skills' transitions in one tensor; each skill samples from its own part.
 
     Skill k draws its batch indices, then its smoothing noise, from its own generator
-    seeded with ``seeds[k] + 1`` (``+ 1``: distinct from its weight initialisation).
+    seeded with ``seeds[k] + 1`` (``+ 1``: distinct from its weight initialisation), and
+    with ``obs_noise`` its observation noise from a second one seeded with ``seeds[k] + 2``:
+    its batches are those of a replay without the noise, but for the noise.
     """
 
     def __init__(
@@ -140,6 +144,7 @@ class BatchedReplay:
         batch_size: int,
         seeds: Sequence[int],
         device: str | torch.device = "cpu",
+        obs_noise: float = 0.0,
     ) -> None:
         """Move the transitions to ``device`` and seed one generator per skill.
 
@@ -148,9 +153,17 @@ class BatchedReplay:
             batch_size: transitions per skill per batch.
             seeds: the K skills' seeds.
             device: where batches are built.
+            obs_noise: std [m] of the Gaussian noise added to the TCP position of every
+                sampled observation and next observation (``TD3BCConfig.obs_noise``).
+
+        Raises:
+            ValueError: no skills, a seed count that differs, or ``obs_noise`` negative or
+                not finite.
         """
         if not data or len(data) != len(seeds):
             raise ValueError(f"need one seed per skill, got {len(data)} skills, {len(seeds)} seeds")
+        if not (np.isfinite(obs_noise) and obs_noise >= 0):
+            raise ValueError(f"obs_noise must be finite and >= 0 [m], got {obs_noise!r}")
         self.device = torch.device(device)
         self.batch_size = batch_size
         self.obs_dim = data[0].obs_mean.shape[0]
@@ -162,6 +175,14 @@ class BatchedReplay:
         self._generators = [
             torch.Generator(device=self.device).manual_seed(seed + 1) for seed in seeds
         ]
+        scale = np.zeros((len(data), 1, self.obs_dim), dtype=np.float32)
+        for k, skill in enumerate(data):
+            scale[k, 0, TCP_POSITION] = obs_noise / skill.obs_std[TCP_POSITION]
+        self._obs_noise = torch.as_tensor(scale, device=self.device) if obs_noise else None
+        """(K, 1, obs_dim): the noise's std in each skill's normalised units (None: none)."""
+        self._noise_generators = [
+            torch.Generator(device=self.device).manual_seed(seed + 2) for seed in seeds
+        ]
 
     def keep(self, skills: Sequence[int]) -> None:
         """Go on sampling for the skills at positions ``skills`` only (in that order); each
@@ -169,6 +190,9 @@ class BatchedReplay:
         self._sizes = [self._sizes[k] for k in skills]
         self._offsets = self._offsets[list(skills)]
         self._generators = [self._generators[k] for k in skills]
+        self._noise_generators = [self._noise_generators[k] for k in skills]
+        if self._obs_noise is not None:
+            self._obs_noise = self._obs_noise[list(skills)]
 
     def sample(self) -> Batch:
         """Draw ``batch_size`` transitions (uniformly, with replacement) for every skill.
@@ -185,14 +209,34 @@ class BatchedReplay:
             )
         rows = self._rows[torch.stack(indices) + self._offsets]
         obs, act = self.obs_dim, self.action_dim
+        observations = rows[..., :obs]
+        next_observations = rows[..., obs + act + 1 : 2 * obs + act + 1]
+        if self._obs_noise is not None:
+            observations, next_observations = self._perturbed(observations, next_observations)
         return Batch(
-            observations=rows[..., :obs],
+            observations=observations,
             actions=rows[..., obs : obs + act],
             rewards=rows[..., obs + act],
-            next_observations=rows[..., obs + act + 1 : 2 * obs + act + 1],
+            next_observations=next_observations,
             dones=rows[..., -1],
             noise=torch.stack(noise),
         )
+
+    def _perturbed(
+        self, observations: torch.Tensor, next_observations: torch.Tensor
+    ) -> tuple[torch.Tensor, torch.Tensor]:
+        """The observations with independent Gaussian noise on their TCP position (each
+        skill's from its own generator), clipped like the data to ``±OBS_CLIP``."""
+        assert self._obs_noise is not None
+        shape = (2, self.batch_size, self.obs_dim)
+        draws = torch.stack(
+            [torch.randn(shape, generator=g, device=self.device) for g in self._noise_generators]
+        )  # (K, 2, B, obs_dim)
+        noisy = [
+            (x + draws[:, i] * self._obs_noise).clamp(-OBS_CLIP, OBS_CLIP)
+            for i, x in enumerate((observations, next_observations))
+        ]
+        return noisy[0], noisy[1]
 
 
 # ----------------------------------------------------------------------------- networks

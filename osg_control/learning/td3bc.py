@@ -67,6 +67,12 @@ class TD3BCConfig:
     # the hold band and the skill never closes or opens (seen here: grab-handle stopped at
     # the handle with g = -0.47 in every episode, 0.2 success at sigma = 0). 1 disables it.
     gripper_switch_weight: float = 10.0
+    # Std [m] of Gaussian noise added to the TCP position (the observation's first three
+    # features) of every sampled observation and next observation, drawn from the skill's
+    # own generator (``replay.BatchedReplay``). Algorithm 1 records the true TCP, while at
+    # run time the policy reads a noisy or filtered one; with noise in training it learns
+    # what to do from readings as uncertain as those. 0 trains on the data as recorded.
+    obs_noise: float = 0.0
 
     def to_json_dict(self) -> dict[str, Any]:
         """The fields as a JSON-ready dict (for checkpoint sidecars)."""

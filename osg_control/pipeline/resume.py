@@ -23,11 +23,12 @@ def untrained_skills(
     """The domain's skills whose checkpoint in ``skills`` was not trained by this stage's
     command on these very data sets (seed, spec and the data set's sha256 in its sidecar;
     ``steps`` updates, or with ``early_stopping`` (``EarlyStop.record``) that rule with a
-    budget of ``steps``). A rerun into the same folder keeps the checkpoints only if there are none:
-    any other retrains every skill (``train_missing``), because weights trained in a
-    smaller batch of skills differ in the last bits from the batch of all (measured: three
-    skills retrained alone differed from a fresh run's), and a reproduction must be a fresh
-    run's bytes."""
+    budget of ``steps``; without observation noise, as ``osg reproduce`` trains: a
+    checkpoint of ``osg train --obs-noise`` is not this stage's). A rerun into the same
+    folder keeps the checkpoints only if there are none: any other retrains every skill
+    (``train_missing``), because weights trained in a smaller batch of skills differ in the
+    last bits from the batch of all (measured: three skills retrained alone differed from a
+    fresh run's), and a reproduction must be a fresh run's bytes."""
     rule = None if early_stopping is None else json.loads(json.dumps(early_stopping))
     return [
         skill.name
@@ -57,7 +58,10 @@ def _trained(
     if not isinstance(meta, dict) or any(meta.get(k) != v for k, v in expected.items()):
         return False
     config = meta.get("train_config")
-    stopped = config.get("early_stopping") if isinstance(config, dict) else None
+    config = config if isinstance(config, dict) else {}
+    if config.get("obs_noise", 0.0) != 0.0:
+        return False  # trained on noisy readings: not what this stage trains
+    stopped = config.get("early_stopping")
     if early_stopping is None:
         budget_matches = stopped is None and meta.get("steps") == steps
     else:

@@ -212,6 +212,7 @@ def train_skills(
     device: str = "cpu",
     threads: int | None = None,
     early_stop: EarlyStop | None = None,
+    obs_noise: float = 0.0,
 ) -> TrainedSkills:
     """Train skills batched with TD3+BC and write their checkpoints.
 
@@ -227,6 +228,8 @@ def train_skills(
         threads: torch CPU threads (None: torch's default); set process-wide.
         early_stop: stop each skill when its held-out success stops improving (None:
             every skill trains ``steps`` updates).
+        obs_noise: std [m] of the noise on the sampled observations' TCP position
+            (``TD3BCConfig.obs_noise``; recorded in each sidecar's ``train_config``).
 
     Raises:
         OSGError: ``cuda`` without CUDA.
@@ -239,7 +242,7 @@ def train_skills(
         raise OSGError("--device cuda: CUDA is not available on this machine")
     if threads:
         torch.set_num_threads(threads)
-    config = TD3BCConfig()
+    config = TD3BCConfig(obs_noise=obs_noise)
     snapshots = 1 if early_stop is None else 2  # early stopping keeps one round's snapshot
     out = check_output_dir(
         out_dir, "checkpoint folder", snapshots * checkpoint_bytes(config, len(names))
@@ -247,7 +250,9 @@ def train_skills(
     bounds = np.asarray(domain.action_bounds, dtype=np.float32)
     inputs = [load_skill_input(Path(data_dir), n, config, bounds) for n in names]
     seeds = [skill_seed(seed, name) for name in names]
-    replay = BatchedReplay([i.data for i in inputs], config.batch_size, seeds, device)
+    replay = BatchedReplay(
+        [i.data for i in inputs], config.batch_size, seeds, device, config.obs_noise
+    )
     trainer = TD3BC(config, seeds, device=device)
     start = time.perf_counter()
     check_seconds = 0.0
