@@ -30,10 +30,10 @@ from osg_control.json_files import is_json_number
 ENCODER_NOISE = 5e-4
 """Joint encoder noise [rad], per joint: about 0.4 mm at the kitchen arm's TCP per joint (its
 absolute encoders resolve far finer; the margin stands for calibration and backlash)."""
-TCP_PER_ENCODER = 1.2
-"""The TCP position's noise [m] per axis per radian of encoder noise: each of an arm's seven
-joints moves the TCP by about its 0.8 m reach times its error (``ENCODER_NOISE``'s 0.4 mm),
-sqrt(7) x 0.8 m in all, spread over three axes."""
+TCP_PER_ENCODER = 0.7
+"""The TCP position's noise [m] per axis per radian of encoder noise, through forward
+kinematics: measured 0.31-0.40 mm per axis at ``ENCODER_NOISE`` (2000 readings of the
+kitchen arm held at a start), about 0.7 m/rad."""
 FINGER_NOISE = 5e-4
 """Finger width noise [m] (the gripper's own width reading)."""
 OBJECT_NOISE = 0.01
