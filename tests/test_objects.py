@@ -14,10 +14,11 @@ from osg_control.domain.frames import (
     skill_frame,
 )
 from osg_control.domain.registry import get_domain
+from osg_control.environment.config import EnvConfig
 from osg_control.errors import DomainError, EnvOptionError
 from osg_control.execution.defaults import load_defaults
 from osg_control.execution.executor import Executor, task_env_config
-from osg_control.execution.objects import ObjectTracker
+from osg_control.execution.objects import ObjectTracker, reading_weight
 from osg_control.kitchen.env import KitchenEnv
 from osg_control.kitchen.skills import CUBE
 from osg_control.perception.percept import Percept
@@ -150,21 +151,66 @@ def test_only_skills_that_touch_the_cube_are_recorded_with_it_moved() -> None:
     np.testing.assert_allclose(episode.world_states[0, 2:4], CUBE.nominal, atol=1e-3)
 
 
-def test_an_object_first_seen_in_the_hand_is_placed_where_the_hand_took_it() -> None:
-    """A start holding the cube: its place is the TCP of the first reading plus the cube's
-    mean place in the hand, averaged over the noisy readings while the hand lifts it."""
-    tracker = ObjectTracker(KITCHEN)
-    rng = np.random.default_rng(2)
+def _held_first(
+    tracker: ObjectTracker, rng: np.random.Generator, tcp_noise: float, cube_noise: float
+) -> np.ndarray:
+    """Feed ``tracker`` a start holding the cube 4 mm / -2 mm off the TCP while the hand
+    lifts it (TCP and cube readings with the given noise); the true pick-up offset."""
     world = np.zeros(len(KITCHEN.world_fields))
     for step in range(50):
         tcp = np.array([0.56, -0.25, 0.03 + 0.003 * step])  # lifting
         reading = world.copy()
-        reading[2:4] = tcp[:2] + [0.004, -0.002] + rng.normal(0, 0.01, 2)
+        reading[2:4] = tcp[:2] + [0.004, -0.002] + rng.normal(0, cube_noise, 2)
         state = np.zeros(10)
-        state[:3] = tcp
+        state[:3] = tcp + rng.normal(0, tcp_noise, 3)
         tracker.update(Percept(state, np.zeros(7), reading, frozenset({"holding-cube"})))
-    expected = np.array([0.56 + 0.004 - CUBE.nominal[0], -0.25 - 0.002 - CUBE.nominal[1], 0])
-    assert np.linalg.norm(tracker.offsets()["cube"] - expected) < 0.004
+    return np.array([0.56 + 0.004 - CUBE.nominal[0], -0.25 - 0.002 - CUBE.nominal[1], 0])
+
+
+def test_the_reading_weight_is_inverse_variance_with_its_limits() -> None:
+    assert reading_weight(0.02, 0.0) == 1.0  # exact objects: their reading
+    assert reading_weight(0.0, 0.01) == 0.0  # exact TCP: the TCP's estimate
+    assert reading_weight(0.0, 0.0) == 1.0  # both exact: they agree
+    assert reading_weight(0.01, 0.01) == pytest.approx(0.5)
+    assert reading_weight(0.01, 0.02) == pytest.approx(0.2)
+    paper = ObjectTracker(KITCHEN, perception=perception_spec("paper", 0.02))
+    robot = ObjectTracker(KITCHEN, perception=perception_spec("robot"))
+    assert paper.reading_weight == 1.0
+    assert 0.0 < robot.reading_weight < 0.01  # encoders' sub-mm TCP against 1 cm objects
+
+
+def test_an_object_first_seen_in_the_hand_under_a_pose_estimator_takes_the_tcps_estimate() -> None:
+    """``robot``: an encoder-exact TCP and 1 cm cube readings: the TCP of the first reading
+    plus the cube's mean place in the hand, averaged while the hand lifts it, not the
+    first cube reading's 1 cm."""
+    errors = {}
+    for name, spec in (("robot", perception_spec("robot")), ("exact", None)):
+        tracker = ObjectTracker(KITCHEN, perception=spec)
+        expected = _held_first(tracker, np.random.default_rng(2), 0.0, 0.01)
+        errors[name] = float(np.linalg.norm(tracker.offsets()["cube"] - expected))
+    assert errors["robot"] < 0.004
+    assert errors["exact"] > 0.005  # told the readings were exact, it keeps the first one
+
+
+def test_an_object_first_seen_in_the_hand_with_exact_readings_keeps_its_reading() -> None:
+    """The paper protocol: exact cube readings and a 2 cm TCP: the cube's first reading,
+    not the TCP's error; a tracker told the TCP were exact keeps that reading's error."""
+    errors = {}
+    for name, spec in (
+        ("paper", perception_spec("paper", 0.02)),
+        ("robot", perception_spec("robot")),
+    ):
+        tracker = ObjectTracker(KITCHEN, perception=spec)
+        expected = _held_first(tracker, np.random.default_rng(4), 0.02, 0.0)
+        errors[name] = float(np.linalg.norm(tracker.offsets()["cube"] - expected))
+    assert errors["paper"] < 1e-9
+    assert errors["robot"] > 0.01  # the first TCP reading's 2 cm per axis
+
+
+def test_a_simulated_env_declares_the_perception_it_perceives_with() -> None:
+    spec = perception_spec("robot", object_noise=0.02)
+    env = KitchenEnv(skill="pick-up-cube", config=EnvConfig(perception=spec))
+    assert env.perception is spec
 
 
 def test_the_handle_node_moves_with_the_door_and_the_track_nodes_do_not() -> None:

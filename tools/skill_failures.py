@@ -80,7 +80,7 @@ def probe(task: Probe) -> dict[str, Any]:
     rng = episode_rng(task.seed, task.skill, task.cell, task.index)
     options = {"radius": skill.start_radius, "angle": skill.start_angle}
     obs, _ = env.reset(seed=int(rng.integers(2**31)), options=options)
-    objects = ObjectTracker(domain)
+    objects = ObjectTracker(domain, perception=env.perception)
     objects.update(env.percept())
     end = np.asarray(env.node_position(skill.end))
     closest, info, steps, gripper = np.inf, {"success": False}, 0, 0.0

@@ -20,6 +20,7 @@ import numpy as np
 
 from osg_control.domain.spec import Node, ObjectFrame, SkillSpec
 from osg_control.perception.percept import Percept
+from osg_control.perception.spec import PerceptionSpec
 
 
 @runtime_checkable
@@ -32,6 +33,7 @@ class SkillEnv(Protocol):
         action_bounds: the per-step bound of each action component; its steps clip to
             them (the ``Domain``'s ``action_bounds``).
         perceptions: the perceptions (``perception.spec``) it simulates.
+        perception: the perception it perceives with (its noise levels).
         nodes: the domain's nodes.
         home: the node a reset starts at without a skill or ``node`` option.
         skill: the skill whose reward and termination it gives, if any.
@@ -47,6 +49,8 @@ class SkillEnv(Protocol):
     def action_bounds(self) -> np.ndarray: ...
     @property
     def perceptions(self) -> tuple[str, ...]: ...
+    @property
+    def perception(self) -> PerceptionSpec: ...
     @property
     def nodes(self) -> Mapping[str, Node]: ...
     @property

@@ -14,7 +14,7 @@ from osg_control.environment.truth import SceneTruth
 from osg_control.errors import EnvOptionError
 from osg_control.perception.percept import Percept
 from osg_control.perception.sensors import noisy_world
-from osg_control.perception.spec import SIMULATED_PERCEPTIONS
+from osg_control.perception.spec import SIMULATED_PERCEPTIONS, PerceptionSpec
 
 
 class Perceiving(SceneTruth, SkillStepper):
@@ -35,6 +35,11 @@ class Perceiving(SceneTruth, SkillStepper):
     def perceptions(self) -> tuple[str, ...]:
         """The perceptions it simulates: ``camera`` too where the scene declares cameras."""
         return SIMULATED_PERCEPTIONS + (("camera",) if self.camera_perception is not None else ())
+
+    @property
+    def perception(self) -> PerceptionSpec:
+        """The perception it perceives with (``config.perception``)."""
+        return self.config.perception
 
     def sense(self) -> Percept:
         """Read the sensors now without stepping (e.g. after the scene was edited from

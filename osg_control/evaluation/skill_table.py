@@ -78,7 +78,7 @@ def run_skill_episode(task: SkillEpisode) -> bool:
     if task.randomize:
         options = placed_start_options(domain, env, skill, sample_placements(domain, rng))
     obs, _ = env.reset(seed=reset_seed, options=options)
-    objects = ObjectTracker(domain)
+    objects = ObjectTracker(domain, perception=env.perception)
     objects.update(env.percept())
     for _ in range(skill.max_steps):
         offset = skill_offset(domain, skill, objects.offsets())

@@ -232,7 +232,7 @@ class Executor:
         policy = self.policies[skill.name]
         end = self.domain.nodes[skill.end]
         if objects is None:
-            objects = ObjectTracker(self.domain)
+            objects = ObjectTracker(self.domain, perception=env.perception)
             objects.update(env.percept())
         kept = (recorded.preconditions - recorded.del_effects) & self.domain.watched_facts
         watched = {bound.fact(fact) for fact in kept}
@@ -306,7 +306,7 @@ class Executor:
         tracker = (
             None if self.filter_gain is None else TcpTracker(self.filter_gain, self.motion_model)
         )
-        objects = ObjectTracker(self.domain)
+        objects = ObjectTracker(self.domain, perception=env.perception)
         objects.update(env.percept())
 
         def reached(facts_now: Iterable[str], obs_now: np.ndarray) -> bool:

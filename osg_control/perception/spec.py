@@ -30,6 +30,10 @@ from osg_control.json_files import is_json_number
 ENCODER_NOISE = 5e-4
 """Joint encoder noise [rad], per joint: about 0.4 mm at the kitchen arm's TCP per joint (its
 absolute encoders resolve far finer; the margin stands for calibration and backlash)."""
+TCP_PER_ENCODER = 0.7
+"""The TCP position's noise [m] per axis per radian of encoder noise, through forward
+kinematics: measured 0.31-0.40 mm per axis at ``ENCODER_NOISE`` (2000 readings of the
+kitchen arm held at a start), about 0.7 m/rad."""
 FINGER_NOISE = 5e-4
 """Finger width noise [m] (the gripper's own width reading)."""
 OBJECT_NOISE = 0.01
@@ -128,6 +132,12 @@ class PerceptionSpec:
                 self.object_angle_noise,
             )
         )
+
+    @property
+    def tcp_position_noise(self) -> float:
+        """The perceived TCP position's noise [m] per axis: the paper's ``tcp_noise`` and
+        the encoders' through forward kinematics (``TCP_PER_ENCODER``), together."""
+        return math.hypot(self.tcp_noise, TCP_PER_ENCODER * self.joint_noise)
 
     def to_dict(self) -> dict[str, Any]:
         """The name and parameters, for a command's ``--json``."""
