@@ -27,6 +27,7 @@ class Perceiving(EpisodeState, TruthReadouts):
     np_random: np.random.Generator
     _percept: Percept | None
     _sensor_slices: dict[str, np.ndarray]
+    _fixture_random: np.random.Generator | None = None
 
     camera_perception: CameraPerception | None = None
     """The scene's fixed cameras and what they locate (the ``camera`` perception), if any."""
@@ -35,6 +36,14 @@ class Perceiving(EpisodeState, TruthReadouts):
     def perceptions(self) -> tuple[str, ...]:
         """The perceptions it simulates: ``camera`` too where the scene declares cameras."""
         return SIMULATED_PERCEPTIONS + (("camera",) if self.camera_perception is not None else ())
+
+    def seed_fixture_noise(self, fresh: bool) -> None:
+        """Give the ``FIXTURE`` sensors their own stream, spawned from the env's generator
+        (``Generator.spawn`` draws nothing from it) when it was just seeded (``fresh``) or
+        at the first reset: the other sensors' draws are then those of an env without
+        fixtures."""
+        if fresh or self._fixture_random is None:
+            self._fixture_random = self.np_random.spawn(1)[0]
 
     def sense(self) -> Percept:
         """Read the sensors now without stepping (e.g. after the scene was edited from
@@ -66,7 +75,10 @@ class Perceiving(EpisodeState, TruthReadouts):
             state, joints = self.sensors.perceived(
                 self.data, self._gripper_cmd, spec, self.np_random
             )
-            seen = noisy_world(spec, self.np_random, truth, self._sensor_slices)
+            self.seed_fixture_noise(fresh=False)
+            seen = noisy_world(
+                spec, self.np_random, truth, self._sensor_slices, self._fixture_random
+            )
             if spec.name == "camera":
                 seen = self._camera_world(state, seen, decision)
             world = self.detect_world(state, seen)
