@@ -103,8 +103,9 @@ def test_placed_cubes_rest_where_asked_and_overlapping_ones_are_refused() -> Non
     env = KitchenEnv(skill="move-home-to-cube", cubes=2)
     placements = sample_placements(env.objects, np.random.default_rng(3))
     world = env.placement_world(placements, None)
-    assert set(world) == {"cube_pos", "cube2_pos"}
+    assert set(world) == {"cube_pos", "cube2_pos", "valve_pos"}  # the valve placed too
     env.reset(seed=1, options={"world": world})
+    assert env.world().valve_pos == tuple(placements["valve"][:2])
     cubes = env.world().cubes
     for cube, name in zip(cubes, ("cube", "cube2"), strict=True):
         np.testing.assert_allclose(cube.pos[:2], placements[name][:2], atol=2e-3)
@@ -131,7 +132,7 @@ def test_a_two_cube_task_runs_in_the_kitchen_with_two_cubes() -> None:
     assert scene.lifting.of_type("cube") == ["cube-1", "cube-2"]
     assert [t.name for t in scene.tasks] == ["two-cubes-in-cabinet", "pick-up-cube-2"]
     assert "(on-counter cube-2)" in scene.start_world and "(holding cube-2)" in scene.facts
-    assert [o.name for o in scene.objects] == ["cube", "cube2", "door"]
+    assert [o.name for o in scene.objects] == ["cube", "cube2", "door", "valve"]
     assert kitchen.for_task(kitchen.task("pick-up")) is kitchen
     assert kitchen.with_counts({"cube": 1}) is kitchen
     env = scene.make_env()

@@ -14,7 +14,7 @@ from osg_control.data.datasets import Dataset, Episode, load_dataset, write_epis
 from osg_control.domain.registry import get_domain
 from osg_control.errors import DatasetError, SkillSpecError
 from osg_control.kitchen.skills import NODES, SKILLS, SkillSpec
-from osg_control.kitchen.world import WORLD_FIELDS, WorldState, world_facts, world_state_from_array
+from osg_control.kitchen.world import WorldState, world_facts, world_fields, world_state_from_array
 from osg_control.planning.graph import (
     graph_from_specs,
     load_graph,
@@ -23,7 +23,7 @@ from osg_control.planning.graph import (
 from osg_control.planning.graph_data import graph_from_datasets
 from osg_control.planning.graph_draw import draw_graph
 
-WORLD = ",".join(WORLD_FIELDS)
+WORLD = ",".join(world_fields())
 KITCHEN = get_domain("kitchen")
 
 STEPS = 6

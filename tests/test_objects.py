@@ -21,6 +21,7 @@ from osg_control.execution.executor import Executor, task_env_config
 from osg_control.execution.objects import ObjectTracker, reading_weight
 from osg_control.kitchen.env import KitchenEnv
 from osg_control.kitchen.skills import CUBE
+from osg_control.kitchen.valve import VALVE
 from osg_control.perception.percept import Percept
 from osg_control.perception.spec import perception_spec
 
@@ -249,9 +250,9 @@ def test_a_tracked_object_needs_one_field_and_a_free_one_two() -> None:
     door = next(frame for frame in KITCHEN.objects if frame.name == "door")
     free = replace(door, axis=None)
     with pytest.raises(DomainError, match="must name its x and y"):
-        replace(KITCHEN, objects=(CUBE, free))
+        replace(KITCHEN, objects=(CUBE, free, VALVE))
     with pytest.raises(DomainError, match="its travel"):
-        replace(KITCHEN, objects=(replace(CUBE, axis=(1.0, 0.0)), door))
+        replace(KITCHEN, objects=(replace(CUBE, axis=(1.0, 0.0)), door, VALVE))
 
 
 def test_a_grab_after_the_door_was_left_part_open_heads_for_the_handle(

@@ -6,7 +6,7 @@ and y, starts within 2 cm of ``above-valve`` moved with it, and runs the learned
 ``lower-to-valve``, ``push-valve-open`` and ``leave-valve`` in turn (each until its beta on
 the percepts, its end node moved with the valve, or its step budget), their input the
 observation in the valve's frame: the true shift (``anchored``) or none (the world frame,
-as the executor runs them while no world field perceives the valve's place). It counts the
+as the executor ran them before the valve's place was a world field). It counts the
 episodes that leave the valve open (truth). The oracle frame reads the truth: this is a
 measurement of the skills, not a controller (``tools/displaced_cube.py --disturbance
 moved-valve`` runs the executor from its percepts).

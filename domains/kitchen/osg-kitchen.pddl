@@ -20,13 +20,13 @@
     )
      (:action leave-valve
         :parameters (?v - valve)
-        :precondition (and (at valve-pushed) (hand-empty))
-        :effect (and (at above-valve) (not (at valve-pushed)) (increase (total-cost) 1))
+        :precondition (and (at-object valve-pushed ?v) (hand-empty))
+        :effect (and (at-object above-valve ?v) (not (at-object valve-pushed ?v)) (increase (total-cost) 1))
     )
      (:action lower-to-valve
         :parameters (?v - valve)
-        :precondition (and (at above-valve) (hand-empty) (valve-closed ?v))
-        :effect (and (at valve-lever) (not (at above-valve)) (increase (total-cost) 1))
+        :precondition (and (at-object above-valve ?v) (hand-empty) (valve-closed ?v))
+        :effect (and (at-object valve-lever ?v) (not (at-object above-valve ?v)) (increase (total-cost) 1))
     )
      (:action move-cabinet-to-cube
         :parameters (?c - cube)
@@ -66,12 +66,12 @@
      (:action move-home-to-valve
         :parameters (?v - valve)
         :precondition (and (at home) (hand-empty))
-        :effect (and (at above-valve) (not (at home)) (increase (total-cost) 1))
+        :effect (and (at-object above-valve ?v) (not (at home)) (increase (total-cost) 1))
     )
      (:action move-valve-to-home
         :parameters (?v - valve)
-        :precondition (and (at above-valve) (hand-empty))
-        :effect (and (at home) (not (at above-valve)) (increase (total-cost) 1))
+        :precondition (and (at-object above-valve ?v) (hand-empty))
+        :effect (and (at home) (not (at-object above-valve ?v)) (increase (total-cost) 1))
     )
      (:action pick-up-cube
         :parameters (?c - cube)
@@ -85,8 +85,8 @@
     )
      (:action push-valve-open
         :parameters (?v - valve)
-        :precondition (and (at valve-lever) (hand-empty) (valve-closed ?v))
-        :effect (and (valve-open ?v) (not (valve-closed ?v)) (at valve-pushed) (not (at valve-lever)) (increase (total-cost) 5))
+        :precondition (and (at-object valve-lever ?v) (hand-empty) (valve-closed ?v))
+        :effect (and (valve-open ?v) (not (valve-closed ?v)) (at-object valve-pushed ?v) (not (at-object valve-lever ?v)) (increase (total-cost) 5))
     )
      (:action release-cube
         :parameters (?c - cube)

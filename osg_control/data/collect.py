@@ -86,8 +86,8 @@ def touches_objects(domain: Domain, skill: SkillSpec) -> bool:
     to one, or starts holding one. The others (the kitchen's door and valve skills; the
     door is an object its handle's node moves with, but Algorithm 1 never places it) are
     recorded with the objects where the scene has them, their data the same as before
-    objects could move."""
-    objects = {frame.name for frame in domain.objects if frame.placed}
+    objects could move; so are an ``evaluation_only`` object's)."""
+    objects = {f.name for f in domain.objects if f.placed and not f.evaluation_only}
     return bool(
         skill_frame(domain, skill) in objects
         or domain.nodes[skill.start].anchor in objects
@@ -108,7 +108,8 @@ def run_scripted_episode(
     reset_seed = int(rng.integers(2**31))
     options: dict[str, Any] = {"radius": skill.start_radius, "angle": skill.start_angle}
     if randomize and touches_objects(domain, skill):
-        options = placed_start_options(domain, env, skill, sample_placements(domain, rng))
+        placements = sample_placements(domain, rng, collecting=True)
+        options = placed_start_options(domain, env, skill, placements)
     obs, info = env.reset(seed=reset_seed, options=options)
     offset = skill_offset(domain, skill, env.anchor_offsets)
     script = shifted_skill(skill, offset)

@@ -72,11 +72,14 @@ def reading_displacement(frame: ObjectFrame, values: Sequence[float]) -> np.ndar
 def offsets_of(
     objects: Sequence[ObjectFrame], world_fields: Sequence[str], world: np.ndarray
 ) -> dict[str, np.ndarray]:
-    """Each object's displacement in a world vector (named by ``world_fields``)."""
+    """Each object's displacement in a world vector (named by ``world_fields``). A
+    vector stored before an object's fields were appended (shorter than ``world_fields``)
+    has none for it: the object is left out (at its nominal place, ``node_position``)."""
     index = {name: i for i, name in enumerate(world_fields)}
     return {
         frame.name: reading_displacement(frame, [world[index[f]] for f in frame.position_fields])
         for frame in objects
+        if all(index[f] < len(world) for f in frame.position_fields)
     }
 
 
@@ -86,12 +89,14 @@ others."""
 
 
 def sample_placements(
-    domain: Domain | Sequence[ObjectFrame], rng: np.random.Generator
+    domain: Domain | Sequence[ObjectFrame], rng: np.random.Generator, collecting: bool = False
 ) -> dict[str, np.ndarray]:
     """A uniform placement of every placed object (``ObjectFrame.placed``) in its region
     (x, y, and its resting z), each clear of those placed before it (``clearance``: drawn
     again until it is); the others stay where the scene has them. One object, or objects
-    that clear each other at the first draw, take one draw each.
+    that clear each other at the first draw, take one draw each. An ``evaluation_only``
+    object draws from a generator spawned from ``rng`` (``Generator.spawn`` draws nothing
+    from it), and is left where the scene has it when ``collecting`` (Algorithm 1).
 
     Raises:
         PlacementError: an object not cleared of the others in ``PLACEMENT_DRAWS`` draws
@@ -101,10 +106,12 @@ def sample_placements(
     placed: dict[str, np.ndarray] = {}
     clear: list[tuple[np.ndarray, float]] = []
     for frame in frames:
-        if frame.region_low is None or frame.region_high is None:
+        if not frame.placed or (collecting and frame.evaluation_only):
             continue
+        assert frame.region_low is not None and frame.region_high is not None  # placed
+        draws = rng.spawn(1)[0] if frame.evaluation_only else rng
         for _draw in range(PLACEMENT_DRAWS):
-            xy = rng.uniform(frame.region_low, frame.region_high)
+            xy = draws.uniform(frame.region_low, frame.region_high)
             if all(np.hypot(*(xy - at)) >= r + frame.clearance for at, r in clear):
                 break
         else:

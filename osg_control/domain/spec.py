@@ -75,6 +75,11 @@ class ObjectFrame:
             in the plane (two ``position_fields``).
         clearance: the radius [m] it keeps clear around it where it is placed at random:
             two placed objects' centres are at least their clearances' sum apart (0: none).
+        evaluation_only: placed at random only when evaluating (``--randomize-objects``),
+            never by Algorithm 1 (its data recorded where the scene has it), its place drawn
+            from a stream of its own (``frames.sample_placements``): an object made
+            placeable after data were collected changes neither the data nor any other
+            object's draws.
     """
 
     name: str
@@ -86,6 +91,7 @@ class ObjectFrame:
     held_fact: str | None = None
     axis: tuple[float, float] | None = None
     clearance: float = 0.0
+    evaluation_only: bool = False
 
     @property
     def placed(self) -> bool:

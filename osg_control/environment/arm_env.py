@@ -249,6 +249,7 @@ class ArmEnv(Perceiving, StartPlacement, gym.Env):
         default_facts = self.skill.start_facts if self.skill else frozenset()
         facts = default_facts if asked is None else facts_option(asked, self.world_facts)
         super().reset(seed=seed)  # after the checks: a refused reset changes nothing
+        self.seed_fixture_noise(fresh=seed is not None)
         orientation = quat_rotation(node.orientation)
         for _attempt in range(50):
             pos, rot = sample_start_pose(self.np_random, centre, radius, angle, orientation)

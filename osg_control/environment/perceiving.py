@@ -27,6 +27,7 @@ class Perceiving(SceneTruth, SkillStepper):
     np_random: np.random.Generator
     _percept: Percept | None
     _sensor_slices: dict[str, np.ndarray]
+    _fixture_random: np.random.Generator | None = None
 
     camera_perception: CameraPerception | None = None
     """The scene's fixed cameras and what they locate (the ``camera`` perception), if any."""
@@ -40,6 +41,14 @@ class Perceiving(SceneTruth, SkillStepper):
     def perception(self) -> PerceptionSpec:
         """The perception it perceives with (``config.perception``)."""
         return self.config.perception
+
+    def seed_fixture_noise(self, fresh: bool) -> None:
+        """Give the ``FIXTURE`` sensors their own stream, spawned from the env's generator
+        (``Generator.spawn`` draws nothing from it) when it was just seeded (``fresh``) or
+        at the first reset: the other sensors' draws are then those of an env without
+        fixtures."""
+        if fresh or self._fixture_random is None:
+            self._fixture_random = self.np_random.spawn(1)[0]
 
     def sense(self) -> Percept:
         """Read the sensors now without stepping (e.g. after the scene was edited from
@@ -71,7 +80,10 @@ class Perceiving(SceneTruth, SkillStepper):
             state, joints = self.sensors.perceived(
                 self.data, self._gripper_cmd, spec, self.np_random
             )
-            seen = noisy_world(spec, self.np_random, truth, self._sensor_slices)
+            self.seed_fixture_noise(fresh=False)
+            seen = noisy_world(
+                spec, self.np_random, truth, self._sensor_slices, self._fixture_random
+            )
             if spec.name == "camera":
                 seen = self._camera_world(state, seen, decision)
             world = self.detect_world(state, seen)

@@ -16,7 +16,13 @@ import numpy as np
 from osg_control.domain.frames import reading_displacement
 from osg_control.environment.success import GRIPPER_CLOSED_CMD
 from osg_control.kitchen.skills import DOOR, NODES
-from osg_control.kitchen.world import CUBE_FIELDS, CUBE_HALF_SIZE, WORLD_FIELDS
+from osg_control.kitchen.world import (
+    CUBE_FIELDS,
+    CUBE_HALF_SIZE,
+    VALVE_FIELDS,
+    WORLD_FIELDS,
+    has_valve_fields,
+)
 from osg_control.perception.sensors import ANGLE, DETECTED, POSITION, QUATERNION
 
 WORLD_SENSORS: dict[str, str] = {
@@ -70,16 +76,18 @@ def detect_grasps(state: np.ndarray, world: np.ndarray) -> np.ndarray:
 
     Args:
         state: the perceived 10-D state (TCP, gripper command, force, finger width).
-        world: the pose estimator's world vector (``world.world_fields(cubes)``).
+        world: the pose estimator's world vector (``world.world_fields(cubes)``; or one
+            stored without the valve's fields, ``world.has_valve_fields``).
     """
     detected = np.array(world, dtype=float)
     handle = _HANDLE_SHUT + reading_displacement(DOOR, (detected[_DOOR_FIELD],))
     detected[_FIELD["handle_grasped"]] = float(_grips(state, HANDLE_GRIP_WIDTH, handle))
-    if len(detected) == len(WORLD_FIELDS):
+    cubes_end = len(detected) - (len(VALVE_FIELDS) if has_valve_fields(len(detected)) else 0)
+    if cubes_end == len(WORLD_FIELDS):
         cube = detected[_CUBE_POSITION]
         detected[_FIELD["cube_grasped"]] = float(_grips(state, CUBE_GRIP_WIDTH, cube))
         return detected
-    starts = [_CUBE_POSITION.start, *range(len(WORLD_FIELDS), len(detected), _CUBE_WIDTH)]
+    starts = [_CUBE_POSITION.start, *range(len(WORLD_FIELDS), cubes_end, _CUBE_WIDTH)]
     grasps = [_FIELD["cube_grasped"], *(i + _CUBE_WIDTH - 1 for i in starts[1:])]
     gaps = [float(np.linalg.norm(state[:3] - detected[i : i + 3])) for i in starts]
     nearest = int(np.argmin(gaps))

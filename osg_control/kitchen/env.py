@@ -1,14 +1,15 @@
 """``KitchenEnv``: the kitchen scene around a robot (``ArmEnv`` with the kitchen's world).
 
 The world-state vector is ``world.world_fields(cubes)`` (door travel, valve angle, each
-cube's pose, which objects both fingers touch); its facts are ``world.world_facts``. The
-scene holds ``cubes`` cubes (1 to ``objects.MAX_CUBES``; a constructor argument, since the
-cubes are bodies of the compiled model and the world vector's width follows them). A start
-world is given by facts (``door-open`` slides the door to ``skills.DOOR_OPENED``) or
-explicitly with the ``world`` reset option (``door_opening`` [m], ``cube_pos``,
-``cube2_pos`` ..., ``valve_pos``: the valve's (x, y), ``valve.py``); ``holding`` is
-``"cube"`` (cube 1) or ``"handle"``. The robot is ``DEFAULT_ROBOT`` unless another is
-given (any registered ``RobotDescription`` with a two-finger gripper).
+cube's pose, which objects both fingers touch, the valve's place); its facts are
+``world.world_facts``. The scene holds ``cubes`` cubes (1 to ``objects.MAX_CUBES``; a
+constructor argument, since the cubes are bodies of the compiled model and the world
+vector's width follows them). A start world is given by facts (``door-open`` slides the
+door to ``skills.DOOR_OPENED``) or explicitly with the ``world`` reset option
+(``door_opening`` [m], ``cube_pos``, ``cube2_pos`` ..., ``valve_pos``: the valve's (x, y),
+``valve.py``); ``holding`` is ``"cube"`` (cube 1) or ``"handle"``. The robot is
+``DEFAULT_ROBOT`` unless another is given (any registered ``RobotDescription`` with a
+two-finger gripper).
 """
 
 from __future__ import annotations
@@ -32,7 +33,7 @@ from osg_control.kitchen.objects import world_fact_names
 from osg_control.kitchen.options import check_world_options, cube_option, world_options
 from osg_control.kitchen.scene import SceneIndex, build_kitchen_model, kitchen_robot
 from osg_control.kitchen.skills import DOOR, DOOR_OPENED, NODES, SKILLS_BY_NAME
-from osg_control.kitchen.valve import valve_position
+from osg_control.kitchen.valve import VALVE, VALVE_SENSORS, valve_position
 from osg_control.kitchen.world import CUBE_HALF_SIZE, WorldState
 
 HANDLE_GRASP_SLACK = 0.015
@@ -82,7 +83,7 @@ class KitchenEnv(ArmEnv):
             )
         self.world_facts = world_fact_names(cubes)
         self.world_options = world_options(cubes)
-        self.world_sensors = {**WORLD_SENSORS, **cube_sensors(cubes)}
+        self.world_sensors = {**WORLD_SENSORS, **cube_sensors(cubes), **VALVE_SENSORS}
         self.objects = cube_objects(cubes)
         spec = (
             lookup(SKILLS_BY_NAME, skill, "skill", SkillSpecError)
@@ -113,14 +114,18 @@ class KitchenEnv(ArmEnv):
         return {frame.name: cube_option(k) for k, frame in enumerate(self._cube_frames(), 1)}
 
     def _cube_frames(self) -> list[ObjectFrame]:
-        return [f for f in self.objects if f.name != DOOR.name]
+        return [f for f in self.objects if f.name not in (DOOR.name, VALVE.name)]
+
+    def _placing_options(self) -> dict[str, str]:
+        """Each placed object's frame -> the ``world`` option that places it."""
+        return {**self._cube_options(), VALVE.name: "valve_pos"}
 
     def placement_offsets(self, world: dict[str, Any]) -> dict[str, np.ndarray]:
         """Each cube's displacement when ``world`` places it (``cube_pos``, ``cube2_pos``
-        ...), the door's when it slides it (``door_opening``)."""
+        ...), the valve's (``valve_pos``), the door's when it slides it (``door_opening``)."""
         placed = {
             frame: np.asarray(world[option], float)
-            for frame, option in self._cube_options().items()
+            for frame, option in self._placing_options().items()
             if world.get(option) is not None
         }
         offsets = placement_offsets(self.objects, placed)
@@ -131,12 +136,16 @@ class KitchenEnv(ArmEnv):
     def placement_world(
         self, placements: dict[str, np.ndarray], holding: str | None
     ) -> dict[str, Any]:
-        """Each placed cube's option (``cube_pos`` ...), but cube 1's when it is held."""
-        return {
+        """Each placed cube's option (``cube_pos`` ...), but cube 1's when it is held, and
+        the valve's (x, y) (``valve_pos``)."""
+        world = {
             option: [float(v) for v in placements[frame]]
             for frame, option in self._cube_options().items()
             if frame in placements and not (option == "cube_pos" and holding == "cube")
         }
+        if VALVE.name in placements:
+            world["valve_pos"] = [float(v) for v in placements[VALVE.name][:2]]
+        return world
 
     def detect_world(self, state: np.ndarray, world: np.ndarray) -> np.ndarray:
         """The grasps from the finger width and the perceived poses

@@ -18,11 +18,12 @@ INSTANCES: tuple[ObjectInstance, ...] = (
     ObjectInstance("cube-1", "cube", frame="cube"),
     ObjectInstance("door-1", "door", frame="door"),
     ObjectInstance("handle-1", "handle"),
-    ObjectInstance("valve-1", "valve"),
+    ObjectInstance("valve-1", "valve", frame="valve"),
 )
 """The scene's objects: one cube (located by the ``CUBE`` frame, which its nodes are
 anchored to), the cabinet's sliding door (the ``DOOR`` frame: its travel, which the
-``handle`` node follows), its handle and the valve."""
+``handle`` node follows), its handle and the valve (the ``VALVE`` frame: its place, which
+its nodes follow)."""
 PREDICATES: tuple[PredicateDecl, ...] = (
     PredicateDecl("hand-empty"),
     PredicateDecl("holding", (("o", "object"),)),

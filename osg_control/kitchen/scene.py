@@ -129,6 +129,7 @@ class SceneIndex:
             c = data.qpos[adr : adr + 7].tolist()
             cubes.append(CubeState((c[0], c[1], c[2]), (c[3], c[4], c[5], c[6]), grasped))
         first = cubes[0]
+        valve = model.body_pos[self.valve_body]
         return WorldState(
             door_opening=float(data.qpos[self.door_qpos]),
             valve_angle=float(data.qpos[self.valve_qpos]),
@@ -137,4 +138,5 @@ class SceneIndex:
             cube_grasped=first.grasped,
             handle_grasped=handle_grasped,
             more_cubes=tuple(cubes[1:]),
+            valve_pos=(float(valve[0]), float(valve[1])),
         )

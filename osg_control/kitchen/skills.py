@@ -30,7 +30,7 @@ from osg_control.domain.spec import (
 from osg_control.domain.spec import nearest_start as _nearest_start
 from osg_control.errors import SkillSpecError, lookup
 from osg_control.kitchen.objects import SKILL_PARAMETERS, WORLD_FACTS
-from osg_control.kitchen.valve import VALVE_NODES, VALVE_PUSH_ANGLES, valve_push_point
+from osg_control.kitchen.valve import VALVE, VALVE_NODES, VALVE_PUSH_ANGLES, valve_push_point
 
 __all__ = ["NODES", "SKILLS", "TOP_DOWN_QUAT", "WORLD_FACTS", "Node", "SkillSpec", "get_skill"]
 
@@ -57,9 +57,8 @@ travel, so a grab after a slide that lost the handle heads for the handle where 
 now is. ``handle-open`` (the slide's goal: the handle at ``DOOR_OPENED``) and
 ``door-front`` (where the movement skills meet, reached with the door open or shut) are
 places along the door's fixed track, not on the door: they stay. The valve's nodes
-(``valve.VALVE_NODES``) are given for the valve at its file place; the ``valve_pos`` reset
-option moves the valve, but no world field perceives its place yet, so they do not follow
-it."""
+(``valve.VALVE_NODES``) are anchored to the valve (``valve.VALVE``): they move with its
+perceived place."""
 
 CUBE = ObjectFrame(
     name="cube",
@@ -85,7 +84,7 @@ reading): the ``handle`` node (its grasp, at (0.42, 0.14) with the door shut) mo
 Never placed at random: the door moves only when the robot slides it. Its frame is frozen
 while the handle is held, like the cube's while the cube is (no skill that holds the handle
 acts in the door's frame: the slide heads for the fixed ``handle-open``)."""
-OBJECTS: tuple[ObjectFrame, ...] = (CUBE, DOOR)
+OBJECTS: tuple[ObjectFrame, ...] = (CUBE, DOOR, VALVE)
 """The kitchen's objects nodes are anchored to (the domain's and the env's ``objects``)."""
 
 

@@ -2,9 +2,11 @@
 as a ``world`` reset option (numpy only, no MuJoCo).
 
 The valve is ``robots/kitchen.xml``'s body ``valve``: a knob on a vertical hinge with a
-lever along its +x. Its place is fixed in the file at ``VALVE_HINGE``; the ``valve_pos``
-reset option moves the body to another (x, y) within ``VALVE_SHIFT`` of it for one
-episode (``KitchenEnv.place_world``), the file's place otherwise.
+lever along its +x. Its place in the file is ``VALVE_HINGE``; the ``valve_pos`` reset
+option moves the body to another (x, y) within ``VALVE_SHIFT`` of it for one episode
+(``KitchenEnv.place_world``), the file's place otherwise. The world vector reads its place
+(``world.VALVE_FIELDS``, a ``FIXTURE`` sensor) and its nodes are anchored to it
+(``VALVE``), so its skills act in its frame wherever it stands.
 """
 
 from __future__ import annotations
@@ -13,9 +15,10 @@ from typing import Any
 
 import numpy as np
 
-from osg_control.domain.spec import Node
+from osg_control.domain.spec import Node, ObjectFrame
 from osg_control.environment.options import finite_option
 from osg_control.errors import EnvOptionError
+from osg_control.perception.sensors import FIXTURE
 
 VALVE_HINGE = (0.35, -0.45)
 """The valve's hinge axis (x, y) [m] in the file: a vertical axis through the knob's
@@ -57,13 +60,36 @@ def valve_push_point(angle: float) -> tuple[float, float, float]:
     return (round(float(x), 4), round(float(y), 4), VALVE_PUSH_Z)
 
 
-VALVE_NODES: tuple[Node, ...] = (
-    Node("above-valve", (VALVE_HINGE[0] + VALVE_PUSH_RADIUS, VALVE_HINGE[1], 0.25)),
-    Node("valve-lever", (VALVE_HINGE[0] + VALVE_PUSH_RADIUS, VALVE_HINGE[1], VALVE_PUSH_Z)),
-    Node("valve-pushed", valve_push_point(VALVE_PUSH_ANGLES[-1])),
+VALVE_FIELDS: tuple[str, ...] = ("valve_x", "valve_y")
+"""The world fields of the valve body's place (x, y) [m]: the world vector's last fields,
+whatever the cubes (``world.world_fields``)."""
+VALVE = ObjectFrame(
+    name="valve",
+    position_fields=VALVE_FIELDS,
+    nominal=VALVE_HINGE,
+    rest_z=VALVE_BODY_Z,
+    region_low=(VALVE_HINGE[0] - VALVE_SHIFT, VALVE_HINGE[1] - VALVE_SHIFT),
+    region_high=(VALVE_HINGE[0] + VALVE_SHIFT, VALVE_HINGE[1] + VALVE_SHIFT),
+    evaluation_only=True,
 )
-"""The valve skills' nodes, given for the valve at its file place: above the lever, at the
-lever, and at the end of the push."""
+"""The valve, located by its hinge's place (the world fields ``valve_x``, ``valve_y``): its
+nodes move with it. ``--randomize-objects`` places it in the ``VALVE_SHIFT`` square around
+its file place (the ``valve_pos`` option's region); Algorithm 1 leaves it at the file's
+place (``evaluation_only``: the skills' data and every other draw stay as collected)."""
+VALVE_SENSORS: dict[str, str] = dict.fromkeys(VALVE_FIELDS, FIXTURE)
+"""The sensors of the valve's place: the pose estimator's position noise, drawn from its
+own stream (the other fields' draws are those of a world vector without them)."""
+VALVE_NODES: tuple[Node, ...] = (
+    Node("above-valve", (VALVE_HINGE[0] + VALVE_PUSH_RADIUS, VALVE_HINGE[1], 0.25), anchor="valve"),
+    Node(
+        "valve-lever",
+        (VALVE_HINGE[0] + VALVE_PUSH_RADIUS, VALVE_HINGE[1], VALVE_PUSH_Z),
+        anchor="valve",
+    ),
+    Node("valve-pushed", valve_push_point(VALVE_PUSH_ANGLES[-1]), anchor="valve"),
+)
+"""The valve skills' nodes, given for the valve at its file place (``VALVE.nominal``) and
+anchored to it: above the lever, at the lever, and at the end of the push."""
 
 
 def valve_position(world: dict[str, Any]) -> np.ndarray:

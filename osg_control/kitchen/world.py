@@ -3,8 +3,9 @@
 ``WorldState`` is what the scene reads (door travel, valve angle, each cube's pose, which
 objects both fingers touch); ``world_facts`` abstracts it into the kitchen's facts; the flat
 vector ``world_fields(cubes)`` is how data sets store it: the one-cube layout
-``WORLD_FIELDS`` (11 values), then 8 values per further cube (``cube2_x`` ...), so a
-one-cube vector reads as it always did.
+``WORLD_FIELDS`` (11 values), then 8 values per further cube (``cube2_x`` ...), then the
+valve's place (``VALVE_FIELDS``). A vector stored before the valve's place was a field
+(11 + 8 per further cube) still reads: its valve stood at the file's place.
 """
 
 from __future__ import annotations
@@ -14,6 +15,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from osg_control.kitchen.objects import HAND_EMPTY_FACT, MAX_CUBES, cube_fact, cube_prefix
+from osg_control.kitchen.valve import VALVE_FIELDS, VALVE_HINGE
 
 CUBE_HALF_SIZE = 0.0225
 """Half the cube's edge [m]."""
@@ -78,6 +80,7 @@ class WorldState:
         cube_grasped: both fingers touch cube 1.
         handle_grasped: both fingers touch the door handle.
         more_cubes: cubes 2, 3, ... of a scene with more than one.
+        valve_pos: the valve body's (x, y) [m] (the ``valve_pos`` reset option moves it).
     """
 
     door_opening: float
@@ -87,6 +90,7 @@ class WorldState:
     cube_grasped: bool
     handle_grasped: bool
     more_cubes: tuple[CubeState, ...] = ()
+    valve_pos: tuple[float, float] = VALVE_HINGE
 
     @property
     def cubes(self) -> tuple[CubeState, ...]:
@@ -130,7 +134,7 @@ class WorldState:
         ]
         for cube in self.more_cubes:
             values += cube.values()
-        return np.array(values)
+        return np.array([*values, *self.valve_pos])
 
 
 def world_facts(world: WorldState) -> frozenset[str]:
@@ -181,36 +185,51 @@ CUBE_FIELDS: tuple[str, ...] = ("x", "y", "z", "qw", "qx", "qy", "qz", "grasped"
 
 def world_fields(cubes: int = 1) -> tuple[str, ...]:
     """The world vector's fields with ``cubes`` cubes: ``WORLD_FIELDS``, then each further
-    cube's 8 (``cube2_x`` ... ``cube2_grasped``)."""
+    cube's 8 (``cube2_x`` ... ``cube2_grasped``), then ``VALVE_FIELDS``."""
     more = (f"{cube_prefix(k)}_{f}" for k in range(2, cubes + 1) for f in CUBE_FIELDS)
-    return WORLD_FIELDS + tuple(more)
+    return WORLD_FIELDS + tuple(more) + VALVE_FIELDS
 
 
 def cube_count(width: int) -> int:
-    """How many cubes a world vector of ``width`` values holds.
+    """How many cubes a world vector of ``width`` values holds: ``world_fields``'s width,
+    or a vector stored before ``VALVE_FIELDS`` were fields (``has_valve_fields``).
 
     Raises:
         ValueError: a width that is no kitchen vector's.
     """
     extra, rest = divmod(width - len(WORLD_FIELDS), len(CUBE_FIELDS))
+    if rest == len(VALVE_FIELDS):
+        rest = 0
     if rest or not 0 <= extra < MAX_CUBES:
         raise ValueError(
             f"a kitchen world vector has {len(WORLD_FIELDS)} values plus {len(CUBE_FIELDS)} "
-            f"per cube beyond the first (1 to {MAX_CUBES} cubes), got {width}"
+            f"per cube beyond the first (1 to {MAX_CUBES} cubes) plus the valve's "
+            f"{len(VALVE_FIELDS)} (absent from vectors stored before them), got {width}"
         )
     return 1 + extra
 
 
+def has_valve_fields(width: int) -> bool:
+    """Whether a kitchen world vector of ``width`` values ends with ``VALVE_FIELDS`` (one
+    stored before they were fields does not: its valve stood at the file's place)."""
+    return (width - len(WORLD_FIELDS)) % len(CUBE_FIELDS) == len(VALVE_FIELDS)
+
+
 def world_state_from_array(values: np.ndarray) -> WorldState:
-    """Inverse of ``WorldState.as_array`` (any number of cubes, ``cube_count``)."""
+    """Inverse of ``WorldState.as_array`` (any number of cubes, ``cube_count``; a vector
+    without the valve's fields has it at the file's place, ``has_valve_fields``)."""
     v = np.asarray(values, dtype=float).tolist()  # Python floats: read every step
     n = len(WORLD_FIELDS)
+    valve = VALVE_HINGE
+    if len(v) != n:
+        cube_count(len(v))
+        if has_valve_fields(len(v)):
+            valve = (v[-2], v[-1])
+            v = v[:-2]
     more = tuple(
         CubeState((c[0], c[1], c[2]), (c[3], c[4], c[5], c[6]), c[7] > 0.5)
         for c in (v[i : i + len(CUBE_FIELDS)] for i in range(n, len(v), len(CUBE_FIELDS)))
     )
-    if more:
-        cube_count(len(v))
     return WorldState(
         door_opening=v[0],
         valve_angle=v[1],
@@ -219,4 +238,5 @@ def world_state_from_array(values: np.ndarray) -> WorldState:
         cube_grasped=v[9] > 0.5,
         handle_grasped=v[10] > 0.5,
         more_cubes=more,
+        valve_pos=valve,
     )

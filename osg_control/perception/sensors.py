@@ -1,8 +1,10 @@
 """Simulated sensors: noise on the simulator's readings by sensor kind.
 
 A domain's env declares, per world field, which sensor reads it (``WorldSensor``): an
-object position (the pose estimator's position noise), an angle or an orientation
-quaternion (its orientation noise), or a detector (``DETECTED``: recomputed by the domain
+object position (the pose estimator's position noise), a fixture's position (an object
+that moves only between episodes; the same noise drawn from a stream of its own, so adding
+one changes no other reading), an angle or an orientation quaternion (its orientation
+noise), or a detector (``DETECTED``: recomputed by the domain
 from the other percepts, e.g. a grasp from the finger width and the object's pose).
 """
 
@@ -16,10 +18,11 @@ import numpy as np
 from osg_control.perception.spec import PerceptionSpec
 
 POSITION = "position"
+FIXTURE = "fixture"
 ANGLE = "angle"
 QUATERNION = "quaternion"
 DETECTED = "detected"
-SENSOR_KINDS = (POSITION, ANGLE, QUATERNION, DETECTED)
+SENSOR_KINDS = (POSITION, FIXTURE, ANGLE, QUATERNION, DETECTED)
 """What can read a world field."""
 
 
@@ -51,12 +54,18 @@ def noisy_world(
     rng: np.random.Generator,
     world: np.ndarray,
     slices: Mapping[str, np.ndarray],
+    fixture_rng: np.random.Generator | None = None,
 ) -> np.ndarray:
     """The pose estimator's reading of a world vector (detector fields left as they are:
-    the domain recomputes them). Draws nothing when the objects are perceived exactly."""
+    the domain recomputes them). Draws nothing when the objects are perceived exactly.
+    ``FIXTURE`` fields draw from ``fixture_rng`` (default ``rng``), so a caller that keeps
+    one apart leaves ``rng``'s draws as they were without them."""
     seen = np.array(world, dtype=float)
     if spec.object_noise > 0 and slices[POSITION].size:
         seen[slices[POSITION]] += rng.normal(0.0, spec.object_noise, slices[POSITION].size)
+    if spec.object_noise > 0 and slices[FIXTURE].size:
+        fixtures = rng if fixture_rng is None else fixture_rng
+        seen[slices[FIXTURE]] += fixtures.normal(0.0, spec.object_noise, slices[FIXTURE].size)
     if spec.object_angle_noise > 0:
         if slices[ANGLE].size:
             seen[slices[ANGLE]] += rng.normal(0.0, spec.object_angle_noise, slices[ANGLE].size)
