@@ -43,6 +43,7 @@ BOUNDS: dict[str, tuple[float, float, bool, bool]] = {
     "max_states": (1, 2**31 - 1, False, False),
     "noise": (0, 1, False, False),
     "object_noise": (0, 1, False, False),
+    "obs_noise": (0, 1, False, False),
     "time_limit": (0, 1e6, True, False),
     "filter": (0, 1, True, False),
     "validation_fraction": (0, 1, False, True),
