@@ -317,8 +317,10 @@ def retreat(ctx: Context, holding: str | None) -> list[Leg]:
 
 
 def pick(ctx: Context, obj: str) -> list[Leg]:
-    """Down to the grasp point, close, lift ``LIFT``."""
-    return [
+    """Over the grasp point first (``approach``'s hover: nothing to do when the approach
+    got there; an approach that ran out of steps made the descent sweep sideways into the
+    object), then down to it, close, lift ``LIFT``."""
+    return approach(ctx, obj, None) + [
         Leg(
             lambda now, start: (grasp_point(ctx, now, obj), grasp_rotation(ctx, now, obj)),
             GRIPPER_OPEN,
