@@ -57,6 +57,10 @@ LIFT = 0.12
 """How far a pick lifts before checking the object came with the hand [m]."""
 DROP = 0.02
 """Height of the held object's bottom above the surface when released [m]."""
+CLEARANCE = 0.02
+"""The gap between footprints a place on a region's top keeps where it can [m]."""
+EDGE_MARGIN = 0.01
+"""How far inside a region's footprint an object is set down at most [m]."""
 RIM_GRASP = ("bowl", "mug")
 """Object categories grasped at the rim (their origin is inside them, or they are wider
 than the open hand)."""
@@ -332,29 +336,77 @@ def pick(ctx: Context, obj: str) -> list[Leg]:
     ]
 
 
-def _surface(ctx: Context, percept: LiberoPercept, target: str, inside: bool) -> np.ndarray:
-    """The point the held object is set down over: an object's top centre, a region's
-    top (``on``) or floor (``in``) centre."""
+def _surface(
+    ctx: Context, percept: LiberoPercept, target: str, inside: bool, held_obj: str
+) -> np.ndarray:
+    """The point the held object ``held_obj`` is set down over: an object's top centre, a
+    region's floor centre (``in``) or a free spot of its top (``on``, ``_free_spot``)."""
     if target in percept.objects:
         pos, _ = percept.objects[target]
         return pos + np.array([0.0, 0.0, ctx.scene.extents[target][1][2]])
     pos, mat = region_pose(ctx.scene, percept, target)
-    half = np.abs(mat @ ctx.scene.regions[target].size)[2]
-    return pos + np.array([0.0, 0.0, -half if inside else half])
+    half = np.abs(mat @ ctx.scene.regions[target].size)
+    if not inside:
+        pos = _free_spot(ctx, percept, pos, half[:2], held_obj)
+    return pos + np.array([0.0, 0.0, -half[2] if inside else half[2]])
+
+
+def _footprint(ctx: Context, percept: LiberoPercept, obj: str) -> np.ndarray:
+    """An object's perceived footprint: the world xy box (lower, upper) round its
+    collision geometry (a moka pot's handle included)."""
+    pos, rot = percept.objects[obj]
+    low, high = ctx.scene.extents[obj]
+    corners = np.array([[x, y, z] for x in (low[0], high[0]) for y in (low[1], high[1])
+                        for z in (low[2], high[2])])  # fmt: skip
+    world = pos[:2] + (corners @ rot.T)[:, :2]
+    return np.array([world.min(axis=0), world.max(axis=0)])
+
+
+def _free_spot(
+    ctx: Context, percept: LiberoPercept, centre: np.ndarray, half: np.ndarray, held_obj: str
+) -> np.ndarray:
+    """Where on a region's top to set ``held_obj`` down: its centre when it would stand
+    ``CLEARANCE`` clear of every other object's footprint there, else the point of the
+    region's footprint (less ``EDGE_MARGIN``) whose footprint stands clearest of them (up to
+    ``CLEARANCE``), the nearest the centre among equals (the second moka pot on a stove)."""
+    own = _footprint(ctx, percept, held_obj) - percept.position(held_obj)[:2]
+    others = [_footprint(ctx, percept, o) for o in percept.objects if o != held_obj]
+
+    def clearance(spot: np.ndarray) -> float:
+        box = own + spot
+        gaps = [float(np.max(np.maximum(o[0] - box[1], box[0] - o[1]))) for o in others]
+        return min([CLEARANCE, *gaps])
+
+    if clearance(centre[:2]) >= CLEARANCE:
+        return centre
+    reach = np.maximum(half - EDGE_MARGIN, 0.0)
+    grid = np.linspace(-1.0, 1.0, 9)
+    spots = [centre[:2] + reach * (a, b) for a in grid for b in grid]
+    best = max(spots, key=lambda s: (clearance(s), -float(np.linalg.norm(s - centre[:2]))))
+    return np.r_[best, centre[2]]
 
 
 def place(ctx: Context, obj: str, target: str, inside: bool) -> list[Leg]:
-    """Lower ``obj`` over ``target`` until its bottom is ``DROP`` above the surface, open,
-    up."""
+    """Over the spot at the height ``obj`` was carried in (``_surface``: an object's top, a
+    region's floor or a free spot of its top), lower until its bottom is ``DROP`` above
+    the surface, open, up."""
+
+    chosen: list[np.ndarray] = []  # the spot, decided once: a swinging load moved it
 
     def down(now: LiberoPercept, start: LiberoPercept) -> tuple[np.ndarray, None]:
-        surface = _surface(ctx, now, target, inside)
+        if not chosen:
+            chosen.append(_surface(ctx, now, target, inside, obj))
+        surface = chosen[0]
         bottom = ctx.scene.extents[obj][0][2]  # the object's bottom below its origin
         origin = surface + np.array([0.0, 0.0, DROP - bottom])
         return origin + _carried_offset(now, obj), None
 
-    return [Leg(down, GRIPPER_CLOSED, 40, 0.01), hold(GRIPPER_OPEN, 10),
-            up(0.08, GRIPPER_OPEN)]  # fmt: skip
+    def over(now: LiberoPercept, start: LiberoPercept) -> tuple[np.ndarray, None]:
+        point, _ = down(now, start)  # at the carrying height first: nothing swept
+        return np.r_[point[:2], max(point[2], start.tcp[2])], None
+
+    return [Leg(over, GRIPPER_CLOSED, 30, 0.01), Leg(down, GRIPPER_CLOSED, 40, 0.01),
+            hold(GRIPPER_OPEN, 10), up(0.08, GRIPPER_OPEN)]  # fmt: skip
 
 
 def _pitched(rotation: np.ndarray, toward: np.ndarray) -> np.ndarray:
