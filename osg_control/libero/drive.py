@@ -12,7 +12,6 @@ from __future__ import annotations
 from dataclasses import replace
 
 import numpy as np
-from scipy.spatial.transform import Rotation
 
 from osg_control.control.description import RobotDescription
 from osg_control.control.ik import DiffIKController
@@ -23,11 +22,6 @@ JOINTS_OBS = "robot0_joint_pos"
 TCP_OBS = "robot0_eef_pos"
 GRIPPER_OPEN, GRIPPER_CLOSED = -1.0, 1.0
 """robosuite's gripper commands."""
-TURN_STEP = 0.15
-"""The most the rotation target given to the IK leads the TCP's rotation [rad] (about the
-wrist's share of one step's joint delta): a farther target is brought nearer along the
-shortest turn. Given a whole turn at once, the IK traded position for rotation: the TCP of
-a hand told to turn 1.5 rad in place drifted 20-30 cm off (LIBERO-10 task 2)."""
 
 
 class JointTargetDriver:
@@ -54,11 +48,6 @@ class JointTargetDriver:
         """The action that moves the TCP toward ``target_pos`` and ``target_rot`` (world
         frame) from the perceived joints (``robot0_joint_pos``), with the gripper command."""
         q = np.asarray(joints, dtype=float)
-        _, now = self.ik.tcp_pose(q)
-        turn = Rotation.from_matrix(now.T @ np.asarray(target_rot, dtype=float)).as_rotvec()
-        angle = float(np.linalg.norm(turn))
-        if angle > TURN_STEP:
-            target_rot = now @ Rotation.from_rotvec(turn * (TURN_STEP / angle)).as_matrix()
         delta = self.ik.step(q, target_pos, target_rot) - q
         return np.r_[np.clip(delta / JOINT_DELTA_LIMIT, -1.0, 1.0), gripper]
 
