@@ -13,17 +13,14 @@ pytest.importorskip("libero.libero", reason="needs the libero extra: pip install
 
 from osg_control import cli  # noqa: E402
 from osg_control.libero.benchmark import Job, run_job  # noqa: E402
-from osg_control.libero.controllers import (  # noqa: E402
-    Context,
-    LegRunner,
-    holding_ok,
-    operator_legs,
-)
+from osg_control.libero.controllers import operator_legs  # noqa: E402
 from osg_control.libero.drive import JointTargetDriver  # noqa: E402
 from osg_control.libero.env import LiberoEnv  # noqa: E402
 from osg_control.libero.executor import PlanExecutor  # noqa: E402
 from osg_control.libero.facts import holds, perceived_init  # noqa: E402
+from osg_control.libero.legs import Context, LegRunner  # noqa: E402
 from osg_control.libero.perception import FIXTURE_NOISE, LiberoPerception  # noqa: E402
+from osg_control.libero.pick_place import holding_ok  # noqa: E402
 from osg_control.libero.problem import Atom  # noqa: E402
 from osg_control.libero.robot import mounted_panda  # noqa: E402
 
