@@ -10,6 +10,7 @@ Wilson interval, the suite, the perception and the step budget.
 
 from __future__ import annotations
 
+import hashlib
 import time
 from collections.abc import Callable, Sequence
 from dataclasses import asdict, dataclass
@@ -66,6 +67,9 @@ class Episode:
     reset_s: float
     step_s: float
     trace: tuple[str, ...] = ()
+    actions_sha256: str = ""
+    """The SHA-256 of every action sent, as float64 bytes in order: equal digests are the
+    same trajectory (the determinism check of a run against another)."""
 
 
 @dataclass(frozen=True)
@@ -82,8 +86,9 @@ class Job:
 
 def run_job(job: Job) -> list[Episode]:
     """Run a job's episodes: reset to the initial state, step the policy on percepts until
-    the env's ``check_success()`` holds or the step budget is spent. The fixture sensor's
-    noise of initial state ``s`` is seeded by ``(job.seed, s)``."""
+    the env's ``check_success()`` holds or the step budget is spent. LIBERO's fixture
+    placement and the fixture sensor's noise of initial state ``s`` are seeded by
+    ``(job.seed, s)`` (``env.episode_seeds``): an episode is the same in any job."""
     env = LiberoEnv(job.suite, job.task)
     robot = mounted_panda(env.sim)
     perception = LiberoPerception(env, job.seed)
@@ -92,18 +97,22 @@ def run_job(job: Job) -> list[Episode]:
     try:
         for state in job.init_states:
             start = time.process_time()
-            obs = env.reset(state)
+            obs = env.reset(state, job.seed)
             scene, percept = perception.reset(obs, state)
             reset_s = time.process_time() - start
             policy.start(env.problem, robot, scene, percept)
             success = env.check_success()
             start = time.process_time()
+            digest = hashlib.sha256()
             while not success and env.steps < job.max_steps:
-                percept = perception.percept(env.step(policy.act(percept)))
+                action = np.asarray(policy.act(percept), dtype=np.float64)
+                digest.update(action.tobytes())
+                percept = perception.percept(env.step(action))
                 success = env.check_success()
             step_s = (time.process_time() - start) / max(env.steps, 1)
             trace = tuple(getattr(policy, "trace", ()))
-            episodes.append(Episode(job.task, state, success, env.steps, reset_s, step_s, trace))
+            episodes.append(Episode(job.task, state, success, env.steps, reset_s, step_s, trace,
+                                    digest.hexdigest()))  # fmt: skip
     finally:
         env.close()
     return episodes

@@ -38,6 +38,28 @@ JOINT_DELTA_LIMIT = 0.05
 default config's ``output_max``)."""
 
 
+def episode_seeds(seed: int, init_state: int) -> tuple[int, int]:
+    """The two seeds of one episode, from the run's ``seed`` and the initial state: LIBERO's
+    fixture placement at reset (``LiberoEnv.reset``), then the fixture sensor's noise
+    (``perception.FixtureSensor``). Neither depends on the task or on which episodes ran
+    before, so a run's episodes are the same whatever worker runs them."""
+    first, second = np.random.SeedSequence([seed, init_state]).generate_state(2)
+    return int(first), int(second)
+
+
+def _reset_grippers(gripper: Any) -> None:
+    """Zero a robot's gripper command state, as a freshly built model has it.
+
+    robosuite's grippers keep the position they are commanded to (``current_action``,
+    ramped each step toward the command's sign) on the model object. ``hard_reset=False``
+    never rebuilds the model, so without this an episode's gripper starts from the previous
+    episode's last command: the same initial state gave different trajectories depending on
+    which episode ran before it in a worker (the fingers 1 cm apart after the first step).
+    """
+    for one in gripper.values() if isinstance(gripper, dict) else (gripper,):
+        one.current_action = np.zeros(one.dof)
+
+
 class LiberoEnv:
     """One LIBERO task's env (``ControlEnv``) with its fixed initial states.
 
@@ -58,16 +80,27 @@ class LiberoEnv:
         self.action_low, self.action_high = np.asarray(low), np.asarray(high)
         self.steps = 0
 
-    def reset(self, init_state: int) -> dict[str, np.ndarray]:
+    def reset(self, init_state: int, seed: int = 0) -> dict[str, np.ndarray]:
         """Reset to fixed initial state ``init_state`` (LIBERO's protocol: ``reset()``, then
         ``set_init_state``); returns the observation.
+
+        LIBERO's ``reset()`` places the fixtures (cabinets, racks, the microwave, stoves)
+        anew from its placement samplers, which draw from NumPy's global generator, and
+        writes them into the model; an initial state sets joint positions and velocities
+        only, so it leaves them where the draw put them (millimetres to a centimetre apart).
+        LIBERO's own ``seed()`` seeds that generator before every reset, with
+        ``episode_seeds(seed, init_state)``: an episode's scene no longer depends on what
+        ran before it in the process.
 
         Raises:
             UsageError: ``init_state`` outside ``0 .. INIT_STATES-1``.
         """
         if not 0 <= init_state < INIT_STATES:
             raise UsageError(f"initial state {init_state} is outside 0-{INIT_STATES - 1}")
+        self.env.seed(episode_seeds(seed, init_state)[0])
         self.env.reset()
+        for robot in self.env.env.robots:
+            _reset_grippers(robot.gripper)
         controller = self.env.env.robots[0].controller  # rebuilt by every reset
         if self.controller == CONTROLLER:
             controller.kp = np.full_like(controller.kp, JOINT_KP)

@@ -16,17 +16,12 @@ import numpy as np
 
 from osg_control.control.description import RobotDescription
 from osg_control.control.ik_backends import IKConfig
-from osg_control.libero.controllers import (
-    Context,
-    LegRunner,
-    hold,
-    holding_ok,
-    operator_legs,
-    up,
-)
+from osg_control.libero.controllers import operator_legs
 from osg_control.libero.drive import GRIPPER_OPEN, JointTargetDriver
 from osg_control.libero.facts import holds, perceived_init
+from osg_control.libero.legs import Context, LegRunner, hold, up
 from osg_control.libero.perception import LiberoPercept
+from osg_control.libero.pick_place import holding_ok
 from osg_control.libero.plan import plan_task
 from osg_control.libero.problem import Atom, LiberoProblem
 from osg_control.libero.scene import Scene
@@ -46,7 +41,7 @@ EFFECTS: dict[str, tuple[str, int]] = {
 }  # fmt: skip
 """Operator -> the goal predicate its effect makes true, and how many of its arguments
 that atom takes (``approach``/``retreat`` have no perceived effect; ``pick``'s is
-checked by ``controllers.holding_ok``)."""
+checked by ``pick_place.holding_ok``)."""
 
 
 class PlanExecutor:

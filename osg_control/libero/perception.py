@@ -17,7 +17,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.spatial.transform import Rotation
 
-from osg_control.libero.env import LiberoEnv
+from osg_control.libero.env import LiberoEnv, episode_seeds
 from osg_control.libero.scene import JOINT_HINGE, JOINT_SLIDE, Scene, read_scene
 
 FIXTURE_NOISE: dict[str, float] = {JOINT_SLIDE: 0.005, JOINT_HINGE: 0.02}
@@ -110,8 +110,7 @@ class LiberoPerception:
         """After the env's reset: read the scene's description once, start the sensor's
         noise for ``episode``, and perceive ``obs``."""
         self.scene = read_scene(self.env.env, self.env.problem)
-        seed = int(np.random.SeedSequence([self.seed, episode]).generate_state(1)[0])
-        self._sensor = FixtureSensor(self.env, self.scene, seed)
+        self._sensor = FixtureSensor(self.env, self.scene, episode_seeds(self.seed, episode)[1])
         return self.scene, self.percept(obs)
 
     def percept(self, obs: dict[str, np.ndarray]) -> LiberoPercept:

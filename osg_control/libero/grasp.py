@@ -1,0 +1,137 @@
+"""Where and how the hand grasps an object from above: the grasp point in the object's
+frame (``grip``: across its narrower side, or the slice of it that fits the open hand, or
+a bowl's or mug's rim) and the top-down rotation turned about the vertical to match
+(``grasp_rotation``, ``fingers_along``), all from the percept and the scene's geometry.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.spatial.transform import Rotation
+
+from osg_control.libero.legs import Context
+from osg_control.libero.perception import LiberoPercept
+
+TURN_WINDOW = np.radians(15.0)
+"""How far past a quarter turn from the start a grasp may turn the wrist [rad]."""
+RIM_GRASP = ("bowl", "mug")
+"""Object categories grasped at the rim (their origin is inside them, or they are wider
+than the open hand)."""
+RIM_INSET = 0.012
+"""How far inside the rim's outer radius the TCP closes [m]."""
+ROUND = 1.3
+"""An object whose horizontal sides differ by less than this ratio is grasped unturned."""
+GRASP_ABOVE_ORIGIN = 0.005
+"""The grasp height above an object's origin tried first [m] (2 cm higher missed the flat
+boxes: cream cheese, butter, pudding)."""
+GRIP_WIDTH = 0.07
+"""The widest side the open hand (about 8 cm) closes round with a margin [m]."""
+BAND = 0.02
+"""The least height of an object's part the fingertips close on [m]."""
+FINGER_HALF = 0.012
+"""Half the width of a finger across its sliding direction [m]."""
+GRIP_STEP = 0.005
+"""The spacing of the slices ``grip`` tries [m]."""
+RIM_DEPTH = 0.02
+"""How far below a rim the fingertips close [m]."""
+
+
+def _yaw(rotation: np.ndarray, angle: float) -> np.ndarray:
+    return Rotation.from_rotvec([0.0, 0.0, angle]).as_matrix() @ rotation
+
+
+@dataclass(frozen=True)
+class Grip:
+    """Where the fingers close on an object, in its own frame: the TCP point, and the
+    object axis (0: x, 1: y) they slide along (None: as the hand comes, a round object)."""
+
+    point: np.ndarray
+    axis: int | None
+
+
+def _slab(ctx: Context, obj: str, axis: int, centre: float) -> list[tuple[np.ndarray, np.ndarray]]:
+    """The object's geoms a finger pair sliding along ``axis`` sweeps down through when
+    centred at ``centre`` on the other horizontal axis."""
+    other = 1 - axis
+    return [(lo, hi) for lo, hi in ctx.scene.parts[obj]
+            if lo[other] < centre + FINGER_HALF and hi[other] > centre - FINGER_HALF]  # fmt: skip
+
+
+def grip(ctx: Context, obj: str) -> Grip:
+    """Where to grasp ``obj`` from above: just above its origin across its narrower side
+    when everything the fingers pass on the way down fits between them (``GRIP_WIDTH``);
+    else the slice of the object, along either horizontal axis, that fits with the least
+    width (a moka pot's handle), at the origin's height clamped into that slice."""
+    low, high = ctx.scene.extents[obj]
+    width = high[:2] - low[:2]
+    axis = int(np.argmin(width))
+    default = np.array([0.0, 0.0, GRASP_ABOVE_ORIGIN])
+    if max(width) < ROUND * min(width) and min(width) <= GRIP_WIDTH:
+        return Grip(default, None)
+    candidates = []
+    for a in (axis, 1 - axis):
+        for centre in np.arange(low[1 - a], high[1 - a] + 1e-9, GRIP_STEP):
+            boxes = _slab(ctx, obj, a, float(centre))
+            if not boxes:
+                continue
+            lo_a, hi_a = min(b[0][a] for b in boxes), max(b[1][a] for b in boxes)
+            if hi_a - lo_a > GRIP_WIDTH:
+                continue
+            top, bottom = max(b[1][2] for b in boxes), min(b[0][2] for b in boxes)
+            point = np.zeros(3)
+            point[a], point[1 - a] = (lo_a + hi_a) / 2, centre
+            point[2] = max(bottom + BAND / 2, min(GRASP_ABOVE_ORIGIN, top - BAND / 2))
+            candidates.append((hi_a - lo_a + abs(centre) * 0.1, a, point))
+            if a == axis and abs(centre) < GRIP_STEP / 2 + 1e-9:
+                return Grip(point, a)
+    if not candidates:
+        return Grip(default, axis)
+    _, a, point = min(candidates, key=lambda c: c[0])
+    return Grip(point, a)
+
+
+def grasp_rotation(ctx: Context, percept: LiberoPercept, obj: str) -> np.ndarray:
+    """The top-down grasp turned about the vertical so that the fingers close across the
+    side ``grip`` chose (unturned for a round object)."""
+    if _rim(ctx, obj):  # the hand's long side across the reach: it fits under cabinets
+        return fingers_along(ctx, percept.position(obj) - ctx.base_xy)
+    axis = grip(ctx, obj).axis
+    if axis is None:
+        return ctx.base
+    return fingers_along(ctx, percept.objects[obj][1][:, axis])
+
+
+def fingers_along(ctx: Context, direction: np.ndarray) -> np.ndarray:
+    """The top-down rotation turned about the vertical so that the fingers slide along
+    ``direction``'s horizontal part, by at most a quarter turn (and ``TURN_WINDOW``) from
+    the start's: the wrist keeps clear of its limits. Where both turns are in that window
+    (the fingers are alike), the one nearer the last commanded rotation: a direction near
+    the boundary would otherwise flip the wrist by half a turn between steps."""
+    finger = ctx.base[:, 1]
+    angle = float(np.arctan2(finger[0] * direction[1] - finger[1] * direction[0],
+                             finger[:2] @ direction[:2]))  # fmt: skip
+    turns = [_yaw(ctx.base, a) for a in (angle, angle - np.pi, angle + np.pi)
+             if abs(a) <= np.pi / 2 + TURN_WINDOW]  # fmt: skip
+    return max(turns, key=lambda r: float(np.trace(r.T @ ctx.rotation)))
+
+
+def _rim(ctx: Context, obj: str) -> bool:
+    return any(word in ctx.categories.get(obj, "") for word in RIM_GRASP)
+
+
+def grasp_point(ctx: Context, percept: LiberoPercept, obj: str) -> np.ndarray:
+    """Where the TCP closes on ``obj``: just above its origin, or on a bowl's or mug's rim
+    (on the side away from a handle: the side of the rim further from the box's centre)."""
+    pos, rot = percept.objects[obj]
+    low, high = ctx.scene.extents[obj]
+    if not _rim(ctx, obj):
+        return pos + rot @ grip(ctx, obj).point
+    axis = grasp_rotation(ctx, percept, obj)[:, 1] * np.array([1.0, 1.0, 0.0])
+    axis /= np.linalg.norm(axis)
+    radius = float(min(np.abs(low[:2]).min(), np.abs(high[:2]).min())) - RIM_INSET
+    centre = pos + rot @ ((low + high) / 2)
+    rims = [pos + side * radius * axis for side in (1.0, -1.0)]
+    rim = max(rims, key=lambda p: float(np.linalg.norm((p - centre)[:2])))
+    return np.r_[rim[:2], pos[2] + high[2] - RIM_DEPTH]

@@ -1,0 +1,101 @@
+"""The leg runner and the motion primitives every operator controller is built from: a
+leg moves the TCP to a target recomputed from the current percept each step, with a
+gripper command, until it is near (or a condition holds, or its steps run out). The
+``Context`` is what the controllers of one episode share.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.spatial.transform import Rotation
+
+from osg_control.libero.drive import JointTargetDriver
+from osg_control.libero.perception import LiberoPercept
+from osg_control.libero.scene import Scene
+
+Target = Callable[[LiberoPercept, LiberoPercept], tuple[np.ndarray, np.ndarray | None]]
+"""(percept now, percept when the leg started) -> TCP position and rotation (None: the
+controller's grasp rotation)."""
+TURN_TOLERANCE = 0.1
+"""A leg that names a rotation is reached only within this of it [rad]."""
+HOVER = 0.10
+"""Height above a thing's grasp point the empty hand approaches [m]."""
+
+
+@dataclass(frozen=True)
+class Leg:
+    """One leg: move the TCP to a target with a gripper command until within
+    ``tolerance`` (0: for all ``steps``), or until ``until`` holds, or ``steps`` run out."""
+
+    target: Target
+    gripper: float
+    steps: int
+    tolerance: float = 0.01
+    until: Callable[[LiberoPercept], bool] | None = None
+
+
+@dataclass
+class Context:
+    """What every controller of an episode shares: the scene, the IK driver, the top-down
+    rotation of the episode's start (``base``, which fixture controllers use), the last
+    commanded rotation (``rotation``: a leg that names none keeps it), the home height,
+    the objects' categories and where the arm's base stands (``base_xy``)."""
+
+    scene: Scene
+    driver: JointTargetDriver
+    base: np.ndarray
+    home_z: float
+    categories: dict[str, str]
+    base_xy: np.ndarray
+
+    def __post_init__(self) -> None:
+        self.rotation = self.base
+
+
+class LegRunner:
+    """Runs legs in order; ``act`` returns the next action, or None when all are done."""
+
+    def __init__(self, legs: list[Leg], context: Context) -> None:
+        self.legs, self.context = legs, context
+        self.index, self.steps = 0, 0
+        self.start: LiberoPercept | None = None
+
+    def act(self, percept: LiberoPercept) -> np.ndarray | None:
+        """The next JOINT_POSITION action, or None when the last leg is done."""
+        while self.index < len(self.legs):
+            leg = self.legs[self.index]
+            if self.start is None:
+                self.start = percept
+            pos, rot = leg.target(percept, self.start)
+            near = leg.tolerance > 0 and np.linalg.norm(percept.tcp - pos) < leg.tolerance
+            if near and rot is not None:  # a leg that turns the hand also waits for the turn
+                _, now = self.context.driver.tcp_pose(percept.joints)
+                near = Rotation.from_matrix(now.T @ rot).magnitude() < TURN_TOLERANCE
+            stop = leg.until is not None and leg.until(percept)
+            if not (near or stop) and self.steps < leg.steps:
+                self.steps += 1
+                if rot is not None:
+                    self.context.rotation = rot
+                return self.context.driver.action(
+                    percept.joints, pos, self.context.rotation, leg.gripper
+                )
+            self.index, self.steps, self.start = self.index + 1, 0, None
+        return None
+
+
+def here(offset: tuple[float, float, float]) -> Target:
+    """The point ``offset`` from where the TCP was when the leg started; no rotation."""
+    return lambda now, start: (start.tcp + offset, None)
+
+
+def hold(gripper: float, steps: int) -> Leg:
+    """Stay where the leg starts, commanding the gripper, for ``steps``."""
+    return Leg(here((0.0, 0.0, 0.0)), gripper, steps, 0.0)
+
+
+def up(height: float, gripper: float) -> Leg:
+    """Straight up ``height`` from where the leg starts, commanding the gripper."""
+    return Leg(here((0.0, 0.0, height)), gripper, 30, 0.02)

@@ -1,0 +1,180 @@
+"""Controllers for moving objects: ``approach`` and ``retreat`` (hover above a thing, go
+up to the home height), ``pick`` / ``pick-out`` (down to the grasp point, close, lift)
+and ``place-on`` / ``place-in`` (over a spot, lower the held object until its bottom is
+``DROP`` above the surface, open, up), and ``holding_ok``, a pick's effect perceived.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from scipy.spatial.transform import Rotation
+
+from osg_control.libero.drive import GRIPPER_CLOSED, GRIPPER_OPEN
+from osg_control.libero.facts import held, region_pose
+from osg_control.libero.fixtures import door_point
+from osg_control.libero.grasp import grasp_point, grasp_rotation
+from osg_control.libero.legs import HOVER, Context, Leg, hold, up
+from osg_control.libero.perception import LiberoPercept
+
+TURN_FIRST = 0.4
+"""A hand that must turn more than this [rad] to grasp turns where it is, at least at
+the home height, before it moves (turning on the way swung the arm into the object)."""
+TOP_CLEARANCE = 0.05
+"""Height above an object's top the empty hand hovers at least [m] (a standing book)."""
+CARRY = 0.30
+"""Height above the target the held object's origin is carried to [m] (a hanging bottle
+clears a basket's rim)."""
+LIFT = 0.12
+"""How far a pick lifts before checking the object came with the hand [m]."""
+DROP = 0.02
+"""Height of the held object's bottom above the surface when released [m]."""
+CLEARANCE = 0.02
+"""The gap between footprints a place on a region's top keeps where it can [m]."""
+EDGE_MARGIN = 0.01
+"""How far inside a region's footprint an object is set down at most [m]."""
+
+
+def anchor(ctx: Context, percept: LiberoPercept, thing: str) -> np.ndarray:
+    """The point the hand approaches: an object's grasp point, a region's centre, a
+    drawer's handle, a knob, or a door's push point."""
+    scene = ctx.scene
+    if thing in percept.objects:
+        return grasp_point(ctx, percept, thing)
+    joints = [scene.joints[j] for j in scene.articulated.get(thing, ())]
+    if thing in scene.knobs:
+        return scene.knobs[thing]
+    if thing in scene.leaves:
+        return door_point(ctx, percept, thing, joints[0], percept.joint(joints[0].name))
+    if thing in scene.regions:
+        return region_pose(scene, percept, thing)[0]
+    raise KeyError(f"nothing to approach named {thing!r}")
+
+
+def _carried_offset(percept: LiberoPercept, obj: str | None) -> np.ndarray:
+    """TCP minus the held object's origin (zero when nothing is held)."""
+    return np.zeros(3) if obj is None else percept.tcp - percept.position(obj)
+
+
+def approach(ctx: Context, thing: str, holding: str | None) -> list[Leg]:
+    """Hover above ``thing``; with an object in hand, its origin ``CARRY`` above it."""
+
+    def target(now: LiberoPercept, start: LiberoPercept) -> tuple[np.ndarray, np.ndarray | None]:
+        point = anchor(ctx, now, thing)
+        if holding is None and thing in now.objects:  # above the object's top
+            top = now.position(thing)[2] + ctx.scene.extents[thing][1][2]
+            hover = np.r_[point[:2], max(point[2] + HOVER, top + TOP_CLEARANCE)]
+            turn = grasp_rotation(ctx, now, thing)
+            _, rot = ctx.driver.tcp_pose(now.joints)
+            if Rotation.from_matrix(rot.T @ turn).magnitude() > TURN_FIRST:  # turn in place
+                return np.r_[start.tcp[:2], max(start.tcp[2], ctx.home_z)], turn
+            return hover, turn
+        if holding is None:
+            return point + np.array([0.0, 0.0, HOVER]), ctx.base
+        return point + np.array([0.0, 0.0, CARRY]) + _carried_offset(now, holding), None
+
+    gripper = GRIPPER_OPEN if holding is None else GRIPPER_CLOSED
+    fine = holding is None and thing in ctx.categories  # the pick that follows descends
+    return [Leg(target, gripper, 90, 0.008 if fine else 0.02)]
+
+
+def retreat(ctx: Context, holding: str | None) -> list[Leg]:
+    """Straight up to the home height (at least 5 cm)."""
+
+    def target(now: LiberoPercept, start: LiberoPercept) -> tuple[np.ndarray, None]:
+        return np.r_[start.tcp[:2], max(ctx.home_z, start.tcp[2] + 0.05)], None
+
+    return [Leg(target, GRIPPER_OPEN if holding is None else GRIPPER_CLOSED, 40, 0.02)]
+
+
+def pick(ctx: Context, obj: str) -> list[Leg]:
+    """Over the grasp point first (``approach``'s hover: nothing to do when the approach
+    got there; an approach that ran out of steps made the descent sweep sideways into the
+    object), then down to it, close, lift ``LIFT``."""
+    return approach(ctx, obj, None) + [
+        Leg(
+            lambda now, start: (grasp_point(ctx, now, obj), grasp_rotation(ctx, now, obj)),
+            GRIPPER_OPEN,
+            40,
+            0.008,
+        ),
+        hold(GRIPPER_CLOSED, 12),
+        up(LIFT, GRIPPER_CLOSED),
+    ]
+
+
+def _surface(
+    ctx: Context, percept: LiberoPercept, target: str, inside: bool, held_obj: str
+) -> np.ndarray:
+    """The point the held object ``held_obj`` is set down over: an object's top centre, a
+    region's floor centre (``in``) or a free spot of its top (``on``, ``_free_spot``)."""
+    if target in percept.objects:
+        pos, _ = percept.objects[target]
+        return pos + np.array([0.0, 0.0, ctx.scene.extents[target][1][2]])
+    pos, mat = region_pose(ctx.scene, percept, target)
+    half = np.abs(mat @ ctx.scene.regions[target].size)
+    if not inside:
+        pos = _free_spot(ctx, percept, pos, half[:2], held_obj)
+    return pos + np.array([0.0, 0.0, -half[2] if inside else half[2]])
+
+
+def _footprint(ctx: Context, percept: LiberoPercept, obj: str) -> np.ndarray:
+    """An object's perceived footprint: the world xy box (lower, upper) round its
+    collision geometry (a moka pot's handle included)."""
+    pos, rot = percept.objects[obj]
+    low, high = ctx.scene.extents[obj]
+    corners = np.array([[x, y, z] for x in (low[0], high[0]) for y in (low[1], high[1])
+                        for z in (low[2], high[2])])  # fmt: skip
+    world = pos[:2] + (corners @ rot.T)[:, :2]
+    return np.array([world.min(axis=0), world.max(axis=0)])
+
+
+def _free_spot(
+    ctx: Context, percept: LiberoPercept, centre: np.ndarray, half: np.ndarray, held_obj: str
+) -> np.ndarray:
+    """Where on a region's top to set ``held_obj`` down: its centre when it would stand
+    ``CLEARANCE`` clear of every other object's footprint there, else the point of the
+    region's footprint (less ``EDGE_MARGIN``) whose footprint stands clearest of them (up to
+    ``CLEARANCE``), the nearest the centre among equals (the second moka pot on a stove)."""
+    own = _footprint(ctx, percept, held_obj) - percept.position(held_obj)[:2]
+    others = [_footprint(ctx, percept, o) for o in percept.objects if o != held_obj]
+
+    def clearance(spot: np.ndarray) -> float:
+        box = own + spot
+        gaps = [float(np.max(np.maximum(o[0] - box[1], box[0] - o[1]))) for o in others]
+        return min([CLEARANCE, *gaps])
+
+    if clearance(centre[:2]) >= CLEARANCE:
+        return centre
+    reach = np.maximum(half - EDGE_MARGIN, 0.0)
+    grid = np.linspace(-1.0, 1.0, 9)
+    spots = [centre[:2] + reach * (a, b) for a in grid for b in grid]
+    best = max(spots, key=lambda s: (clearance(s), -float(np.linalg.norm(s - centre[:2]))))
+    return np.r_[best, centre[2]]
+
+
+def place(ctx: Context, obj: str, target: str, inside: bool) -> list[Leg]:
+    """Over the spot at the height ``obj`` was carried in (``_surface``: an object's top, a
+    region's floor or a free spot of its top), lower until its bottom is ``DROP`` above
+    the surface, open, up."""
+
+    chosen: list[np.ndarray] = []  # the spot, decided once: a swinging load moved it
+
+    def down(now: LiberoPercept, start: LiberoPercept) -> tuple[np.ndarray, None]:
+        if not chosen:
+            chosen.append(_surface(ctx, now, target, inside, obj))
+        surface = chosen[0]
+        bottom = ctx.scene.extents[obj][0][2]  # the object's bottom below its origin
+        origin = surface + np.array([0.0, 0.0, DROP - bottom])
+        return origin + _carried_offset(now, obj), None
+
+    def over(now: LiberoPercept, start: LiberoPercept) -> tuple[np.ndarray, None]:
+        point, _ = down(now, start)  # at the carrying height first: nothing swept
+        return np.r_[point[:2], max(point[2], start.tcp[2])], None
+
+    return [Leg(over, GRIPPER_CLOSED, 30, 0.01), Leg(down, GRIPPER_CLOSED, 40, 0.01),
+            hold(GRIPPER_OPEN, 10), up(0.08, GRIPPER_OPEN)]  # fmt: skip
+
+
+def holding_ok(ctx: Context, percept: LiberoPercept, obj: str, start_z: float) -> bool:
+    """A pick's effect, perceived: the object is held and came up with the hand."""
+    return held(ctx.scene, percept, obj) and percept.position(obj)[2] > start_z + 0.04
