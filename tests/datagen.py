@@ -9,7 +9,10 @@ import numpy as np
 from osg_control.data.datasets import Episode, write_episodes
 from osg_control.domain.spaces import ACTION_DIM, OBS_DIM
 from osg_control.kitchen.skills import get_skill
-from osg_control.kitchen.world import WORLD_FIELDS
+from osg_control.kitchen.world import world_fields
+
+WORLD_FIELDS = world_fields()
+"""The one-cube kitchen's world vector fields, the valve's place included."""
 
 
 def synthetic_episode(steps: int = 6, success: bool = True, seed: int = 0) -> Episode:
@@ -26,7 +29,7 @@ def synthetic_episode(steps: int = 6, success: bool = True, seed: int = 0) -> Ep
         rewards=rewards,
         terminations=rewards > 0,
         truncations=truncations,
-        world_states=np.zeros((steps, 11), dtype=np.float32),
+        world_states=np.zeros((steps, len(WORLD_FIELDS)), dtype=np.float32),
     )
 
 
