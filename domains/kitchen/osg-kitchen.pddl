@@ -11,7 +11,7 @@
     (:action grab-cube
         :parameters (?c - cube)
         :precondition (and (at-object above-cube ?c) (on-counter ?c) (hand-empty))
-        :effect (and (holding ?c) (not (hand-empty)) (at-object cube-grasped ?c) (not (at-object above-cube ?c)) (increase (total-cost) 57))
+        :effect (and (holding ?c) (not (hand-empty)) (at-object cube-grasped ?c) (not (at-object above-cube ?c)) (increase (total-cost) 51))
     )
      (:action grab-handle
         :parameters (?d - door)
