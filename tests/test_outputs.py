@@ -18,9 +18,8 @@ from osg_control.data.datasets import write_episodes
 from osg_control.domain.registry import get_domain
 from osg_control.errors import EXIT_CODES, OutputError
 from osg_control.io_safety import atomic_write, check_output_dir
-from tests.datagen import WORLD_FIELDS
 from osg_control.paths import PACKAGE_DIR
-from tests.datagen import synthetic_episode
+from tests.datagen import WORLD_FIELDS, synthetic_episode
 from tests.test_classifier import write_movement_datasets
 
 KITCHEN = get_domain("kitchen")
