@@ -67,7 +67,7 @@ def test_skill_failures_reads_the_truth_of_table_i_episodes() -> None:
     warm = _report("tools/skill_failures.py", "--skill", "push-valve-open", "--episodes", "3",
                    "--filter", "--warm-readings", "4", "--workers", "1")  # fmt: skip
     assert warm["warm_readings"] == 4 and warm["filter_gain"] == 0.2
-    assert warm["frame_error_succeeded"] is None  # the valve's skills act in the world frame
+    assert warm["frame_error_succeeded"] == 0.0  # the valve's frame, read exactly (paper)
     assert all(f["steps"] <= 80 and not f["success"] for f in warm["failures"])
     assert 0.0 <= warm["success"] <= 1.0 and len(warm["failures"]) <= 3
 
