@@ -14,7 +14,7 @@ simulator's truth is for scoring the result, outside.
    node, over the skill graph's costs (``round(-ln p * 1000)`` of the measured rates);
 2. each option runs its policy until its termination condition beta holds (the skill's
    success predicate), its step budget runs out, or a precondition it keeps and the domain
-   watches (``Domain.watched_facts``, e.g. a grasp) is lost for ``GRASP_GRACE_STEPS``
+   watches (``Domain.watched_facts``, e.g. a grasp) is lost for ``option.GRASP_GRACE_STEPS``
    steps; the joints are reset between skills;
 3. on a failure (timeout, lost grasp, or the expected effect missing from the perceived
    facts) the state is re-read, re-classified and re-planned, up to ``max_replans`` times.
@@ -42,19 +42,24 @@ from osg_control.domain.binding import BoundSkill, bind_step
 from osg_control.domain.contract import SkillEnv
 from osg_control.domain.frames import (
     Offsets,
-    in_skill_frame,
     node_position,
-    skill_offset,
 )
 from osg_control.domain.spec import SkillSpec
 from osg_control.environment.arm_env import GRIPPER_OPEN_CMD, EnvConfig
-from osg_control.environment.success import success_holds
 from osg_control.errors import SimulationError
 from osg_control.execution import MAX_REPLANS
 from osg_control.execution.entry import EntryChoice
 from osg_control.execution.goals import parse_goal
 from osg_control.execution.locate import node_at
 from osg_control.execution.objects import ObjectTracker
+from osg_control.execution.option import (
+    EPISODE_ENDED,
+    GRIPPER_OPEN_STEPS,
+    TIME_LIMIT,
+    OptionRun,
+    open_gripper,
+    run_option,
+)
 from osg_control.execution.results import (
     EntryClassifier,
     ExecutionResult,
@@ -65,23 +70,6 @@ from osg_control.perception.spec import PerceptionSpec
 from osg_control.planning.api import graph_domain
 from osg_control.planning.graph import SkillGraph
 from osg_control.planning.memo import PlanMemo
-
-TIME_LIMIT = "the env's episode time limit was reached"
-"""The failure of a skill whose env step came back truncated (e.g. a gymnasium
-``TimeLimit``): the episode is over, so the execution ends without replanning."""
-EPISODE_ENDED = "the env ended its episode"
-"""The failure of a step sequence cut short because the env's episode is over
-(``env.episode_over``: a step came back terminated, e.g. FrankaKitchen's tasks all done, or
-truncated): by Gymnasium's protocol no further step is taken, so the execution ends there
-and succeeds if its goal facts hold."""
-
-GRASP_GRACE_STEPS = 5
-"""Steps a watched fact may be false before the skill is stopped (a grasp's contact may
-flicker for a few steps in the offline data)."""
-
-
-GRIPPER_OPEN_STEPS = 5
-"""Control steps that open an empty but closed gripper in place."""
 
 
 def task_env_config(perception: PerceptionSpec) -> EnvConfig:
@@ -215,71 +203,13 @@ class Executor:
         tracker: TcpTracker | None = None,
         objects: ObjectTracker | None = None,
     ) -> tuple[SkillOutcome, np.ndarray]:
-        """Run one option until beta holds on the percepts, its step budget runs out or it
-        loses a watched precondition (``Domain.watched_facts``) from the perceived facts.
-
-        ``skill``: a spec (run as written: its recorded binding) or a plan step's bound
-        skill: the lifted skill's policy in its bound object's frame, its facts and
-        watched preconditions those of its objects (which cube is held).
-        ``tracker``, if given, turns each observation into the policy's input and into the
-        TCP position beta is checked on; it reads every observation and is told every
-        action of the skill. ``objects`` estimates where the objects are from every percept
-        (default: a new one); a skill acting in an object's frame sees the TCP relative to
-        it and ends where it is (``domain.frames``).
-        """
+        """Run one option (``option.run_option``) with this executor's policy for it,
+        telling its motion memory every command and ``on_step`` every env step."""
         bound = skill if isinstance(skill, BoundSkill) else BoundSkill(skill)
-        recorded, skill = self.skills[bound.skill.name], bound.skill
-        policy = self.policies[skill.name]
-        end = self.domain.nodes[skill.end]
-        if objects is None:
-            objects = ObjectTracker(self.domain, perception=env.perception)
-            objects.update(env.percept())
-        kept = (recorded.preconditions - recorded.del_effects) & self.domain.watched_facts
-        watched = {bound.fact(fact) for fact in kept}
-        started = time.perf_counter()
-        lost_steps = 0
-        for step in range(1, skill.max_steps + 1):
-            seen = obs if tracker is None else tracker.read(obs)
-            offset = skill_offset(self.domain, skill, bound.offsets(objects.offsets()))
-            action = policy(in_skill_frame(seen, offset))
-            if tracker is not None:
-                tracker.acted(action)
-            self.motion.commanded(action)
-            obs, _reward, terminated, truncated, info = env.step(action)
-            if self.on_step is not None:
-                self.on_step(env)
-            if "failure" in info:
-                return SkillOutcome(
-                    skill.name, False, step, time.perf_counter() - started, failure=info["failure"]
-                ), obs
-            percept = env.percept()
-            objects.update(percept)
-            position = (percept.state if tracker is None else tracker.read(obs))[:3]
-            goal = node_position(self.domain.nodes, end.name, bound.offsets(objects.offsets()))
-            if success_holds(skill, end, position, percept.state[7], percept.facts, goal):
-                return SkillOutcome(skill.name, True, step, time.perf_counter() - started), obs
-            ended = _episode_end(terminated, truncated)
-            if ended:
-                return SkillOutcome(
-                    skill.name, False, step, time.perf_counter() - started, failure=ended
-                ), obs
-            lost = watched - percept.facts
-            lost_steps = lost_steps + 1 if lost else 0
-            if lost_steps >= GRASP_GRACE_STEPS:
-                return SkillOutcome(
-                    skill.name,
-                    False,
-                    step,
-                    time.perf_counter() - started,
-                    failure=f"precondition {sorted(lost)} lost",
-                ), obs
-        return SkillOutcome(
-            skill.name,
-            False,
-            skill.max_steps,
-            time.perf_counter() - started,
-            failure=f"timeout after {skill.max_steps} steps",
-        ), obs
+        return run_option(
+            OptionRun(self.domain, self.policies[bound.skill.name], self.motion, self.on_step),
+            env, bound, obs, tracker, objects,
+        )  # fmt: skip
 
     def execute(
         self,
@@ -318,7 +248,7 @@ class Executor:
                 result.success = True
                 break
             if self.domain.hand_empty in facts and obs[7] != GRIPPER_OPEN_CMD:
-                obs, result.failure = _open_gripper(env)
+                obs, result.failure = open_gripper(env)
                 self.motion.still(GRIPPER_OPEN_STEPS)
                 if result.failure:
                     if not is_divergence(result.failure):  # the env's episode is over
@@ -413,29 +343,6 @@ class Executor:
 
 OUTCOME_EVENT = ("skill", "success", "steps", "failure")
 """The ``SkillOutcome`` fields an ``outcome`` event carries."""
-
-
-def _open_gripper(env: SkillEnv, steps: int = GRIPPER_OPEN_STEPS) -> tuple[np.ndarray, str | None]:
-    """Open an empty but closed gripper in place (recovery before a movement skill, whose
-    termination needs it open); returns the observation and a divergence, or the env's
-    episode ending (no step is taken after it), if any."""
-    obs = env.observe()
-    for _ in range(steps):
-        obs, _reward, terminated, truncated, info = env.step(
-            np.array([0.0, 0.0, 0.0, 0.0, 0.0, 0.0, GRIPPER_OPEN_CMD])
-        )
-        failure = info.get("failure") or _episode_end(terminated, truncated)
-        if failure:
-            return obs, f"opening the gripper: {failure}"
-    return obs, None
-
-
-def _episode_end(terminated: bool, truncated: bool) -> str | None:
-    """The failure of a step that ended the env's episode (``TIME_LIMIT`` when truncated),
-    else None: by Gymnasium's protocol no step may follow it."""
-    if truncated:
-        return TIME_LIMIT
-    return EPISODE_ENDED if terminated else None
 
 
 def _check_observation(obs: Any, env: SkillEnv) -> None:
