@@ -363,7 +363,7 @@ def _train_argv(tmp: Path, out: Path) -> list[str]:
 
 
 SIZED_COMMANDS = {
-    "collect": (_collect_argv, lambda: collection_bytes(KITCHEN, [KITCHEN.skill(FAST_SKILL)], 3)),
+    "collect": (_collect_argv, lambda: collection_bytes(KITCHEN, [(KITCHEN.skill(FAST_SKILL), 3)])),
     "train": (_train_argv, lambda: checkpoint_bytes(TD3BCConfig(), 1)),
 }
 """Commands whose output size is known up front: (argv, the bytes they need)."""
@@ -395,7 +395,7 @@ def test_the_size_estimates_bound_what_is_written(tmp_path):
     skill = KITCHEN.skill(FAST_SKILL)
     data = collect_skill(KITCHEN, skill, 4, 0, tmp_path, progress=False)
     # the merged file and the chunks of the skill in progress exist together
-    assert 2 * data.path.stat().st_size <= collection_bytes(KITCHEN, [skill], 4)
+    assert 2 * data.path.stat().st_size <= collection_bytes(KITCHEN, [(skill, 4)])
     shipped = KITCHEN.defaults_dir / "skills"
     for weights in shipped.glob("*.safetensors"):
         written = weights.stat().st_size + weights.with_suffix(".json").stat().st_size

@@ -21,6 +21,7 @@ def _fake_run(tmp_path, domain, steps=300, seed=0):
             "seed": seed,
             "skill_spec": json.loads(skill.to_json()),
             "dataset_sha256": sha256_file(path),
+            "train_config": {"obs_noise": domain.recipe(skill.name).obs_noise},
         }
         (skills / f"{skill.name}.json").write_text(json.dumps(sidecar))
         (skills / f"{skill.name}.safetensors").write_bytes(b"weights")
@@ -55,7 +56,8 @@ def _stopped_early(skills, domain, rule, budget) -> None:
         path = skills / f"{skill.name}.json"
         sidecar = json.loads(path.read_text())
         sidecar["steps"] = 3000  # the kept weights' updates, not the budget
-        sidecar["train_config"] = {"early_stopping": {"rule": rule, "max_updates": budget}}
+        stopped = {"early_stopping": {"rule": rule, "max_updates": budget}}
+        sidecar["train_config"] = {**sidecar["train_config"], **stopped}
         path.write_text(json.dumps(sidecar))
 
 
@@ -72,16 +74,25 @@ def test_early_stopped_checkpoints_are_kept_only_under_the_same_rule_and_budget(
     assert untrained_skills(domain, data, skills, 3000, 0) == everything
 
 
-def test_a_checkpoint_trained_with_observation_noise_is_retrained(tmp_path) -> None:
-    """``osg reproduce`` trains without ``--obs-noise``: such a checkpoint is not its own."""
+def test_a_checkpoint_trained_with_other_observation_noise_than_its_recipe_is_retrained(
+    tmp_path,
+) -> None:
+    """``osg reproduce`` trains each skill with its recipe's noise (``Domain.recipe``: 0 for
+    most, 1 cm for grab-cube): a checkpoint with another is not its own."""
     domain = get_domain("kitchen")
+    assert domain.recipe("grab-cube").obs_noise == 0.01
     data, skills = _fake_run(tmp_path, domain)
-    first = domain.skills[0].name
-    path = skills / f"{first}.json"
-    sidecar = json.loads(path.read_text())
-    sidecar["train_config"] = {"obs_noise": 0.01}
+    plain = domain.skills[0].name
+    assert domain.recipe(plain).obs_noise == 0.0
+    for name, other, own in ((plain, 0.01, 0.0), ("grab-cube", 0.0, 0.01)):
+        path = skills / f"{name}.json"
+        sidecar = json.loads(path.read_text())
+        sidecar["train_config"] = {"obs_noise": other}
+        path.write_text(json.dumps(sidecar))
+        assert untrained_skills(domain, data, skills, 300, 0) == [name]
+        sidecar["train_config"] = {"obs_noise": own}
+        path.write_text(json.dumps(sidecar))
+        assert untrained_skills(domain, data, skills, 300, 0) == []
+    del sidecar["train_config"]  # none recorded: trained before the field, without noise
     path.write_text(json.dumps(sidecar))
-    assert untrained_skills(domain, data, skills, 300, 0) == [first]
-    sidecar["train_config"] = {"obs_noise": 0.0}  # recorded, but none
-    path.write_text(json.dumps(sidecar))
-    assert untrained_skills(domain, data, skills, 300, 0) == []
+    assert untrained_skills(domain, data, skills, 300, 0) == ["grab-cube"]

@@ -300,7 +300,27 @@ def test_observation_noise_perturbs_only_the_tcp_position(tmp_path: Path) -> Non
         assert not torch.equal(drawn, n.next_observations - p.next_observations)  # independent
 
 
-@pytest.mark.parametrize("bad", [-0.01, float("nan"), float("inf")])
-def test_observation_noise_must_be_a_finite_std(tmp_path: Path, bad: float) -> None:
+def test_observation_noise_per_skill_leaves_a_noiseless_skill_as_without_noise(
+    tmp_path: Path,
+) -> None:
+    """One noise per skill (``Domain.recipe``): a skill with none samples exactly what it
+    samples with none for every skill, one with some exactly what it samples with that for
+    every skill."""
+    data = [toy_data(tmp_path), toy_data(tmp_path, OTHER_SKILL, seed=1)]
+    seeds, sigma = [3, 4], 0.02
+    plain, noisy = BatchedReplay(data, 512, seeds), BatchedReplay(data, 512, seeds, obs_noise=sigma)
+    mixed = BatchedReplay(data, 512, seeds, obs_noise=[0.0, sigma])
+    for _ in range(2):
+        p, n, m = plain.sample(), noisy.sample(), mixed.sample()
+        for field in dataclasses.fields(p):
+            assert torch.equal(getattr(m, field.name)[0], getattr(p, field.name)[0])
+            assert torch.equal(getattr(m, field.name)[1], getattr(n, field.name)[1])
+    with pytest.raises(ValueError, match="one obs_noise per skill"):
+        BatchedReplay(data, 8, seeds, obs_noise=[0.01])
+
+
+@pytest.mark.parametrize("bad", [-0.01, float("nan"), float("inf"), [0.0, -0.01]])
+def test_observation_noise_must_be_a_finite_std(tmp_path: Path, bad: float | list[float]) -> None:
     with pytest.raises(ValueError, match="obs_noise"):
-        BatchedReplay([toy_data(tmp_path)], 8, [0], obs_noise=bad)
+        data = toy_data(tmp_path)
+        BatchedReplay([data, data], 8, [0, 1], obs_noise=bad)

@@ -121,7 +121,6 @@ def add_randomize_argument(parser: argparse.ArgumentParser) -> None:
     )
 
 
-
 def perception_of(
     args: argparse.Namespace, domain: Domain, default_noise: float = 0.0
 ) -> PerceptionSpec:

@@ -18,7 +18,7 @@ from osg_control.io_safety import check_output_dir
 from osg_control.json_files import dump_json
 from osg_control.parallel import open_executor
 from osg_control.paths import cache_dir
-from osg_control.pipeline.collect import collection_bytes
+from osg_control.pipeline.collect import collection_bytes, skill_episodes
 
 
 def register(subparsers: argparse._SubParsersAction) -> None:
@@ -27,7 +27,11 @@ def register(subparsers: argparse._SubParsersAction) -> None:
         "collect", help="record scripted noisy episodes (Algorithm 1), one HDF5 file per skill"
     )
     collect.add_argument("--skill", default="all", help="a skill name, or 'all' (default)")
-    collect.add_argument("--episodes", type=int, default=DEFAULT_EPISODES)
+    collect.add_argument(
+        "--episodes", type=int, default=None,
+        help=f"episodes per skill (default: {DEFAULT_EPISODES}, times the skill's training "
+        "recipe's factor: grab-cube collects twice as many)",
+    )  # fmt: skip
     collect.add_argument("--workers", type=int, default=2)
     add_backend_arguments(collect)
     collect.add_argument("--seed", type=int, default=0)
@@ -48,17 +52,21 @@ def run_collect(args: argparse.Namespace) -> int:
     """Collect the requested skills and print their scripted success rates."""
     domain = domain_of(args)
     skills = list(domain.skills) if args.skill == "all" else [domain.skill(args.skill)]
+    default = args.episodes is None
+    counts = [
+        (s, skill_episodes(domain, s, DEFAULT_EPISODES) if default else args.episodes)
+        for s in skills
+    ]
     out = check_output_dir(
-        args.out or cache_dir() / domain.ref / "data",
-        "data folder",
-        collection_bytes(domain, skills, args.episodes),
-    )
+        args.out or cache_dir() / domain.ref / "data", "data folder",
+        collection_bytes(domain, counts),
+    )  # fmt: skip
     rows = []
     with open_executor(args.backend, args.workers, args.address) as executor:
-        for skill in skills:
+        for skill, episodes in counts:
             started = time.perf_counter()
             dataset = collect_skill(
-                domain, skill, args.episodes, args.seed, out, executor, not args.json
+                domain, skill, episodes, args.seed, out, executor, not args.json
             )
             summary = dataset_summary(dataset)
             summary["seconds"] = round(time.perf_counter() - started, 2)

@@ -77,11 +77,11 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     parser.add_argument(
         "--obs-noise",
         type=float,
-        default=0.0,
+        default=None,
         metavar="SIGMA",
         help="std [m] of Gaussian noise added to the TCP position of every sampled "
-        "observation, so the policy learns from readings as noisy as at run time (default 0: "
-        "the data as recorded)",
+        "observation, so the policy learns from readings as noisy as at run time (default: "
+        "each skill's training recipe's, 0 for most: the data as recorded)",
     )
     add_early_stop_arguments(parser)
     parser.add_argument("--json", action="store_true", help="print the summary as JSON")

@@ -29,7 +29,7 @@ from osg_control.domain.spaces import (
     observation_bounds,
     unbounded_observation,
 )
-from osg_control.domain.spec import Node, ObjectFrame, SkillSpec
+from osg_control.domain.spec import Node, ObjectFrame, SkillSpec, TrainingRecipe
 from osg_control.domain.validation import fact_fields, validate_domain
 from osg_control.errors import DomainError, PlanningError, SkillSpecError, lookup
 from osg_control.perception.spec import SIMULATED_PERCEPTIONS
@@ -174,6 +174,9 @@ class Domain:
         counts: the object counts it was built with by ``with_counts`` (empty: its own
             scene); part of its ``ref``. Its tasks of other counts are checked and run in
             the domain of theirs (``for_task``).
+        training: skill name -> how its weights are made where that departs from a run's
+            defaults (``spec.TrainingRecipe``: more episodes, training noise); read by
+            ``osg reproduce`` and ``osg train``.
     """
 
     name: str
@@ -209,6 +212,7 @@ class Domain:
     fact_atoms: tuple[FactAtom, ...] = ()
     scaled: Callable[[Mapping[str, int]], Domain] | None = None
     counts: tuple[tuple[str, int], ...] = ()
+    training: Mapping[str, TrainingRecipe] = field(default_factory=dict)
     skills_by_name: dict[str, SkillSpec] = field(init=False, repr=False, compare=False)
     lifting: Lifting = field(init=False, repr=False, compare=False)
     """The lifted view of its declarations (``domain.lifted``)."""
@@ -344,6 +348,10 @@ class Domain:
         counts = ",".join(f"{kind}={n}" for kind, n in self.counts)
         name = f"{self.name}[{counts}]" if counts else self.name
         return name if self.robot_is_default else f"{name}@{self.robot}"
+
+    def recipe(self, name: str) -> TrainingRecipe:
+        """How skill ``name``'s weights are made (``training``; the defaults if unsaid)."""
+        return self.training.get(self.skill(name).name, TrainingRecipe())
 
     def skill(self, name: str) -> SkillSpec:
         """Look a skill up by name.

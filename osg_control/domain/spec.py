@@ -14,6 +14,7 @@ lists its nodes, facts and skills with these types.
 from __future__ import annotations
 
 import json
+import math
 import re
 from collections.abc import Iterable, Mapping
 from dataclasses import asdict, dataclass, field
@@ -137,6 +138,29 @@ class ScriptParams:
     noise_mean: float = 0.0
     noise_std: float = 0.01
     steps_per_waypoint: int = 20
+
+
+@dataclass(frozen=True)
+class TrainingRecipe:
+    """How a skill's shipped weights are made where they depart from a run's defaults, so
+    ``osg reproduce`` and ``osg train`` make them the same way (``Domain.training``).
+
+    Attributes:
+        episodes_factor: the skill collects this many times the run's episodes per skill.
+        obs_noise: std [m] of the training noise on the sampled TCP position
+            (``TD3BCConfig.obs_noise``): for a skill that acts within a few steps of its
+            start, before a filtered reading settles.
+    """
+
+    episodes_factor: int = 1
+    obs_noise: float = 0.0
+
+    def __post_init__(self) -> None:
+        if not (isinstance(self.episodes_factor, int) and self.episodes_factor >= 1):
+            raise ValueError(f"episodes_factor must be a whole number >= 1, got "
+                             f"{self.episodes_factor!r}")  # fmt: skip
+        if not (math.isfinite(self.obs_noise) and self.obs_noise >= 0):
+            raise ValueError(f"obs_noise must be finite and >= 0 [m], got {self.obs_noise!r}")
 
 
 @dataclass(frozen=True)

@@ -44,6 +44,9 @@ def validate_domain(domain: Domain) -> None:
     duplicates = sorted({n for n in names if names.count(n) > 1})
     if duplicates:
         raise DomainError(f"{where}: field 'skills' has duplicate names {duplicates}")
+    unknown = sorted(set(domain.training) - set(names))
+    if unknown:
+        raise DomainError(f"{where}: field 'training' names unknown skills {unknown}")
     for node_name, node in domain.nodes.items():
         if node.name != node_name:
             raise DomainError(f"{where}: field 'nodes' key {node_name!r} names {node.name!r}")

@@ -21,7 +21,7 @@ from osg_control.kitchen.objects import (
 )
 from osg_control.kitchen.paper import PUBLISHED
 from osg_control.kitchen.scene import ROBOT_MOUNTS
-from osg_control.kitchen.skills import NODES, SKILLS
+from osg_control.kitchen.skills import NODES, SKILLS, TRAINING
 from osg_control.kitchen.tasks import DEFAULT_WORLD, KITCHEN_TASKS
 from osg_control.kitchen.world import world_facts, world_fields, world_state_from_array
 from osg_control.paths import PACKAGE_DIR
@@ -97,6 +97,7 @@ def kitchen_domain(cubes: int = 1) -> Domain:
         nodes=NODES,
         facts=world_fact_names(cubes),
         skills=SKILLS,
+        training=TRAINING,
         tasks=tasks,
         start_regions=start_regions(),
         start_world=DEFAULT_WORLD + tuple(cube_fact("cube-on-counter", k) for k in more),

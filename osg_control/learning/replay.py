@@ -144,7 +144,7 @@ class BatchedReplay:
         batch_size: int,
         seeds: Sequence[int],
         device: str | torch.device = "cpu",
-        obs_noise: float = 0.0,
+        obs_noise: float | Sequence[float] = 0.0,
     ) -> None:
         """Move the transitions to ``device`` and seed one generator per skill.
 
@@ -154,15 +154,21 @@ class BatchedReplay:
             seeds: the K skills' seeds.
             device: where batches are built.
             obs_noise: std [m] of the Gaussian noise added to the TCP position of every
-                sampled observation and next observation (``TD3BCConfig.obs_noise``).
+                sampled observation and next observation (``TD3BCConfig.obs_noise``): one
+                for all skills, or one per skill.
 
         Raises:
-            ValueError: no skills, a seed count that differs, or ``obs_noise`` negative or
-                not finite.
+            ValueError: no skills, a seed or noise count that differs, or an ``obs_noise``
+                negative or not finite.
         """
         if not data or len(data) != len(seeds):
             raise ValueError(f"need one seed per skill, got {len(data)} skills, {len(seeds)} seeds")
-        if not (np.isfinite(obs_noise) and obs_noise >= 0):
+        noises = np.asarray(obs_noise, dtype=np.float64)
+        noises = np.full(len(data), float(noises)) if noises.ndim == 0 else noises
+        if noises.shape != (len(data),):
+            raise ValueError(f"need one obs_noise per skill or one for all, got {obs_noise!r} "
+                             f"for {len(data)} skills")  # fmt: skip
+        if not np.all(np.isfinite(noises) & (noises >= 0)):
             raise ValueError(f"obs_noise must be finite and >= 0 [m], got {obs_noise!r}")
         self.device = torch.device(device)
         self.batch_size = batch_size
@@ -177,8 +183,8 @@ class BatchedReplay:
         ]
         scale = np.zeros((len(data), 1, self.obs_dim), dtype=np.float32)
         for k, skill in enumerate(data):
-            scale[k, 0, TCP_POSITION] = obs_noise / skill.obs_std[TCP_POSITION]
-        self._obs_noise = torch.as_tensor(scale, device=self.device) if obs_noise else None
+            scale[k, 0, TCP_POSITION] = noises[k] / skill.obs_std[TCP_POSITION]
+        self._obs_noise = torch.as_tensor(scale, device=self.device) if noises.any() else None
         """(K, 1, obs_dim): the noise's std in each skill's normalised units (None: none)."""
         self._noise_generators = [
             torch.Generator(device=self.device).manual_seed(seed + 2) for seed in seeds

@@ -42,19 +42,26 @@ class DataSets:
         return {p.name: sha256_file(p) for p in sorted(self.directory.glob("*.h5"))}
 
 
-def collection_bytes(domain: Domain, skills: Sequence[SkillSpec], episodes: int) -> int:
-    """The disk space collecting ``episodes`` episodes of each skill takes at most: every
-    skill's merged file plus the chunk files of the skill in progress (each episode taken
-    at its longest: the script's step budget plus the hold after a success)."""
+def skill_episodes(domain: Domain, skill: SkillSpec, episodes: int) -> int:
+    """The episodes a run of ``episodes`` per skill collects of ``skill``: its training
+    recipe's multiple of them (``Domain.recipe``)."""
+    return episodes * domain.recipe(skill.name).episodes_factor
+
+
+def collection_bytes(domain: Domain, counts: Sequence[tuple[SkillSpec, int]]) -> int:
+    """The disk space collecting ``counts`` (each skill and its episodes) takes at most:
+    every skill's merged file plus the chunk files of the skill in progress (each episode
+    taken at its longest: the script's step budget plus the hold after a success)."""
     sizes = [
         dataset_bytes(
             episodes * (sum(skill.waypoint_budgets()) + HOLD_STEPS),
             episodes,
             len(domain.world_fields),
         )
-        for skill in skills
+        for skill, episodes in counts
     ]
-    chunk_files = -(-episodes // CHUNK_EPISODES)
+    most = max((episodes for _skill, episodes in counts), default=1)
+    chunk_files = -(-most // CHUNK_EPISODES)
     return sum(sizes) + max(sizes, default=0) + (chunk_files - 1) * FILE_OVERHEAD
 
 
@@ -69,12 +76,13 @@ def collect_datasets(
     address: str | None = None,
     progress: bool = True,
 ) -> DataSets:
-    """Collect ``episodes`` scripted episodes of each skill into ``out``.
+    """Collect ``episodes`` scripted episodes of each skill into ``out`` (a skill whose
+    training recipe says so, a multiple of them: ``Domain.recipe``).
 
     Args:
         domain: whose skills to collect.
         out: the data folder (checked for room before any episode runs).
-        episodes: per skill.
+        episodes: per skill (before its recipe's ``episodes_factor``).
         seed: the run seed (each skill's episodes draw from it and the skill's name).
         workers: local processes (or Ray CPUs).
         skills: skill names (default: all of the domain's).
@@ -87,12 +95,13 @@ def collect_datasets(
         SkillSpecError: an unknown skill name.
     """
     specs = list(domain.skills) if skills is None else [domain.skill(n) for n in skills]
-    folder = check_output_dir(out, "data folder", collection_bytes(domain, specs, episodes))
+    counts = [(spec, skill_episodes(domain, spec, episodes)) for spec in specs]
+    folder = check_output_dir(out, "data folder", collection_bytes(domain, counts))
     summaries = []
     with open_executor(backend, workers, address) as executor:
-        for spec in specs:
+        for spec, count in counts:
             started = time.perf_counter()
-            dataset = collect_skill(domain, spec, episodes, seed, folder, executor, progress)
+            dataset = collect_skill(domain, spec, count, seed, folder, executor, progress)
             summary = dataset_summary(dataset)
             summary["seconds"] = round(time.perf_counter() - started, 2)
             summaries.append(summary)

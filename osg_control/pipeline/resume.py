@@ -23,22 +23,23 @@ def untrained_skills(
     """The domain's skills whose checkpoint in ``skills`` was not trained by this stage's
     command on these very data sets (seed, spec and the data set's sha256 in its sidecar;
     ``steps`` updates, or with ``early_stopping`` (``EarlyStop.record``) that rule with a
-    budget of ``steps``; without observation noise, as ``osg reproduce`` trains: a
-    checkpoint of ``osg train --obs-noise`` is not this stage's). A rerun into the same
-    folder keeps the checkpoints only if there are none: any other retrains every skill
-    (``train_missing``), because weights trained in a smaller batch of skills differ in the
-    last bits from the batch of all (measured: three skills retrained alone differed from a
-    fresh run's), and a reproduction must be a fresh run's bytes."""
+    budget of ``steps``; with its training recipe's observation noise, as ``osg reproduce``
+    trains: a checkpoint of ``osg train --obs-noise`` with another is not this stage's).
+    A rerun into the same folder keeps the checkpoints only if there are none: any other
+    retrains every skill (``train_missing``), because weights trained in a smaller batch of
+    skills differ in the last bits from the batch of all (measured: three skills retrained
+    alone differed from a fresh run's), and a reproduction must be a fresh run's bytes."""
     rule = None if early_stopping is None else json.loads(json.dumps(early_stopping))
     return [
         skill.name
         for skill in domain.skills
-        if not _trained(skill, data, skills, steps, seed, rule)
+        if not _trained(skill, domain.recipe(skill.name).obs_noise, data, skills, steps, seed, rule)
     ]
 
 
 def _trained(
     skill: SkillSpec,
+    obs_noise: float,
     data: Path,
     skills: Path,
     steps: int,
@@ -59,8 +60,8 @@ def _trained(
         return False
     config = meta.get("train_config")
     config = config if isinstance(config, dict) else {}
-    if config.get("obs_noise", 0.0) != 0.0:
-        return False  # trained on noisy readings: not what this stage trains
+    if config.get("obs_noise", 0.0) != obs_noise:
+        return False  # trained on other readings than this stage trains on
     stopped = config.get("early_stopping")
     if early_stopping is None:
         budget_matches = stopped is None and meta.get("steps") == steps

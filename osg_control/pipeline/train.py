@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import itertools
 import time
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any
 
@@ -48,6 +48,8 @@ class SkillInput:
     data: SkillData
     dataset_path: Path
     dataset_sha256: str
+    obs_noise: float = 0.0
+    """Std [m] of its training noise on the sampled TCP position (``TD3BCConfig.obs_noise``)."""
 
 
 @dataclass(frozen=True)
@@ -148,7 +150,7 @@ def _checkpoint(
 ) -> Checkpoint:
     """A skill's checkpoint with ``layers`` after ``updates`` (``early_stopping``: its
     record in ``train_config``)."""
-    train_config = trainer.config.to_json_dict()
+    train_config = replace(trainer.config, obs_noise=item.obs_noise).to_json_dict()
     if early_stopping is not None:
         train_config["early_stopping"] = early_stopping
     return Checkpoint(
@@ -212,7 +214,7 @@ def train_skills(
     device: str = "cpu",
     threads: int | None = None,
     early_stop: EarlyStop | None = None,
-    obs_noise: float = 0.0,
+    obs_noise: float | None = None,
 ) -> TrainedSkills:
     """Train skills batched with TD3+BC and write their checkpoints.
 
@@ -229,7 +231,8 @@ def train_skills(
         early_stop: stop each skill when its held-out success stops improving (None:
             every skill trains ``steps`` updates).
         obs_noise: std [m] of the noise on the sampled observations' TCP position
-            (``TD3BCConfig.obs_noise``; recorded in each sidecar's ``train_config``).
+            (``TD3BCConfig.obs_noise``; recorded in each sidecar's ``train_config``) for
+            every skill; None: each skill's training recipe's (``Domain.recipe``).
 
     Raises:
         OSGError: ``cuda`` without CUDA.
@@ -242,16 +245,22 @@ def train_skills(
         raise OSGError("--device cuda: CUDA is not available on this machine")
     if threads:
         torch.set_num_threads(threads)
-    config = TD3BCConfig(obs_noise=obs_noise)
+    config = TD3BCConfig()
     snapshots = 1 if early_stop is None else 2  # early stopping keeps one round's snapshot
     out = check_output_dir(
         out_dir, "checkpoint folder", snapshots * checkpoint_bytes(config, len(names))
     )
     bounds = np.asarray(domain.action_bounds, dtype=np.float32)
-    inputs = [load_skill_input(Path(data_dir), n, config, bounds) for n in names]
+    inputs = [
+        replace(
+            load_skill_input(Path(data_dir), n, config, bounds),
+            obs_noise=domain.recipe(n).obs_noise if obs_noise is None else obs_noise,
+        )
+        for n in names
+    ]
     seeds = [skill_seed(seed, name) for name in names]
     replay = BatchedReplay(
-        [i.data for i in inputs], config.batch_size, seeds, device, config.obs_noise
+        [i.data for i in inputs], config.batch_size, seeds, device, [i.obs_noise for i in inputs]
     )
     trainer = TD3BC(config, seeds, device=device)
     start = time.perf_counter()
