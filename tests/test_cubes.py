@@ -15,7 +15,7 @@ from osg_control.cli import main
 from osg_control.domain.binding import bind_step
 from osg_control.domain.frames import sample_placements
 from osg_control.domain.registry import domain_override, get_domain
-from osg_control.environment.arm_env import GRIPPER_OPEN_CMD, EnvConfig
+from osg_control.environment.arm_env import GRIPPER_OPEN_CMD
 from osg_control.errors import DomainError, EnvOptionError, PlacementError
 from osg_control.execution.executor import load_executor, task_env_config
 from osg_control.execution.locate import node_at, skill_on_path
@@ -116,12 +116,6 @@ def test_placed_cubes_rest_where_asked_and_overlapping_ones_are_refused() -> Non
     with pytest.raises(PlacementError, match="overlapping"):  # cube 2 onto cube 1's rest place
         env.reset(seed=2, options={"world": {"cube2_pos": [0.5, -0.2, CUBE_HALF_SIZE]}})
     np.testing.assert_array_equal(env.data.qpos, before)  # refused before anything moved
-
-
-def test_several_cubes_on_camera_are_refused() -> None:
-    config = EnvConfig(perception=perception_spec("camera", 0.0))
-    with pytest.raises(EnvOptionError, match="camera perception locates one cube"):
-        KitchenEnv(config=config, cubes=2)
 
 
 def test_a_two_cube_task_runs_in_the_kitchen_with_two_cubes() -> None:
