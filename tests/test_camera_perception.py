@@ -207,6 +207,46 @@ def test_a_lost_grasp_makes_the_cameras_look_where_the_cube_fell() -> None:
     assert "cube-on-counter" in env.percept().facts
 
 
+def test_a_cube_unseen_at_the_start_is_pursued_after_the_part_of_the_goal_within_reach() -> None:
+    """Cube 2 hidden from the cameras' first look (its colour blanked): the whole goal has
+    no plan from the first percept, so the executor runs the part within reach (the door,
+    cube 1), which the cameras see cube 2 during, then replans the whole and finishes."""
+    from osg_control.domain.registry import get_domain
+    from osg_control.execution.executor import load_executor, task_env_config
+    from osg_control.kitchen.cameras import cube_target
+    from osg_control.perception.colour_pose import colour_mask
+
+    kitchen = get_domain("kitchen")
+    task = kitchen.task("two-cubes-in-cabinet")
+    scene = kitchen.for_task(task)
+    env = scene.make_env(config=task_env_config(perception_spec("camera")))
+    env.sense()  # makes the rig
+    rig, hiding = env.cameras.rig, [True]
+    render = rig.render
+
+    def cube_2_hidden(data, index, wants_depth):
+        def masked(rgb):
+            if hiding[0]:
+                rgb = rgb.copy()
+                rgb[colour_mask(rgb, cube_target(2)) > 0] = 0
+            return wants_depth(rgb)
+
+        return render(data, index, masked)
+
+    rig.render = cube_2_hidden  # type: ignore[method-assign]
+    obs, _ = env.reset(seed=7, options={"facts": task.world})
+    hiding[0] = False
+    assert "(on-counter cube-2)" not in env.percept().facts
+    plans = []
+    executor = load_executor(scene, max_replans=2)
+    executor.on_event = lambda kind, fields: plans.append(fields["plan"]) if kind == "plan" else 0
+    result = executor.execute(task.goal, env, obs)
+    assert result.success and set(task.goal) <= env.facts(), result.to_dict()
+    assert result.replans == 2 and plans[0] == [] and len(plans) == 3
+    assert not any("cube-2" in step for step in plans[1]), plans[1]  # door and cube 1
+    assert any("cube-2" in step for step in plans[2]), plans[2]  # then cube 2
+
+
 def test_a_rim_seen_without_its_top_is_moved_half_the_box_away_from_the_camera() -> None:
     from osg_control.perception.colour_pose import _edge_shift
 

@@ -163,8 +163,8 @@ def test_cli_plans_and_exports_two_cubes(
     assert main(["--domain", "kitchen[cube=9]", "plan", "--goal", "door-open"]) == 2
     assert "1 to 3 cubes" in capsys.readouterr().err
     camera = ["--domain", "kitchen[cube=2]", "run", "--goal", "(lifted cube-2)"]
-    assert main([*camera, "--perception", "camera"]) == 2  # refused before any episode
-    assert "does not support perception 'camera'" in capsys.readouterr().err
+    assert main([*camera, "--perception", "camera", "--json"]) == 0  # each cube its colour
+    assert json.loads(capsys.readouterr().out)["success_rate"] == 1.0
     assert main(["pddl", "export", "--out", str(tmp_path)]) == 0
     problem = (tmp_path / "problems" / "two-cubes-in-cabinet.pddl").read_text()
     assert "(:objects cube-1 cube-2 - cube" in problem and "(on-counter cube-2)" in problem
