@@ -44,9 +44,6 @@ def validate_domain(domain: Domain) -> None:
     duplicates = sorted({n for n in names if names.count(n) > 1})
     if duplicates:
         raise DomainError(f"{where}: field 'skills' has duplicate names {duplicates}")
-    unknown = sorted(set(domain.training) - set(names))
-    if unknown:
-        raise DomainError(f"{where}: field 'training' names unknown skills {unknown}")
     for node_name, node in domain.nodes.items():
         if node.name != node_name:
             raise DomainError(f"{where}: field 'nodes' key {node_name!r} names {node.name!r}")
@@ -64,6 +61,9 @@ def validate_domain(domain: Domain) -> None:
         unknown = sorted(skill.facts - facts)
         if unknown:
             raise DomainError(f"{where}: skill {skill.name!r} names unknown facts {unknown}")
+    unknown = sorted(set(domain.training) - set(names))
+    if unknown:
+        raise DomainError(f"{where}: field 'training' names unknown skills {unknown}")
     _check_objects(where, domain)
     for field_name, named in fact_fields(domain):
         unknown = sorted({f for f in named if not f.startswith("(")} - facts)

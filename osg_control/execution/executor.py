@@ -17,7 +17,10 @@ simulator's truth is for scoring the result, outside.
    watches (``Domain.watched_facts``, e.g. a grasp) is lost for ``option.GRASP_GRACE_STEPS``
    steps; the joints are reset between skills;
 3. on a failure (timeout, lost grasp, or the expected effect missing from the perceived
-   facts) the state is re-read, re-classified and re-planned, up to ``max_replans`` times.
+   facts) the state is re-read, re-classified and re-planned, up to ``max_replans`` times;
+   a goal with no plan from the perceived facts while part of it has one (an object not
+   seen yet) runs that part, then replans the whole from what is perceived then (each a
+   replan).
 """
 
 from __future__ import annotations
@@ -243,6 +246,7 @@ class Executor:
             return target.holds(self.domain, facts_now, obs_now, objects.offsets())
 
         planning_time = 0.0
+        pursued = goal  # the goal, or the part of it within reach of what is perceived
         for attempt in range(self.max_replans + 1):
             if reached(facts, obs):
                 result.success = True
@@ -256,7 +260,7 @@ class Executor:
                     break
             t0 = time.perf_counter()
             seen = obs if tracker is None else tracker.read(obs)
-            entry, plan, planned = self.plan(goal, seen, facts, objects.offsets())
+            entry, plan, planned = self.plan(pursued, seen, facts, objects.offsets())
             planning_time += time.perf_counter() - t0
             if attempt == 0:
                 result.entry_skill = entry.split()[0] if entry else None
@@ -264,7 +268,19 @@ class Executor:
             self._emit("plan", attempt=attempt, entry=entry, plan=plan)
             if not planned.solved:
                 result.failure = f"no plan: unreachable goal facts {list(planned.unreached)}"
-                break
+                within = [fact for fact in goal if fact not in set(planned.unreached)]
+                if pursued != goal or len(within) in (0, len(goal)):
+                    break
+                if attempt >= self.max_replans:
+                    break
+                # part of the goal is out of reach from what is perceived (an object not
+                # seen yet, say): pursue the rest, then look again and replan the whole
+                if after_attempt is not None:
+                    after_attempt(attempt, result)
+                pursued = within
+                result.replans += 1
+                self._emit("replan", attempt=attempt + 1, failure=result.failure)
+                continue
             entered = [entry] if entry else []
             obs, failed = self._run_sequence(env, entered + plan, obs, result, tracker, objects)
             facts = env.percept().facts
@@ -275,8 +291,14 @@ class Executor:
                 if not result.success:
                     missing = target.missing(self.domain, facts, obs, objects.offsets())
                     result.failure = f"plan finished but goal facts {missing} missing"
+                    if pursued != goal and attempt < self.max_replans:
+                        pursued = goal  # the part within reach is done: replan the whole
+                        result.replans += 1
+                        self._emit("replan", attempt=attempt + 1, failure=result.failure)
+                        continue
                 break
             result.failure = failed
+            pursued = goal
             if is_divergence(failed):
                 break  # the world was reset: never replan
             if TIME_LIMIT in failed or EPISODE_ENDED in failed:

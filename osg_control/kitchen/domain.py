@@ -108,7 +108,7 @@ def kitchen_domain(cubes: int = 1) -> Domain:
         hand_empty="hand-empty",
         watched_facts=WATCHED_FACTS,
         objects=cube_objects(cubes),
-        perceptions=("paper", "robot", "sim", *(("camera",) if cubes == 1 else ())),
+        perceptions=("paper", "robot", "sim", "camera"),
         defaults_dir=PACKAGE_DIR / "kitchen" / "defaults",
         env_id="osg/Kitchen-v0",
         published=PUBLISHED,

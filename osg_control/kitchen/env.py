@@ -24,8 +24,8 @@ from osg_control.control.robot_model import workspace
 from osg_control.domain.frames import placement_offsets, reading_displacement
 from osg_control.domain.spec import ObjectFrame, SkillSpec
 from osg_control.environment.arm_env import ArmEnv, EnvConfig
-from osg_control.errors import EnvOptionError, SkillSpecError, lookup
-from osg_control.kitchen.cameras import KITCHEN_CAMERAS
+from osg_control.errors import SkillSpecError, lookup
+from osg_control.kitchen.cameras import kitchen_cameras
 from osg_control.kitchen.cubes import check_cubes, cube_objects, cube_sensors
 from osg_control.kitchen.detectors import WORLD_SENSORS, detect_grasps
 from osg_control.kitchen.domain import DEFAULT_ROBOT, facts_of
@@ -51,11 +51,11 @@ class KitchenEnv(ArmEnv):
         config: noise, step budget, IK and random-start options.
         render_mode: ``"rgb_array"`` for ``render``.
         robot: a registered robot's name or a description (default ``DEFAULT_ROBOT``).
-        cubes: how many cubes the scene holds (1 to ``objects.MAX_CUBES``; more than one
-            not with the ``camera`` perception, whose colour target finds one red cube).
+        cubes: how many cubes the scene holds (1 to ``objects.MAX_CUBES``; each its own
+            colour, which the ``camera`` perception's masks find: ``cameras``).
 
     Raises:
-        EnvOptionError: a cube count out of range, or more than one cube on camera.
+        EnvOptionError: a cube count out of range.
 
     Example:
         >>> env = KitchenEnv(skill="move-home-to-cube")
@@ -64,7 +64,6 @@ class KitchenEnv(ArmEnv):
     """
 
     holdable = tuple(_FINGER_ON)
-    camera_perception = KITCHEN_CAMERAS
 
     def __init__(
         self,
@@ -76,11 +75,7 @@ class KitchenEnv(ArmEnv):
     ) -> None:
         self.cubes = check_cubes(cubes)
         """How many cubes the scene holds."""
-        if cubes > 1 and config is not None and config.perception.name == "camera":
-            raise EnvOptionError(
-                f"KitchenEnv: the camera perception locates one cube (its red colour target); "
-                f"use the robot, paper or sim perception with cubes={cubes}"
-            )
+        self.camera_perception = kitchen_cameras(cubes)
         self.world_facts = world_fact_names(cubes)
         self.world_options = world_options(cubes)
         self.world_sensors = {**WORLD_SENSORS, **cube_sensors(cubes), **VALVE_SENSORS}
