@@ -23,17 +23,18 @@ DOOR_RADIUS = 0.6
 KNOB_TURN = 0.4
 """How far past LIBERO's threshold a knob is turned [rad]."""
 PUSH_PITCH = np.radians(35.0)
-"""How far the hand pushing a drawer shut is tilted toward the cabinet (``_pitched``)."""
+"""How far the hand pushing a drawer shut is tilted toward the cabinet (``pitched``)."""
 DRAWER_MARGIN = 0.02
 """How far past LIBERO's open threshold a drawer is pulled [m]."""
 
 
-def _pitched(rotation: np.ndarray, toward: np.ndarray) -> np.ndarray:
-    """``rotation`` with its approach axis (the TCP's z, down) tilted ``PUSH_PITCH`` toward
+def pitched(rotation: np.ndarray, toward: np.ndarray, angle: float = PUSH_PITCH) -> np.ndarray:
+    """``rotation`` with its approach axis (the TCP's z, down) tilted ``angle`` toward
     ``toward``, about the fingers' axis: the wrist and forearm then stay back and up, clear
-    of a cabinet's top while the fingertips push its bottom drawer."""
+    of a cabinet's top while the fingertips push its bottom drawer (or of a microwave's
+    roof while the fingers hold a mug inside it)."""
     tilts = [Rotation.from_rotvec(rotation[:, 1] * a).as_matrix() @ rotation
-             for a in (PUSH_PITCH, -PUSH_PITCH)]  # fmt: skip
+             for a in (angle, -angle)]  # fmt: skip
     return max(tilts, key=lambda r: float(r[:, 2] @ toward))
 
 
@@ -61,8 +62,8 @@ def drawer(ctx: Context, region: str, opening: bool) -> list[Leg]:
             hold(GRIPPER_OPEN, 8),
             Leg(here(tuple(out * PUSH_STANDOFF)), GRIPPER_OPEN, 20, 0.02),
         ]  # fmt: skip
-    shut = joint.limits[1] if joint.opening < 0 else joint.limits[0]
-    across = _pitched(across, -out)
+    shut = joint.shut
+    across = pitched(across, -out)
     front = lambda now, q: _handle(ctx, now, joint, q) + out * PUSH_STANDOFF  # noqa: E731
     return [
         Leg(lambda now, s: (front(now, sensed(s)) + [0, 0, HOVER], across), GRIPPER_CLOSED,
@@ -92,7 +93,7 @@ def door(ctx: Context, fixture: str) -> list[Leg]:
     """Close a door: from beside the leaf, push the point ``DOOR_LEAD`` ahead of the
     sensed angle round the hinge, up to the closed stop."""
     joint = ctx.scene.joints[ctx.scene.articulated[fixture][0]]
-    shut = joint.limits[1] if joint.opening < 0 else joint.limits[0]
+    shut = joint.shut
 
     def ahead(now: LiberoPercept, start: LiberoPercept) -> tuple[np.ndarray, None]:
         q = now.joint(joint.name) - joint.opening * DOOR_LEAD
