@@ -27,14 +27,25 @@ from scipy.spatial.transform import Rotation
 
 from osg_control.libero.drive import GRIPPER_CLOSED, GRIPPER_OPEN
 from osg_control.libero.fixtures import pitched
-from osg_control.libero.grasp import FINGER_HALF, GRIP_STEP, GRIP_WIDTH, fingers_along, slab
+from osg_control.libero.grasp import (
+    FINGER_HALF,
+    GRIP_STEP,
+    GRIP_WIDTH,
+    TURN_WINDOW,
+    fingers_along,
+    slab,
+)
 from osg_control.libero.legs import Context, GraspRule, Leg, here, hold
 from osg_control.libero.perception import LiberoPercept
 from osg_control.libero.pick_place import DROP
 from osg_control.libero.scene import Scene
 
-GRASP_PITCH = np.radians(45.0)
-"""How far a grasp for a doorway tilts the hand's approach toward the inside [rad]."""
+PUSH_PITCH = np.radians(45.0)
+"""How far the hand pushing an object in tilts its approach toward the inside [rad]: its
+palm stays outside and below the roof while the fingertips reach in."""
+PALM_CLEAR = 0.02
+"""How far below a grasped slice's top the TCP closes at most [m] (robosuite's Panda
+hand: the palm is 2.6 cm above the TCP)."""
 DOOR_CLEARANCE = 0.015
 """How far inside the doorway's plane the object's outer side is put [m]."""
 WALL_CLEARANCE = 0.01
@@ -43,15 +54,16 @@ INSERT_LIFT = 0.03
 """Height of the object's bottom above the region's floor while it goes in [m]."""
 OUTSIDE = 0.03
 """How far outside the doorway's plane the object waits before it goes in [m]."""
-ENTRY = 0.005
+ENTRY = 0.04
 """How far outside the doorway's plane the TCP stops while the object goes in held [m]
-(the pitched hand's palm then clears the roof's front edge)."""
+(robosuite's Panda hand is 3.2 cm thick either side of the TCP: it stays clear of the
+roof's front edge)."""
 BACK_OUT = 0.06
 """How far the hand backs out along the doorway's normal [m]."""
 PUSH_HEIGHT = 0.025
 """Height above the object's bottom the closed hand pushes it at [m] (low: it slides
 rather than tips)."""
-PUSH_STANDOFF = 0.03
+PUSH_STANDOFF = 0.05
 """How far outside the object's outer side the push starts [m]."""
 PUSH_BITE = 0.02
 """How far inside the object's outer side the push aims, the target moving with it [m]."""
@@ -81,22 +93,24 @@ class Doorway:
 
 def doorway(scene: Scene, region: str) -> Doorway | None:
     """The doorway into ``region`` when a hinged door (``Scene.leaves``) closes its
-    parent, else None: the normal is horizontal, perpendicular to the leaf turned to its
-    closed stop, pointing away from the region's centre."""
+    parent, else None: the side of the region's box that the door's leaf, turned to its
+    closed stop, covers (the horizontal face whose normal points most toward the closed
+    leaf's middle), its plane through the hinge line. (The leaf's far corner is off the
+    hinge's line by the leaf's thickness: a normal taken across it was 5 deg askew.)"""
     box = scene.regions.get(region)
     if box is None or box.parent not in scene.leaves:
         return None
     joint = scene.joints[scene.articulated[box.parent][0]]
     turn = Rotation.from_rotvec(joint.axis * (joint.shut - joint.q0)).as_matrix()
-    along = turn @ (scene.leaves[box.parent] - joint.anchor)
-    normal = np.cross(joint.axis, along) * np.array([1.0, 1.0, 0.0])
-    normal /= np.linalg.norm(normal)
-    if normal @ (box.pos - joint.anchor) > 0:
-        normal = -normal
-    half = np.abs(box.mat @ box.size)
-    return Doorway(region, normal, float(normal @ joint.anchor),
-                   float(normal @ box.pos - abs(normal @ half)), box.pos.copy(),
-                   float(box.pos[2] - half[2]))  # fmt: skip
+    closed = joint.anchor + turn @ (scene.leaves[box.parent] - joint.anchor)
+    middle = (joint.anchor + closed) / 2 - box.pos
+    sides = [(sign * box.mat[:, i], float(box.size[i])) for i in range(3) for sign in (1.0, -1.0)
+             if abs(box.mat[2, i]) < 0.5]  # fmt: skip
+    normal, half = max(sides, key=lambda side: float(side[0][:2] @ middle[:2]))
+    normal = normal * np.array([1.0, 1.0, 0.0]) / np.linalg.norm(normal[:2])
+    floor = float(box.pos[2] - np.abs(box.mat @ box.size)[2])
+    return Doorway(region, normal, float(normal @ joint.anchor), float(normal @ box.pos - half),
+                   box.pos.copy(), floor)  # fmt: skip
 
 
 def reach(ctx: Context, percept: LiberoPercept, obj: str, direction: np.ndarray) -> float:
@@ -132,7 +146,8 @@ def _origin_at(
 def outer_grip(ctx: Context, obj: str, outward: np.ndarray) -> tuple[np.ndarray, int]:
     """The grasp, in ``obj``'s frame, on the slice furthest along ``outward`` (a horizontal
     direction in its frame) that the hand closes round (``GRIP_WIDTH``) with both fingers
-    over it: the TCP point (halfway up the slice) and the axis the fingers slide along.
+    over it: the TCP point (halfway up the slice, or higher so that the palm stays above
+    it: ``PALM_CLEAR``) and the axis the fingers slide along.
 
     Raises:
         KeyError: no slice of ``obj`` fits the hand.
@@ -152,7 +167,8 @@ def outer_grip(ctx: Context, obj: str, outward: np.ndarray) -> tuple[np.ndarray,
                 continue
             point = np.zeros(3)
             point[axis], point[other] = (lo + hi) / 2, centre
-            point[2] = (min(b[0][2] for b in boxes) + max(b[1][2] for b in boxes)) / 2
+            top = max(b[1][2] for b in boxes)
+            point[2] = max((min(b[0][2] for b in boxes) + top) / 2, top - PALM_CLEAR)
             score = float(point[:2] @ outward[:2])
             if best is None or score > best[0]:
                 best = (score, point, axis)
@@ -161,15 +177,29 @@ def outer_grip(ctx: Context, obj: str, outward: np.ndarray) -> tuple[np.ndarray,
     return best[1], best[2]
 
 
+def reaching_in(ctx: Context, rotation: np.ndarray, way: Doorway) -> np.ndarray:
+    """Of a top-down ``rotation`` and the same turned half a turn about the vertical (the
+    fingers alike), the one whose x axis points more into the doorway, where the wrist's
+    window (``grasp.TURN_WINDOW``) allows: with the other the arm wound its wrist and
+    stalled short of the doorway (LIBERO-10 task 9, state 4)."""
+    turned = rotation @ np.diag([-1.0, -1.0, 1.0])
+    allowed = Rotation.from_matrix(ctx.base.T @ turned).magnitude() <= np.pi / 2 + TURN_WINDOW
+    inward = allowed and turned[:, 0] @ way.normal < rotation[:, 0] @ way.normal
+    return turned if inward else rotation
+
+
 def doorway_grasp(ctx: Context, obj: str, way: Doorway) -> GraspRule:
-    """The grasp for taking ``obj`` through ``way`` (``outer_grip``, the hand pitched
-    ``GRASP_PITCH`` toward the inside), from each percept."""
+    """The grasp for taking ``obj`` through ``way``: top-down on ``outer_grip``'s slice,
+    chosen at the rule's first use and then kept (a slice chosen anew each step jumped
+    elsewhere when the descending fingers tilted the object)."""
+    chosen: list[tuple[np.ndarray, int]] = []
 
     def rule(percept: LiberoPercept) -> tuple[np.ndarray, np.ndarray]:
         pos, rot = percept.objects[obj]
-        point, axis = outer_grip(ctx, obj, rot.T @ way.normal)
-        turn = pitched(fingers_along(ctx, rot[:, axis]), -way.normal, GRASP_PITCH)
-        return pos + rot @ point, turn
+        if not chosen:
+            chosen.append(outer_grip(ctx, obj, rot.T @ way.normal))
+        point, axis = chosen[0]
+        return pos + rot @ point, reaching_in(ctx, fingers_along(ctx, rot[:, axis]), way)
 
     return rule
 
@@ -238,7 +268,8 @@ def insert(ctx: Context, obj: str, region: str) -> list[Leg]:
     def behind(standoff: float):  # noqa: ANN202
         def target(now: LiberoPercept, start: LiberoPercept) -> tuple[np.ndarray, np.ndarray]:
             if not push_turn:
-                push_turn.append(pitched(fingers_along(ctx, across), -n, GRASP_PITCH))
+                level = reaching_in(ctx, fingers_along(ctx, across), way)
+                push_turn.append(pitched(level, -n, PUSH_PITCH))
             origin = now.position(obj)
             side = float(n @ origin) + reach(ctx, now, obj, n) + standoff
             point = n * side + across * float(across @ origin)
