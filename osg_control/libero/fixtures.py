@@ -16,6 +16,10 @@ from osg_control.libero.scene import Joint
 
 PUSH_STANDOFF = 0.05
 """Distance from a drawer's handle or a door's leaf the pushing hand starts at [m]."""
+DOOR_STANDOFF = 0.045
+"""Distance from a door's leaf the pushing hand comes down at [m]: robosuite's Panda hand
+is 3.2 cm thick either side of the TCP (at 2.5 cm it came down on the leaf's top edge of
+a door opened past a right angle, LIBERO-10 task 9 state 4)."""
 DOOR_LEAD = 0.35
 """How far ahead of the sensed door angle the push point is put [rad]."""
 DOOR_RADIUS = 0.6
@@ -79,13 +83,13 @@ def door_point(
     ctx: Context, percept: LiberoPercept, door: str, joint: Joint, q: float
 ) -> np.ndarray:
     """The push point on the door's closing side when the door is at ``q``, standing off
-    ``PUSH_STANDOFF`` / 2 from the leaf."""
+    ``DOOR_STANDOFF`` from the leaf."""
     tip = ctx.scene.leaves[door]
     turn = Rotation.from_rotvec(joint.axis * (q - joint.q0)).as_matrix()
     radial = turn @ (tip - joint.anchor)
     radial -= (radial @ joint.axis) * joint.axis
     closing = np.cross(joint.axis, radial / np.linalg.norm(radial)) * -joint.opening
-    point = joint.anchor + DOOR_RADIUS * radial - closing * PUSH_STANDOFF / 2
+    point = joint.anchor + DOOR_RADIUS * radial - closing * DOOR_STANDOFF
     return np.r_[point[:2], joint.anchor[2]]
 
 
