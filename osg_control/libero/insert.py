@@ -1,21 +1,22 @@
 """Putting an object into a region behind a hinged door (the microwave's heating region).
 
-Such a region has a roof: an object set down from above, the hand over it, does not go in.
-It is entered sideways through its doorway instead, every quantity read from the scene's
-description (``doorway``: the region's box, and the door leaf turned to its closed stop,
-which gives the doorway's plane and its outward normal) and the percept:
+Such a region has a roof: an object set down from above, the hand over it, does not go in
+(the microwave's inside is 16 cm high, a mug 10 cm, the hand above it 12 cm more). It is
+entered sideways through its doorway instead, every quantity read from the scene's
+description (``doorway``: the region's box and the side of it the door's leaf, turned to its
+closed stop, covers: the doorway's plane and its outward normal) and the percept:
 
-- the grasp is chosen when the object is picked, because the plan takes it there next
-  (``doorway_grasps``, which the plan executor sets from its plan): the slice of the object
-  furthest out toward the doorway that fits the hand (a mug's handle), the hand pitched
-  ``GRASP_PITCH`` toward the inside so that its palm stays outside and below the roof
-  while the fingers reach in;
-- ``approach`` carries the object to in front of the doorway, clear of it, at the height
-  it goes in at (``INSERT_LIFT`` above the region's floor);
-- ``insert`` moves it in horizontally until its outer side is ``DOOR_CLEARANCE`` inside
+- the grasp is chosen before the pick, because the plan takes the object there next
+  (``doorway_grasps``, which the plan executor sets from its plan): top-down on the slice of
+  the object furthest out toward the doorway that fits the hand (``outer_grip``: a mug's
+  handle), so that the hand stays outside while the object goes in;
+- ``approach`` carries it to in front of the doorway, at the height it goes in at
+  (``INSERT_LIFT`` above the region's floor);
+- ``insert`` takes it in until the hand reaches the doorway (``ENTRY``), sets it down, lets
+  go and backs out, then pushes it with the closed hand, pitched ``PUSH_PITCH`` so that the
+  palm stays outside and below the roof, until its outer side is ``DOOR_CLEARANCE`` inside
   the doorway's plane (the door then closes over it) but its inner side stays
-  ``WALL_CLEARANCE`` off the region's back (``goal_depth``), lowers it to ``DROP`` above the
-  floor, lets go and backs the hand out along the normal.
+  ``WALL_CLEARANCE`` off the region's back (``goal_depth``).
 """
 
 from __future__ import annotations
@@ -35,7 +36,7 @@ from osg_control.libero.grasp import (
     fingers_along,
     slab,
 )
-from osg_control.libero.legs import Context, GraspRule, Leg, here, hold
+from osg_control.libero.legs import Context, GraspRule, Leg, Target, here, hold
 from osg_control.libero.perception import LiberoPercept
 from osg_control.libero.pick_place import DROP
 from osg_control.libero.scene import Scene
@@ -231,8 +232,7 @@ def _upright(percept: LiberoPercept, obj: str) -> np.ndarray:
 
 def approach(ctx: Context, region: str, holding: str) -> list[Leg]:
     """Carry ``holding`` to in front of the doorway into ``region``: its inner side
-    ``OUTSIDE`` out of the plane, its lowest point (as it hangs) ``INSERT_LIFT`` above the
-    region's floor."""
+    ``OUTSIDE`` out of the plane, its bottom ``INSERT_LIFT`` above the region's floor."""
     way = doorway(ctx.scene, region)
     assert way is not None
 
@@ -244,8 +244,8 @@ def approach(ctx: Context, region: str, holding: str) -> list[Leg]:
 
 
 def insert(ctx: Context, obj: str, region: str) -> list[Leg]:
-    """In through the doorway until the TCP reaches its plane (``ENTRY``), down until the
-    object, righted, would stand ``DROP`` above the floor, let go, back out; then push its
+    """In through the doorway until the TCP is ``ENTRY`` outside its plane, down until the
+    object, upright, would stand ``DROP`` above the floor, let go, back out; then push its
     outer side with the closed hand, pitched, ``PUSH_HEIGHT`` above its bottom, until its
     origin is at ``goal_depth`` (perceived), and back out ``BACK_OUT``."""
     way = doorway(ctx.scene, region)
@@ -265,7 +265,7 @@ def insert(ctx: Context, obj: str, region: str) -> list[Leg]:
 
     push_turn: list[np.ndarray] = []  # the pushing hand's rotation, decided once
 
-    def behind(standoff: float):  # noqa: ANN202
+    def behind(standoff: float) -> Target:
         def target(now: LiberoPercept, start: LiberoPercept) -> tuple[np.ndarray, np.ndarray]:
             if not push_turn:
                 level = reaching_in(ctx, fingers_along(ctx, across), way)
