@@ -36,7 +36,7 @@ def pitched(rotation: np.ndarray, toward: np.ndarray, angle: float = PUSH_PITCH)
     """``rotation`` with its approach axis (the TCP's z, down) tilted ``angle`` toward
     ``toward``, about the fingers' axis: the wrist and forearm then stay back and up, clear
     of a cabinet's top while the fingertips push its bottom drawer (or of a microwave's
-    roof while the fingers hold a mug inside it)."""
+    roof while they push a mug into it, ``insert``)."""
     tilts = [Rotation.from_rotvec(rotation[:, 1] * a).as_matrix() @ rotation
              for a in (angle, -angle)]  # fmt: skip
     return max(tilts, key=lambda r: float(r[:, 2] @ toward))
