@@ -20,6 +20,10 @@ DOOR_STANDOFF = 0.045
 """Distance from a door's leaf the pushing hand comes down at [m]: robosuite's Panda hand
 is 3.2 cm thick either side of the TCP (at 2.5 cm it came down on the leaf's top edge of
 a door opened past a right angle, LIBERO-10 task 9 state 4)."""
+DOOR_PUSH_STANDOFF = 0.02
+"""The same while it pushes [m]: at the closed stop the hand's face is then past the shut
+leaf's plane (at 4.5 cm it stopped 1.3 cm short of it, and a slow push left the door open
+past LIBERO's 0.005 rad threshold, state 35)."""
 DOOR_LEAD = 0.35
 """How far ahead of the sensed door angle the push point is put [rad]."""
 DOOR_RADIUS = 0.6
@@ -80,16 +84,17 @@ def drawer(ctx: Context, region: str, opening: bool) -> list[Leg]:
 
 
 def door_point(
-    ctx: Context, percept: LiberoPercept, door: str, joint: Joint, q: float
-) -> np.ndarray:
+    ctx: Context, percept: LiberoPercept, door: str, joint: Joint, q: float,
+    standoff: float = DOOR_STANDOFF,
+) -> np.ndarray:  # fmt: skip
     """The push point on the door's closing side when the door is at ``q``, standing off
-    ``DOOR_STANDOFF`` from the leaf."""
+    ``standoff`` from the leaf."""
     tip = ctx.scene.leaves[door]
     turn = Rotation.from_rotvec(joint.axis * (q - joint.q0)).as_matrix()
     radial = turn @ (tip - joint.anchor)
     radial -= (radial @ joint.axis) * joint.axis
     closing = np.cross(joint.axis, radial / np.linalg.norm(radial)) * -joint.opening
-    point = joint.anchor + DOOR_RADIUS * radial - closing * DOOR_STANDOFF
+    point = joint.anchor + DOOR_RADIUS * radial - closing * standoff
     return np.r_[point[:2], joint.anchor[2]]
 
 
@@ -102,7 +107,7 @@ def door(ctx: Context, fixture: str) -> list[Leg]:
     def ahead(now: LiberoPercept, start: LiberoPercept) -> tuple[np.ndarray, None]:
         q = now.joint(joint.name) - joint.opening * DOOR_LEAD
         q = min(q, shut) if joint.opening < 0 else max(q, shut)
-        return door_point(ctx, now, fixture, joint, q), None
+        return door_point(ctx, now, fixture, joint, q, DOOR_PUSH_STANDOFF), None
 
     at = lambda now, s: door_point(ctx, now, fixture, joint, s.joint(joint.name))  # noqa: E731
     return [
