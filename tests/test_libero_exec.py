@@ -5,9 +5,11 @@ it): the fixture sensor, the facts read from percepts, an operator's controller,
 from __future__ import annotations
 
 import json
+from types import SimpleNamespace
 
 import numpy as np
 import pytest
+from scipy.spatial.transform import Rotation
 
 pytest.importorskip("libero.libero", reason="needs the libero extra: pip install -e .[libero]")
 
@@ -18,11 +20,21 @@ from osg_control.libero.drive import JointTargetDriver  # noqa: E402
 from osg_control.libero.env import LiberoEnv  # noqa: E402
 from osg_control.libero.executor import PlanExecutor  # noqa: E402
 from osg_control.libero.facts import holds, perceived_init  # noqa: E402
+from osg_control.libero.insert import (  # noqa: E402
+    DOOR_CLEARANCE,
+    PALM_CLEAR,
+    WALL_CLEARANCE,
+    doorway,
+    doorway_grasps,
+    goal_depth,
+    outer_grip,
+)
 from osg_control.libero.legs import Context, LegRunner  # noqa: E402
 from osg_control.libero.perception import FIXTURE_NOISE, LiberoPerception  # noqa: E402
 from osg_control.libero.pick_place import holding_ok  # noqa: E402
 from osg_control.libero.problem import Atom  # noqa: E402
 from osg_control.libero.robot import mounted_panda  # noqa: E402
+from osg_control.libero.scene import Joint, RegionBox, Scene  # noqa: E402
 
 DRAWER_JOINT = "white_cabinet_1_bottom_level"
 
@@ -139,14 +151,107 @@ def test_scripted_plan_puts_the_soup_in_the_basket(capsys) -> None:
                    for line in episode["trace"])  # fmt: skip
 
 
+def _box_scene(q0: float) -> Scene:
+    """A microwave-like scene: a region box (y 0.276-0.444) behind a door hinged about z at
+    (-0.17, 0.264), shut at 0 and open at ``q0``; the leaf's far corner is off the hinge's
+    line by the leaf's thickness (2.4 cm), as LIBERO's is; and a mug-like object: a body
+    too wide for the hand and a handle on its +x side."""
+    anchor = np.array([-0.17, 0.264, 1.016])
+    shut_corner = np.array([0.09, 0.24, 0.923])  # the leaf's far corner when shut
+    turn = Rotation.from_rotvec([0.0, 0.0, q0]).as_matrix()
+    region = RegionBox("oven_1_heating_region", "oven_1", None, np.array([0.0, 0.36, 1.016]),
+                       np.eye(3), np.array([0.12, 0.084, 0.08]), None)  # fmt: skip
+    joint = Joint("oven_1_hinge", "hinge", np.array([0.0, 0.0, 1.0]), anchor, q0, -1.3, -0.005,
+                  (-2.094, 0.0))  # fmt: skip
+    body = (np.array([-0.071, -0.053, 0.0]), np.array([0.034, 0.053, 0.103]))
+    handle = [(np.array([0.06, -0.009, 0.027]), np.array([0.068, 0.009, 0.085])),
+              (np.array([0.024, -0.009, 0.073]), np.array([0.068, 0.009, 0.086])),
+              (np.array([0.015, -0.009, 0.017]), np.array([0.065, 0.009, 0.035]))]  # fmt: skip
+    parts = [body, *handle]
+    extent = (np.min([lo for lo, _ in parts], axis=0), np.max([hi for _, hi in parts], axis=0))
+    return Scene({region.name: region}, {joint.name: joint}, {"oven_1": (joint.name,)},
+                 {"oven_1": anchor + turn @ (shut_corner - anchor)}, {}, {}, {"mug_1": extent},
+                 {"mug_1": parts}, {"mug_1": np.eye(3)})  # fmt: skip
+
+
+@pytest.mark.parametrize("q0", [-1.3, -1.58, -1.96])
+def test_doorway_geometry_from_the_leaf_and_the_box(q0: float) -> None:
+    """The doorway is the side of the region's box the shut leaf covers, its plane through
+    the hinge, whatever angle the door was read at; the object's origin goes to where its
+    outer side is inside the plane, unless its inner side would then reach the back."""
+    way = doorway(_box_scene(q0), "oven_1_heating_region")
+    assert way is not None
+    assert np.allclose(way.normal, [0.0, -1.0, 0.0], atol=1e-9)  # not 5 deg askew
+    assert way.plane == pytest.approx(-0.264) and way.back == pytest.approx(-0.444)
+    assert way.floor == pytest.approx(0.936)
+    depth = goal_depth(way, outer=0.068, inner=0.071)  # a mug, its handle out
+    assert depth == pytest.approx(way.plane - 0.068 - DOOR_CLEARANCE)
+    assert depth - 0.071 >= way.back + WALL_CLEARANCE - 1e-12
+    deep = goal_depth(way, outer=0.068, inner=0.15)  # the back wins: no wall pushed through
+    assert deep == pytest.approx(way.back + 0.15 + WALL_CLEARANCE)
+
+
+def test_no_doorway_without_a_door() -> None:
+    """A region whose parent has no hinged leaf (a drawer, a basket) is placed from above."""
+    scene = _box_scene(-1.58)
+    scene.leaves.clear()
+    assert doorway(scene, "oven_1_heating_region") is None
+    assert doorway(scene, "no_such_region") is None
+
+
+def test_outer_grip_takes_the_handle_toward_the_doorway() -> None:
+    """The slice furthest toward the doorway that fits the hand: the mug's handle, the
+    fingers across it (sliding along the object's y), the TCP ``PALM_CLEAR`` below the
+    handle's top so that the palm stays above it; nothing fits a bare wide body."""
+    ctx = SimpleNamespace(scene=_box_scene(-1.58))
+    point, axis = outer_grip(ctx, "mug_1", np.array([1.0, 0.0, 0.0]))  # type: ignore[arg-type]
+    assert axis == 1
+    assert 0.04 < point[0] <= 0.068 - 0.012 + 1e-9 and abs(point[1]) < 1e-9
+    assert point[2] == pytest.approx(0.086 - PALM_CLEAR)
+    ctx.scene.parts["mug_1"] = ctx.scene.parts["mug_1"][:1]
+    with pytest.raises(KeyError, match="no slice"):
+        outer_grip(ctx, "mug_1", np.array([1.0, 0.0, 0.0]))  # type: ignore[arg-type]
+
+
+def test_the_plan_chooses_the_doorway_grasp_at_pick_time() -> None:
+    """LIBERO-10 task 9: the plan's next place of the mug is into the microwave, so its
+    grasp (set when the plan is made, before the pick) is top-down on the side facing the
+    doorway (the handle), not the rim; the table's regions get none."""
+    env = LiberoEnv("libero_10", 9)
+    try:
+        obs = env.reset(0)
+        scene, percept = LiberoPerception(env).reset(obs, 0)
+        robot = mounted_panda(env.sim)
+        policy = PlanExecutor()
+        policy.start(env.problem, robot, scene, percept)
+        way = doorway(scene, "microwave_1_heating_region")
+        assert way is not None and np.allclose(way.normal, [0.0, -1.0, 0.0], atol=0.02)
+        assert set(policy.ctx.grasps) == {"white_yellow_mug_1"}
+        point, rotation = policy.ctx.grasps["white_yellow_mug_1"](percept)
+        origin = percept.position("white_yellow_mug_1")
+        assert way.normal @ (point - origin) > 0.04  # on the handle, out toward the doorway
+        assert rotation[:, 2] @ [0.0, 0.0, -1.0] > 0.99  # top-down
+        assert not doorway_grasps(
+            policy.ctx,
+            [("place-on", ("white_yellow_mug_1", "kitchen_table_microwave_init_region"))],
+        )
+    finally:
+        env.close()
+
+
 @pytest.mark.slow
-def test_scripted_plan_closes_the_drawer_on_the_bowl(capsys) -> None:
-    """LIBERO-10 task 3, initial state 0: the bowl into the open drawer, then the drawer
-    pushed shut (its joint sensed with noise), within 520 steps."""
+@pytest.mark.parametrize(
+    ("task", "placed"),
+    [(3, "place-in akita_black_bowl_1 white_cabinet_1_bottom_region"),
+     (9, "place-in white_yellow_mug_1 microwave_1_heating_region")],
+)  # fmt: skip
+def test_scripted_plan_puts_it_in_and_closes(capsys, task: int, placed: str) -> None:
+    """LIBERO-10, initial state 0, within 520 steps: task 3, the bowl into the open drawer,
+    then the drawer pushed shut (its joint sensed with noise); task 9, the mug picked by its
+    handle, taken in through the microwave's doorway and pushed in, the door pushed shut."""
     argv = ["--domain", "libero", "evaluate", "benchmark", "--suite", "libero_10", "--task",
-            "3", "--init-states", "0:1", "--policy", "scripted-plan", "--json"]  # fmt: skip
+            str(task), "--init-states", "0:1", "--policy", "scripted-plan", "--json"]  # fmt: skip
     assert cli.main(argv) == 0
     (episode,) = json.loads(capsys.readouterr().out)["episode_log"]
     assert episode["success"], episode["trace"]
-    assert any(line.endswith("place-in akita_black_bowl_1 white_cabinet_1_bottom_region: ok")
-               for line in episode["trace"])  # fmt: skip
+    assert any(line.endswith(f"{placed}: ok") for line in episode["trace"])

@@ -13,6 +13,9 @@ will come from: told which operator to run, they script its motion; they are not
   not a fixed pose: going back to one would spend the step budget).
 - ``pick ?o ?s`` / ``pick-out ?o ?r``: down to the grasp point, close, lift. A bowl is
   grasped at its rim (``RIM_GRASP``), anything else just above its origin.
+- ``approach ?r`` holding an object / ``place-in ?o ?r`` into a region behind a door (the
+  microwave's, roofed): in front of the doorway, then in through it sideways (``insert``;
+  the object was grasped for it when picked).
 - ``place-on ?o ?t`` / ``place-in ?o ?r``: over the target so the held object's origin is
   above the target's, lower until its bottom is ``DROP`` above the surface (``on``) or the
   region's floor (``in``), open, up.
@@ -26,6 +29,7 @@ will come from: told which operator to run, they script its motion; they are not
 
 from __future__ import annotations
 
+from osg_control.libero import insert
 from osg_control.libero.fixtures import door, drawer, knob
 from osg_control.libero.legs import Context, Leg
 from osg_control.libero.pick_place import approach, pick, place, retreat
@@ -39,12 +43,17 @@ def operator_legs(
     Raises:
         KeyError: an operator no controller runs, or a thing the scene does not describe.
     """
+    into_doorway = insert.doorway(ctx.scene, args[-1]) is not None
+    if operator == "approach" and holding is not None and into_doorway:
+        return insert.approach(ctx, args[0], holding)
     if operator == "approach":
         return approach(ctx, args[0], holding)
     if operator == "retreat":
         return retreat(ctx, holding)
     if operator in ("pick", "pick-out"):
         return pick(ctx, args[0])
+    if operator == "place-in" and into_doorway:
+        return insert.insert(ctx, args[0], args[1])
     if operator in ("place-on", "place-in"):
         return place(ctx, args[0], args[1], inside=operator == "place-in")
     if operator in ("open", "close") and args[0] in ctx.scene.leaves and operator == "close":

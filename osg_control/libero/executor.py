@@ -19,6 +19,7 @@ from osg_control.control.ik_backends import IKConfig
 from osg_control.libero.controllers import operator_legs
 from osg_control.libero.drive import GRIPPER_OPEN, JointTargetDriver
 from osg_control.libero.facts import holds, perceived_init
+from osg_control.libero.insert import doorway_grasps
 from osg_control.libero.legs import Context, LegRunner, hold, up
 from osg_control.libero.perception import LiberoPercept
 from osg_control.libero.pick_place import holding_ok
@@ -84,6 +85,7 @@ class PlanExecutor:
         result = plan_task(perceived, self.planner, SearchLimits(time_s=PLAN_TIME_S))
         steps = [s.action.split() for s in result.steps or ()]
         self.queue = [(s[0], tuple(s[1:])) for s in steps]
+        self.ctx.grasps = doorway_grasps(self.ctx, self.queue)  # chosen for where it goes
         self.trace.append(f"{self.step} plan ({result.status}): {len(self.queue)} steps")
 
     def _effect_holds(self, percept: LiberoPercept) -> bool:

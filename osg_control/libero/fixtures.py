@@ -16,6 +16,14 @@ from osg_control.libero.scene import Joint
 
 PUSH_STANDOFF = 0.05
 """Distance from a drawer's handle or a door's leaf the pushing hand starts at [m]."""
+DOOR_STANDOFF = 0.045
+"""Distance from a door's leaf the pushing hand comes down at [m]: robosuite's Panda hand
+is 3.2 cm thick either side of the TCP (at 2.5 cm it came down on the leaf's top edge of
+a door opened past a right angle, LIBERO-10 task 9 state 4)."""
+DOOR_PUSH_STANDOFF = 0.02
+"""The same while it pushes [m]: at the closed stop the hand's face is then past the shut
+leaf's plane (at 4.5 cm it stopped 1.3 cm short of it, and a slow push left the door open
+past LIBERO's 0.005 rad threshold, state 35)."""
 DOOR_LEAD = 0.35
 """How far ahead of the sensed door angle the push point is put [rad]."""
 DOOR_RADIUS = 0.6
@@ -23,17 +31,18 @@ DOOR_RADIUS = 0.6
 KNOB_TURN = 0.4
 """How far past LIBERO's threshold a knob is turned [rad]."""
 PUSH_PITCH = np.radians(35.0)
-"""How far the hand pushing a drawer shut is tilted toward the cabinet (``_pitched``)."""
+"""How far the hand pushing a drawer shut is tilted toward the cabinet (``pitched``)."""
 DRAWER_MARGIN = 0.02
 """How far past LIBERO's open threshold a drawer is pulled [m]."""
 
 
-def _pitched(rotation: np.ndarray, toward: np.ndarray) -> np.ndarray:
-    """``rotation`` with its approach axis (the TCP's z, down) tilted ``PUSH_PITCH`` toward
+def pitched(rotation: np.ndarray, toward: np.ndarray, angle: float = PUSH_PITCH) -> np.ndarray:
+    """``rotation`` with its approach axis (the TCP's z, down) tilted ``angle`` toward
     ``toward``, about the fingers' axis: the wrist and forearm then stay back and up, clear
-    of a cabinet's top while the fingertips push its bottom drawer."""
+    of a cabinet's top while the fingertips push its bottom drawer (or of a microwave's
+    roof while they push a mug into it, ``insert``)."""
     tilts = [Rotation.from_rotvec(rotation[:, 1] * a).as_matrix() @ rotation
-             for a in (PUSH_PITCH, -PUSH_PITCH)]  # fmt: skip
+             for a in (angle, -angle)]  # fmt: skip
     return max(tilts, key=lambda r: float(r[:, 2] @ toward))
 
 
@@ -61,8 +70,8 @@ def drawer(ctx: Context, region: str, opening: bool) -> list[Leg]:
             hold(GRIPPER_OPEN, 8),
             Leg(here(tuple(out * PUSH_STANDOFF)), GRIPPER_OPEN, 20, 0.02),
         ]  # fmt: skip
-    shut = joint.limits[1] if joint.opening < 0 else joint.limits[0]
-    across = _pitched(across, -out)
+    shut = joint.shut
+    across = pitched(across, -out)
     front = lambda now, q: _handle(ctx, now, joint, q) + out * PUSH_STANDOFF  # noqa: E731
     return [
         Leg(lambda now, s: (front(now, sensed(s)) + [0, 0, HOVER], across), GRIPPER_CLOSED,
@@ -75,16 +84,17 @@ def drawer(ctx: Context, region: str, opening: bool) -> list[Leg]:
 
 
 def door_point(
-    ctx: Context, percept: LiberoPercept, door: str, joint: Joint, q: float
-) -> np.ndarray:
+    ctx: Context, percept: LiberoPercept, door: str, joint: Joint, q: float,
+    standoff: float = DOOR_STANDOFF,
+) -> np.ndarray:  # fmt: skip
     """The push point on the door's closing side when the door is at ``q``, standing off
-    ``PUSH_STANDOFF`` / 2 from the leaf."""
+    ``standoff`` from the leaf."""
     tip = ctx.scene.leaves[door]
     turn = Rotation.from_rotvec(joint.axis * (q - joint.q0)).as_matrix()
     radial = turn @ (tip - joint.anchor)
     radial -= (radial @ joint.axis) * joint.axis
     closing = np.cross(joint.axis, radial / np.linalg.norm(radial)) * -joint.opening
-    point = joint.anchor + DOOR_RADIUS * radial - closing * PUSH_STANDOFF / 2
+    point = joint.anchor + DOOR_RADIUS * radial - closing * standoff
     return np.r_[point[:2], joint.anchor[2]]
 
 
@@ -92,12 +102,12 @@ def door(ctx: Context, fixture: str) -> list[Leg]:
     """Close a door: from beside the leaf, push the point ``DOOR_LEAD`` ahead of the
     sensed angle round the hinge, up to the closed stop."""
     joint = ctx.scene.joints[ctx.scene.articulated[fixture][0]]
-    shut = joint.limits[1] if joint.opening < 0 else joint.limits[0]
+    shut = joint.shut
 
     def ahead(now: LiberoPercept, start: LiberoPercept) -> tuple[np.ndarray, None]:
         q = now.joint(joint.name) - joint.opening * DOOR_LEAD
         q = min(q, shut) if joint.opening < 0 else max(q, shut)
-        return door_point(ctx, now, fixture, joint, q), None
+        return door_point(ctx, now, fixture, joint, q, DOOR_PUSH_STANDOFF), None
 
     at = lambda now, s: door_point(ctx, now, fixture, joint, s.joint(joint.name))  # noqa: E731
     return [

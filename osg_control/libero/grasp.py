@@ -51,7 +51,7 @@ class Grip:
     axis: int | None
 
 
-def _slab(ctx: Context, obj: str, axis: int, centre: float) -> list[tuple[np.ndarray, np.ndarray]]:
+def slab(ctx: Context, obj: str, axis: int, centre: float) -> list[tuple[np.ndarray, np.ndarray]]:
     """The object's geoms a finger pair sliding along ``axis`` sweeps down through when
     centred at ``centre`` on the other horizontal axis."""
     other = 1 - axis
@@ -73,7 +73,7 @@ def grip(ctx: Context, obj: str) -> Grip:
     candidates = []
     for a in (axis, 1 - axis):
         for centre in np.arange(low[1 - a], high[1 - a] + 1e-9, GRIP_STEP):
-            boxes = _slab(ctx, obj, a, float(centre))
+            boxes = slab(ctx, obj, a, float(centre))
             if not boxes:
                 continue
             lo_a, hi_a = min(b[0][a] for b in boxes), max(b[1][a] for b in boxes)
@@ -94,7 +94,10 @@ def grip(ctx: Context, obj: str) -> Grip:
 
 def grasp_rotation(ctx: Context, percept: LiberoPercept, obj: str) -> np.ndarray:
     """The top-down grasp turned about the vertical so that the fingers close across the
-    side ``grip`` chose (unturned for a round object)."""
+    side ``grip`` chose (unturned for a round object); the plan's own grasp where it set
+    one (``Context.grasps``)."""
+    if obj in ctx.grasps:
+        return ctx.grasps[obj](percept)[1]
     if _rim(ctx, obj):  # the hand's long side across the reach: it fits under cabinets
         return fingers_along(ctx, percept.position(obj) - ctx.base_xy)
     axis = grip(ctx, obj).axis
@@ -123,7 +126,10 @@ def _rim(ctx: Context, obj: str) -> bool:
 
 def grasp_point(ctx: Context, percept: LiberoPercept, obj: str) -> np.ndarray:
     """Where the TCP closes on ``obj``: just above its origin, or on a bowl's or mug's rim
-    (on the side away from a handle: the side of the rim further from the box's centre)."""
+    (on the side away from a handle: the side of the rim further from the box's centre);
+    the plan's own grasp where it set one (``Context.grasps``)."""
+    if obj in ctx.grasps:
+        return ctx.grasps[obj](percept)[0]
     pos, rot = percept.objects[obj]
     low, high = ctx.scene.extents[obj]
     if not _rim(ctx, obj):

@@ -7,7 +7,7 @@ gripper command, until it is near (or a condition holds, or its steps run out). 
 from __future__ import annotations
 
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 from scipy.spatial.transform import Rotation
@@ -23,6 +23,8 @@ TURN_TOLERANCE = 0.1
 """A leg that names a rotation is reached only within this of it [rad]."""
 HOVER = 0.10
 """Height above a thing's grasp point the empty hand approaches [m]."""
+GraspRule = Callable[[LiberoPercept], tuple[np.ndarray, np.ndarray]]
+"""percept -> the TCP point and rotation an object is grasped at (``Context.grasps``)."""
 
 
 @dataclass(frozen=True)
@@ -42,7 +44,9 @@ class Context:
     """What every controller of an episode shares: the scene, the IK driver, the top-down
     rotation of the episode's start (``base``, which fixture controllers use), the last
     commanded rotation (``rotation``: a leg that names none keeps it), the home height,
-    the objects' categories and where the arm's base stands (``base_xy``)."""
+    the objects' categories, where the arm's base stands (``base_xy``), and the grasps
+    that replace the top-down one for objects the plan takes somewhere it does not fit
+    (``grasps``: set by the plan executor from what the plan does next, ``insert``)."""
 
     scene: Scene
     driver: JointTargetDriver
@@ -50,6 +54,7 @@ class Context:
     home_z: float
     categories: dict[str, str]
     base_xy: np.ndarray
+    grasps: dict[str, GraspRule] = field(default_factory=dict)
 
     def __post_init__(self) -> None:
         self.rotation = self.base

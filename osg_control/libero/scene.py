@@ -72,6 +72,11 @@ class Joint:
     limits: tuple[float, float]
 
     @property
+    def shut(self) -> float:
+        """The end of its range that closes it (a door's or drawer's closed stop)."""
+        return self.limits[1] if self.opening < 0 else self.limits[0]
+
+    @property
     def opening(self) -> float:
         """+1 when opening increases the joint value, -1 when it decreases it."""
         return 1.0 if self.active > self.rest else -1.0

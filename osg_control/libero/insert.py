@@ -1,0 +1,290 @@
+"""Putting an object into a region behind a hinged door (the microwave's heating region).
+
+Such a region has a roof: an object set down from above, the hand over it, does not go in
+(the microwave's inside is 16 cm high, a mug 10 cm, the hand above it 12 cm more). It is
+entered sideways through its doorway instead, every quantity read from the scene's
+description (``doorway``: the region's box and the side of it the door's leaf, turned to its
+closed stop, covers: the doorway's plane and its outward normal) and the percept:
+
+- the grasp is chosen before the pick, because the plan takes the object there next
+  (``doorway_grasps``, which the plan executor sets from its plan): top-down on the slice of
+  the object furthest out toward the doorway that fits the hand (``outer_grip``: a mug's
+  handle), so that the hand stays outside while the object goes in;
+- ``approach`` carries it to in front of the doorway, at the height it goes in at
+  (``INSERT_LIFT`` above the region's floor);
+- ``insert`` takes it in until the hand reaches the doorway (``ENTRY``), sets it down, lets
+  go and backs out, then pushes it with the closed hand, pitched ``PUSH_PITCH`` so that the
+  palm stays outside and below the roof, until its outer side is ``DOOR_CLEARANCE`` inside
+  the doorway's plane (the door then closes over it) but its inner side stays
+  ``WALL_CLEARANCE`` off the region's back (``goal_depth``).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.spatial.transform import Rotation
+
+from osg_control.libero.drive import GRIPPER_CLOSED, GRIPPER_OPEN
+from osg_control.libero.fixtures import pitched
+from osg_control.libero.grasp import (
+    FINGER_HALF,
+    GRIP_STEP,
+    GRIP_WIDTH,
+    TURN_WINDOW,
+    fingers_along,
+    slab,
+)
+from osg_control.libero.legs import Context, GraspRule, Leg, Target, here, hold
+from osg_control.libero.perception import LiberoPercept
+from osg_control.libero.pick_place import DROP
+from osg_control.libero.scene import Scene
+
+PUSH_PITCH = np.radians(45.0)
+"""How far the hand pushing an object in tilts its approach toward the inside [rad]: its
+palm stays outside and below the roof while the fingertips reach in."""
+PALM_CLEAR = 0.02
+"""How far below a grasped slice's top the TCP closes at most [m] (robosuite's Panda
+hand: the palm is 2.6 cm above the TCP)."""
+DOOR_CLEARANCE = 0.015
+"""How far inside the doorway's plane the object's outer side is put [m]."""
+WALL_CLEARANCE = 0.01
+"""How far off the region's back the object's inner side stays at least [m]."""
+INSERT_LIFT = 0.03
+"""Height of the object's bottom above the region's floor while it goes in [m]."""
+OUTSIDE = 0.03
+"""How far outside the doorway's plane the object waits before it goes in [m]."""
+ENTRY = 0.04
+"""How far outside the doorway's plane the TCP stops while the object goes in held [m]
+(robosuite's Panda hand is 3.2 cm thick either side of the TCP: it stays clear of the
+roof's front edge)."""
+BACK_OUT = 0.06
+"""How far the hand backs out along the doorway's normal [m]."""
+PUSH_HEIGHT = 0.025
+"""Height above the object's bottom the closed hand pushes it at [m] (low: it slides
+rather than tips)."""
+PUSH_STANDOFF = 0.05
+"""How far outside the object's outer side the push starts [m]."""
+PUSH_BITE = 0.02
+"""How far inside the object's outer side the push aims, the target moving with it [m]."""
+
+
+@dataclass(frozen=True)
+class Doorway:
+    """The way into a region behind a hinged door, in the world frame.
+
+    Attributes:
+        region: the region.
+        normal: the horizontal unit vector out through the doorway.
+        plane: ``normal`` . x on the doorway's plane (the hinge line: the shut leaf's
+            inner face).
+        back: ``normal`` . x on the region's back face.
+        centre: the region's centre.
+        floor: the region's floor height [m].
+    """
+
+    region: str
+    normal: np.ndarray
+    plane: float
+    back: float
+    centre: np.ndarray
+    floor: float
+
+
+def doorway(scene: Scene, region: str) -> Doorway | None:
+    """The doorway into ``region`` when a hinged door (``Scene.leaves``) closes its
+    parent, else None: the side of the region's box that the door's leaf, turned to its
+    closed stop, covers (the horizontal face whose normal points most toward the closed
+    leaf's middle), its plane through the hinge line. (The leaf's far corner is off the
+    hinge's line by the leaf's thickness: a normal taken across it was 5 deg askew.)"""
+    box = scene.regions.get(region)
+    if box is None or box.parent not in scene.leaves:
+        return None
+    joint = scene.joints[scene.articulated[box.parent][0]]
+    turn = Rotation.from_rotvec(joint.axis * (joint.shut - joint.q0)).as_matrix()
+    closed = joint.anchor + turn @ (scene.leaves[box.parent] - joint.anchor)
+    middle = (joint.anchor + closed) / 2 - box.pos
+    sides = [(sign * box.mat[:, i], float(box.size[i])) for i in range(3) for sign in (1.0, -1.0)
+             if abs(box.mat[2, i]) < 0.5]  # fmt: skip
+    normal, half = max(sides, key=lambda side: float(side[0][:2] @ middle[:2]))
+    normal = normal * np.array([1.0, 1.0, 0.0]) / np.linalg.norm(normal[:2])
+    floor = float(box.pos[2] - np.abs(box.mat @ box.size)[2])
+    return Doorway(region, normal, float(normal @ joint.anchor), float(normal @ box.pos - half),
+                   box.pos.copy(), floor)  # fmt: skip
+
+
+def reach(ctx: Context, percept: LiberoPercept, obj: str, direction: np.ndarray) -> float:
+    """How far ``obj``'s geometry extends from its origin along ``direction`` (its box's
+    corners in its perceived pose)."""
+    _, rot = percept.objects[obj]
+    low, high = ctx.scene.extents[obj]
+    corners = np.array([[x, y, z] for x in (low[0], high[0]) for y in (low[1], high[1])
+                        for z in (low[2], high[2])])  # fmt: skip
+    return float(np.max(corners @ rot.T @ direction))
+
+
+def goal_depth(way: Doorway, outer: float, inner: float) -> float:
+    """Where along the doorway's normal the object's origin goes: its outer side
+    (``outer`` out from the origin) ``DOOR_CLEARANCE`` inside the plane, unless its inner
+    side (``inner`` in from it) would then come closer than ``WALL_CLEARANCE`` to the back
+    (the back wins: nothing is pushed through a wall)."""
+    return max(way.plane - outer - DOOR_CLEARANCE, way.back + inner + WALL_CLEARANCE)
+
+
+def _origin_at(
+    ctx: Context, percept: LiberoPercept, obj: str, way: Doorway, depth: float, lift: float
+) -> np.ndarray:
+    """The origin that puts ``obj`` at ``depth`` along the normal, its extent centred
+    across the doorway on the region's centre, its bottom ``lift`` above the floor."""
+    across = np.cross([0.0, 0.0, 1.0], way.normal)
+    offset = (reach(ctx, percept, obj, across) - reach(ctx, percept, obj, -across)) / 2
+    lateral = float(across @ way.centre) - offset
+    bottom = ctx.scene.extents[obj][0][2]
+    return way.normal * depth + across * lateral + np.array([0.0, 0.0, way.floor + lift - bottom])
+
+
+def outer_grip(ctx: Context, obj: str, outward: np.ndarray) -> tuple[np.ndarray, int]:
+    """The grasp, in ``obj``'s frame, on the slice furthest along ``outward`` (a horizontal
+    direction in its frame) that the hand closes round (``GRIP_WIDTH``) with both fingers
+    over it: the TCP point (halfway up the slice, or higher so that the palm stays above
+    it: ``PALM_CLEAR``) and the axis the fingers slide along.
+
+    Raises:
+        KeyError: no slice of ``obj`` fits the hand.
+    """
+    low, high = ctx.scene.extents[obj]
+    best: tuple[float, np.ndarray, int] | None = None
+    for axis in (0, 1):
+        other = 1 - axis
+        for centre in np.arange(low[other], high[other] + 1e-9, GRIP_STEP):
+            boxes = slab(ctx, obj, axis, float(centre))
+            if not boxes:
+                continue
+            inside = (min(b[0][other] for b in boxes) <= centre - FINGER_HALF
+                      and centre + FINGER_HALF <= max(b[1][other] for b in boxes))  # fmt: skip
+            lo, hi = min(b[0][axis] for b in boxes), max(b[1][axis] for b in boxes)
+            if not inside or hi - lo > GRIP_WIDTH:
+                continue
+            point = np.zeros(3)
+            point[axis], point[other] = (lo + hi) / 2, centre
+            top = max(b[1][2] for b in boxes)
+            point[2] = max((min(b[0][2] for b in boxes) + top) / 2, top - PALM_CLEAR)
+            score = float(point[:2] @ outward[:2])
+            if best is None or score > best[0]:
+                best = (score, point, axis)
+    if best is None:
+        raise KeyError(f"no slice of {obj!r} fits the hand")
+    return best[1], best[2]
+
+
+def reaching_in(ctx: Context, rotation: np.ndarray, way: Doorway) -> np.ndarray:
+    """Of a top-down ``rotation`` and the same turned half a turn about the vertical (the
+    fingers alike), the one whose x axis points more into the doorway, where the wrist's
+    window (``grasp.TURN_WINDOW``) allows: with the other the arm wound its wrist and
+    stalled short of the doorway (LIBERO-10 task 9, state 4)."""
+    turned = rotation @ np.diag([-1.0, -1.0, 1.0])
+    allowed = Rotation.from_matrix(ctx.base.T @ turned).magnitude() <= np.pi / 2 + TURN_WINDOW
+    inward = allowed and turned[:, 0] @ way.normal < rotation[:, 0] @ way.normal
+    return turned if inward else rotation
+
+
+def doorway_grasp(ctx: Context, obj: str, way: Doorway) -> GraspRule:
+    """The grasp for taking ``obj`` through ``way``: top-down on ``outer_grip``'s slice,
+    chosen at the rule's first use and then kept (a slice chosen anew each step jumped
+    elsewhere when the descending fingers tilted the object)."""
+    chosen: list[tuple[np.ndarray, int]] = []
+
+    def rule(percept: LiberoPercept) -> tuple[np.ndarray, np.ndarray]:
+        pos, rot = percept.objects[obj]
+        if not chosen:
+            chosen.append(outer_grip(ctx, obj, rot.T @ way.normal))
+        point, axis = chosen[0]
+        return pos + rot @ point, reaching_in(ctx, fingers_along(ctx, rot[:, axis]), way)
+
+    return rule
+
+
+def doorway_grasps(ctx: Context, steps: list[tuple[str, tuple[str, ...]]]) -> dict[str, GraspRule]:
+    """The grasps a plan's ``steps`` need: for each object whose next place is into a
+    region behind a door, ``doorway_grasp`` (the others keep the top-down one)."""
+    grasps: dict[str, GraspRule] = {}
+    placed: set[str] = set()
+    for operator, args in steps:
+        if operator not in ("place-in", "place-on") or args[0] in placed:
+            continue
+        placed.add(args[0])
+        way = doorway(ctx.scene, args[1]) if operator == "place-in" else None
+        if way is not None:
+            grasps[args[0]] = doorway_grasp(ctx, args[0], way)
+    return grasps
+
+
+def _carried(percept: LiberoPercept, obj: str) -> np.ndarray:
+    return percept.tcp - percept.position(obj)
+
+
+def _upright(percept: LiberoPercept, obj: str) -> np.ndarray:
+    """``obj``'s perceived rotation less any tilt: its yaw about the vertical."""
+    x = percept.objects[obj][1][:, 0] * np.array([1.0, 1.0, 0.0])
+    return Rotation.from_rotvec([0.0, 0.0, np.arctan2(x[1], x[0])]).as_matrix()
+
+
+def approach(ctx: Context, region: str, holding: str) -> list[Leg]:
+    """Carry ``holding`` to in front of the doorway into ``region``: its inner side
+    ``OUTSIDE`` out of the plane, its bottom ``INSERT_LIFT`` above the region's floor."""
+    way = doorway(ctx.scene, region)
+    assert way is not None
+
+    def target(now: LiberoPercept, start: LiberoPercept) -> tuple[np.ndarray, None]:
+        depth = way.plane + reach(ctx, now, holding, -way.normal) + OUTSIDE
+        return _origin_at(ctx, now, holding, way, depth, INSERT_LIFT) + _carried(now, holding), None
+
+    return [Leg(target, GRIPPER_CLOSED, 90, 0.015)]
+
+
+def insert(ctx: Context, obj: str, region: str) -> list[Leg]:
+    """In through the doorway until the TCP is ``ENTRY`` outside its plane, down until the
+    object, upright, would stand ``DROP`` above the floor, let go, back out; then push its
+    outer side with the closed hand, pitched, ``PUSH_HEIGHT`` above its bottom, until its
+    origin is at ``goal_depth`` (perceived), and back out ``BACK_OUT``."""
+    way = doorway(ctx.scene, region)
+    assert way is not None
+    n = way.normal
+    across = np.cross([0.0, 0.0, 1.0], n)
+
+    def entry(now: LiberoPercept, start: LiberoPercept) -> tuple[np.ndarray, None]:
+        carried = _carried(now, obj)
+        depth = way.plane + ENTRY - float(n @ carried)
+        return _origin_at(ctx, now, obj, way, depth, INSERT_LIFT) + carried, None
+
+    def down(now: LiberoPercept, start: LiberoPercept) -> tuple[np.ndarray, None]:
+        grip_z = outer_grip(ctx, obj, _upright(now, obj).T @ n)[0][2]
+        bottom = ctx.scene.extents[obj][0][2]
+        return np.r_[start.tcp[:2], way.floor + DROP - bottom + grip_z], None
+
+    push_turn: list[np.ndarray] = []  # the pushing hand's rotation, decided once
+
+    def behind(standoff: float) -> Target:
+        def target(now: LiberoPercept, start: LiberoPercept) -> tuple[np.ndarray, np.ndarray]:
+            if not push_turn:
+                level = reaching_in(ctx, fingers_along(ctx, across), way)
+                push_turn.append(pitched(level, -n, PUSH_PITCH))
+            origin = now.position(obj)
+            side = float(n @ origin) + reach(ctx, now, obj, n) + standoff
+            point = n * side + across * float(across @ origin)
+            return np.r_[point[:2], origin[2] + PUSH_HEIGHT], push_turn[0]
+
+        return target
+
+    def pushed(now: LiberoPercept) -> bool:
+        outer, inner = reach(ctx, now, obj, n), reach(ctx, now, obj, -n)
+        return float(n @ now.position(obj)) <= goal_depth(way, outer, inner)
+
+    return [
+        Leg(entry, GRIPPER_CLOSED, 40, 0.01), Leg(down, GRIPPER_CLOSED, 30, 0.01),
+        hold(GRIPPER_OPEN, 10), Leg(here(tuple(n * BACK_OUT)), GRIPPER_OPEN, 20, 0.02),
+        Leg(behind(PUSH_STANDOFF), GRIPPER_CLOSED, 40, 0.01),
+        Leg(behind(-PUSH_BITE), GRIPPER_CLOSED, 50, 0.0, pushed),
+        Leg(here(tuple(n * BACK_OUT)), GRIPPER_CLOSED, 20, 0.02),
+    ]  # fmt: skip
