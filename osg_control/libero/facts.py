@@ -112,7 +112,10 @@ def perceived_init(
     rest). An object perceived on no support keeps the task file's support atoms: the
     table's start regions are small boxes round the starting spots, and ``pick`` needs a
     support only as its precondition. A drawer, door or knob between LIBERO's thresholds
-    is stated as the goal does not want it, so that the plan moves it."""
+    is stated as the goal does not want it, so that the plan moves it: a drawer the goal
+    puts something in is open only past LIBERO's open threshold (a closed drawer's noisy
+    reading straddles its closed threshold, and it read as half-way, so open, half the
+    time)."""
     atoms: list[Atom] = []
     for obj in problem.objects:
         if obj not in percept.objects:
@@ -130,6 +133,9 @@ def perceived_init(
             mine = [a for a in problem.init if a.predicate in ("on", "in") and a.args[0] == obj]
         atoms += mine
     wanted = {a.args[0] for a in problem.goal if a.predicate in ("open", "turnon")}
+    wanted |= {
+        a.args[1] for a in problem.goal if a.predicate == "in" and a.args[1] in scene.articulated
+    }  # a drawer the goal puts something in
     for thing in scene.articulated:
         predicate = "turnon" if thing in scene.knobs else "open"
         if thing in wanted:  # open / on only when perceived past LIBERO's threshold

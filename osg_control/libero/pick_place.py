@@ -11,7 +11,7 @@ from scipy.spatial.transform import Rotation
 
 from osg_control.libero.drive import GRIPPER_CLOSED, GRIPPER_OPEN
 from osg_control.libero.facts import held, region_pose
-from osg_control.libero.fixtures import door_point
+from osg_control.libero.fixtures import door_point, drawer_front
 from osg_control.libero.grasp import grasp_point, grasp_rotation
 from osg_control.libero.legs import HOVER, Context, Leg, hold, up
 from osg_control.libero.perception import LiberoPercept
@@ -56,7 +56,8 @@ def _carried_offset(percept: LiberoPercept, obj: str | None) -> np.ndarray:
 
 
 def approach(ctx: Context, thing: str, holding: str | None) -> list[Leg]:
-    """Hover above ``thing``; with an object in hand, its origin ``CARRY`` above it."""
+    """Hover above ``thing`` (a drawer: in front of its handle, ``fixtures.drawer_front``);
+    with an object in hand, its origin ``CARRY`` above it."""
 
     def target(now: LiberoPercept, start: LiberoPercept) -> tuple[np.ndarray, np.ndarray | None]:
         point = anchor(ctx, now, thing)
@@ -68,6 +69,9 @@ def approach(ctx: Context, thing: str, holding: str | None) -> list[Leg]:
             if Rotation.from_matrix(rot.T @ turn).magnitude() > TURN_FIRST:  # turn in place
                 return np.r_[start.tcp[:2], max(start.tcp[2], ctx.home_z)], turn
             return hover, turn
+        region = ctx.scene.regions.get(thing)
+        if holding is None and region is not None and region.joint is not None:
+            point = drawer_front(ctx, now, thing)  # a drawer: in front of its handle
         if holding is None:
             return point + np.array([0.0, 0.0, HOVER]), ctx.base
         return point + np.array([0.0, 0.0, CARRY]) + _carried_offset(now, holding), None
