@@ -155,9 +155,7 @@ def test_scripted_plan_closes_the_drawer_on_the_bowl(capsys) -> None:
 @pytest.mark.parametrize(
     ("task", "fixture"),
     [
-        pytest.param(
-            0, "wooden_cabinet_1_middle_region", id="drawer-open", marks=pytest.mark.slow
-        ),
+        pytest.param(0, "wooden_cabinet_1_middle_region", id="drawer-open", marks=pytest.mark.slow),
         pytest.param(7, "flat_stove_1", id="knob-turn-on"),
     ],  # fmt: skip
 )
