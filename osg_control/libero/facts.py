@@ -89,6 +89,12 @@ def _joint_state(scene: Scene, percept: LiberoPercept, thing: str, active: bool)
     return all(j.is_rest(percept.joint(j.name)) for j in joints)
 
 
+def _half_open(scene: Scene, percept: LiberoPercept, thing: str) -> bool:
+    """Whether any joint of ``thing`` is perceived past the middle of its LIBERO thresholds."""
+    joints = [scene.joints[j] for j in scene.articulated.get(thing, ())]
+    return any((percept.joint(j.name) - (j.active + j.rest) / 2) * j.opening > 0 for j in joints)
+
+
 def holds(scene: Scene, percept: LiberoPercept, atom: Atom) -> bool:
     """Whether a goal atom holds in the percept (False for a predicate it cannot read)."""
     args = atom.args
@@ -112,7 +118,10 @@ def perceived_init(
     rest). An object perceived on no support keeps the task file's support atoms: the
     table's start regions are small boxes round the starting spots, and ``pick`` needs a
     support only as its precondition. A drawer, door or knob between LIBERO's thresholds
-    is stated as the goal does not want it, so that the plan moves it."""
+    is stated as the goal does not want it, so that the plan moves it; but a drawer the
+    goal puts something in is open when more than half-way open (a closed drawer's noisy
+    reading straddles its closed threshold, and read as half-way, so open, half the time;
+    LIBERO-10's open drawer starts 1-12 mm past its open threshold)."""
     atoms: list[Atom] = []
     for obj in problem.objects:
         if obj not in percept.objects:
@@ -130,10 +139,13 @@ def perceived_init(
             mine = [a for a in problem.init if a.predicate in ("on", "in") and a.args[0] == obj]
         atoms += mine
     wanted = {a.args[0] for a in problem.goal if a.predicate in ("open", "turnon")}
+    filled = {a.args[1] for a in problem.goal if a.predicate == "in"}  # drawers filled
     for thing in scene.articulated:
         predicate = "turnon" if thing in scene.knobs else "open"
         if thing in wanted:  # open / on only when perceived past LIBERO's threshold
             active = _joint_state(scene, percept, thing, active=True)
+        elif thing in filled:  # open when more than half-way: the hand gets in
+            active = _half_open(scene, percept, thing)
         else:  # half-way counts as open / on: it still has to be closed / turned off
             active = not _joint_state(scene, percept, thing, active=False)
         if active:

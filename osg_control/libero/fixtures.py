@@ -1,6 +1,7 @@
 """Controllers for LIBERO's fixtures, from the scene's joints and the sensed joint angles:
-a drawer opened by pulling its handle or closed by pushing its front, a door closed by
-pushing its leaf round the hinge, a knob turned with the wrist.
+a drawer opened by pulling its handle (pinched top and bottom by the hand held level in
+front of it) or closed by pushing its front, a door closed by pushing its leaf round the
+hinge, a knob grasped across its grip and turned with the wrist.
 """
 
 from __future__ import annotations
@@ -30,10 +31,22 @@ DOOR_RADIUS = 0.6
 """Where a door is pushed, as a fraction of the leaf's length from the hinge."""
 KNOB_TURN = 0.4
 """How far past LIBERO's threshold a knob is turned [rad]."""
+KNOB_STEP = 0.1
+"""How far ahead of the sensed knob angle the wrist is turned each step [rad]: further
+ahead, the IK gave up the grasp point for the turn (the knob is heavy) and the fingers
+slipped off."""
+KNOB_PITCH = np.radians(30.0)
+"""How far the hand grasping a knob is tilted, its fingertips toward the arm's base: a
+knob next to the base (LIBERO-Goal's stove) is then reached at its grasp height; top-down,
+the elbow folded to its limit 2 cm above it."""
 PUSH_PITCH = np.radians(35.0)
 """How far the hand pushing a drawer shut is tilted toward the cabinet (``pitched``)."""
 DRAWER_MARGIN = 0.02
 """How far past LIBERO's open threshold a drawer is pulled [m]."""
+PULL_STANDOFF = 0.12
+"""How far in front of a drawer's handle the hand hovers and turns level before it goes
+in [m]: the top-down hand, its long side along the drawer's travel, stays clear of the
+handles of the drawers above."""
 
 
 def pitched(rotation: np.ndarray, toward: np.ndarray, angle: float = PUSH_PITCH) -> np.ndarray:
@@ -46,9 +59,27 @@ def pitched(rotation: np.ndarray, toward: np.ndarray, angle: float = PUSH_PITCH)
     return max(tilts, key=lambda r: float(r[:, 2] @ toward))
 
 
+def _level(rotation: np.ndarray, out: np.ndarray) -> np.ndarray:
+    """The top-down ``rotation`` (its fingers sliding along ``out``) tilted a quarter turn
+    about its x axis so that it faces ``-out``: the hand level, pointing into the drawer,
+    its fingers sliding vertically (they close on the handle's bar from above and below;
+    from above, the handles of the drawers higher up are in the way)."""
+    tilts = [Rotation.from_rotvec(rotation[:, 0] * a).as_matrix() @ rotation
+             for a in (np.pi / 2, -np.pi / 2)]  # fmt: skip
+    return max(tilts, key=lambda r: float(r[:, 2] @ -out))
+
+
 def _handle(ctx: Context, percept: LiberoPercept, joint: Joint, q: float) -> np.ndarray:
     """A drawer's handle when its joint is at ``q``."""
     return ctx.scene.handles[joint.name] + joint.axis * (q - joint.q0)
+
+
+def drawer_front(ctx: Context, percept: LiberoPercept, region: str) -> np.ndarray:
+    """The point ``PULL_STANDOFF`` in front of a drawer's handle at its sensed travel: where
+    the empty hand approaches a drawer (``pick_place.approach``, ``HOVER`` above it)."""
+    joint = ctx.scene.joints[ctx.scene.articulated[region][0]]
+    out = joint.axis * joint.opening
+    return _handle(ctx, percept, joint, percept.joint(joint.name)) + out * PULL_STANDOFF
 
 
 def drawer(ctx: Context, region: str, opening: bool) -> list[Leg]:
@@ -58,14 +89,17 @@ def drawer(ctx: Context, region: str, opening: bool) -> list[Leg]:
     out = joint.axis * joint.opening  # the direction the drawer comes out
     across = fingers_along(ctx, np.cross(out, [0.0, 0.0, 1.0]))  # the hand thin along out
     sensed = lambda p: p.joint(joint.name)  # noqa: E731
-    if opening:  # pinch the handle's bar front and back, the fingers along ``out``
+    if opening:  # pinch the handle's bar top and bottom, the hand level, facing the drawer
         goal = joint.active + joint.opening * DRAWER_MARGIN
-        along = fingers_along(ctx, out)
+        level = _level(fingers_along(ctx, out), out)
         return [
-            Leg(lambda now, s: (_handle(ctx, now, joint, sensed(now)), along), GRIPPER_OPEN,
-                40, 0.008),
+            Leg(lambda now, s: (drawer_front(ctx, s, region) + [0, 0, HOVER], level),
+                GRIPPER_OPEN, 40, 0.02),
+            Leg(lambda now, s: (drawer_front(ctx, s, region), level), GRIPPER_OPEN, 40, 0.01),
+            Leg(lambda now, s: (_handle(ctx, s, joint, sensed(s)), level), GRIPPER_OPEN, 40,
+                0.006),
             hold(GRIPPER_CLOSED, 12),
-            Leg(lambda now, s: (_handle(ctx, now, joint, goal), along), GRIPPER_CLOSED, 60,
+            Leg(lambda now, s: (_handle(ctx, now, joint, goal), level), GRIPPER_CLOSED, 60,
                 0.01, lambda p: joint.is_active(sensed(p) - joint.opening * DRAWER_MARGIN)),
             hold(GRIPPER_OPEN, 8),
             Leg(here(tuple(out * PUSH_STANDOFF)), GRIPPER_OPEN, 20, 0.02),
@@ -119,26 +153,28 @@ def door(ctx: Context, fixture: str) -> list[Leg]:
 
 
 def knob(ctx: Context, fixture: str, on: bool) -> list[Leg]:
-    """Grasp the knob, turn the wrist about its axis until the sensed angle is
-    ``KNOB_TURN`` past LIBERO's threshold, let go, up."""
+    """Grasp the knob across its grip (``scene.Scene.grips``), the hand tilted
+    ``KNOB_PITCH``, turn the wrist about the knob's axis (at most ``KNOB_STEP`` ahead of
+    where it is) until the sensed angle is ``KNOB_TURN`` past LIBERO's threshold, let go,
+    up."""
     joint = ctx.scene.joints[ctx.scene.articulated[fixture][0]]
     point = ctx.scene.knobs[fixture]
     sign = joint.opening if on else -joint.opening
     goal = (joint.active if on else joint.rest) + sign * KNOB_TURN
+    grasp = pitched(fingers_along(ctx, ctx.scene.grips[fixture]), ctx.base_xy - point,
+                    KNOB_PITCH)  # fmt: skip
 
     def turn(now: LiberoPercept, start: LiberoPercept) -> tuple[np.ndarray, np.ndarray]:
-        left = goal - now.joint(joint.name)
-        step = float(np.clip(left, -0.6, 0.6))
+        step = float(np.clip(goal - now.joint(joint.name), -KNOB_STEP, KNOB_STEP))
         _, rot = ctx.driver.tcp_pose(now.joints)
-        spin = Rotation.from_rotvec(joint.axis * step).as_matrix()
-        return point, spin @ rot
+        return point, Rotation.from_rotvec(joint.axis * step).as_matrix() @ rot
 
     def done(p: LiberoPercept) -> bool:
         return bool((p.joint(joint.name) - goal) * sign > 0)
 
     return [
-        Leg(lambda now, s: (point + [0, 0, HOVER], ctx.base), GRIPPER_OPEN, 40, 0.02),
-        Leg(lambda now, s: (point, ctx.base), GRIPPER_OPEN, 30, 0.006),
+        Leg(lambda now, s: (point + [0, 0, HOVER], grasp), GRIPPER_OPEN, 40, 0.02),
+        Leg(lambda now, s: (point, grasp), GRIPPER_OPEN, 30, 0.006),
         hold(GRIPPER_CLOSED, 12),
         Leg(turn, GRIPPER_CLOSED, 60, 0.0, done),
         hold(GRIPPER_OPEN, 8),

@@ -26,6 +26,10 @@ ROUND = 1.3
 GRASP_ABOVE_ORIGIN = 0.005
 """The grasp height above an object's origin tried first [m] (2 cm higher missed the flat
 boxes: cream cheese, butter, pudding)."""
+GRASP_FLOOR = 0.03
+"""The least height above an object's bottom the TCP closes at, up to half the object's
+height [m]: an object whose origin is at its bottom (the wine bottle) was grasped at the
+table, the fingertips on it."""
 GRIP_WIDTH = 0.07
 """The widest side the open hand (about 8 cm) closes round with a margin [m]."""
 BAND = 0.02
@@ -60,14 +64,16 @@ def slab(ctx: Context, obj: str, axis: int, centre: float) -> list[tuple[np.ndar
 
 
 def grip(ctx: Context, obj: str) -> Grip:
-    """Where to grasp ``obj`` from above: just above its origin across its narrower side
-    when everything the fingers pass on the way down fits between them (``GRIP_WIDTH``);
+    """Where to grasp ``obj`` from above: just above its origin (at least ``GRASP_FLOOR``
+    above its bottom) across its narrower side when everything the fingers pass on the way
+    down fits between them (``GRIP_WIDTH``);
     else the slice of the object, along either horizontal axis, that fits with the least
     width (a moka pot's handle), at the origin's height clamped into that slice."""
     low, high = ctx.scene.extents[obj]
     width = high[:2] - low[:2]
     axis = int(np.argmin(width))
-    default = np.array([0.0, 0.0, GRASP_ABOVE_ORIGIN])
+    lift = min(low[2] + GRASP_FLOOR, (low[2] + high[2]) / 2)  # an origin at the bottom
+    default = np.array([0.0, 0.0, max(GRASP_ABOVE_ORIGIN, lift)])
     if max(width) < ROUND * min(width) and min(width) <= GRIP_WIDTH:
         return Grip(default, None)
     candidates = []

@@ -11,7 +11,7 @@ from scipy.spatial.transform import Rotation
 
 from osg_control.libero.drive import GRIPPER_CLOSED, GRIPPER_OPEN
 from osg_control.libero.facts import held, region_pose
-from osg_control.libero.fixtures import door_point
+from osg_control.libero.fixtures import door_point, drawer_front
 from osg_control.libero.grasp import grasp_point, grasp_rotation
 from osg_control.libero.legs import HOVER, Context, Leg, hold, up
 from osg_control.libero.perception import LiberoPercept
@@ -24,6 +24,9 @@ TOP_CLEARANCE = 0.05
 CARRY = 0.30
 """Height above the target the held object's origin is carried to [m] (a hanging bottle
 clears a basket's rim)."""
+CARRY_CEILING = 0.10
+"""The highest the hand carries an object, above the home height [m]: ``CARRY`` above a
+cabinet's top was at the edge of the arm's reach, and the approach ran out of steps."""
 LIFT = 0.12
 """How far a pick lifts before checking the object came with the hand [m]."""
 DROP = 0.02
@@ -56,7 +59,9 @@ def _carried_offset(percept: LiberoPercept, obj: str | None) -> np.ndarray:
 
 
 def approach(ctx: Context, thing: str, holding: str | None) -> list[Leg]:
-    """Hover above ``thing``; with an object in hand, its origin ``CARRY`` above it."""
+    """Hover above ``thing`` (a drawer: in front of its handle, ``fixtures.drawer_front``);
+    with an object in hand, its origin ``CARRY`` above it (the hand at most
+    ``CARRY_CEILING`` above the home height)."""
 
     def target(now: LiberoPercept, start: LiberoPercept) -> tuple[np.ndarray, np.ndarray | None]:
         point = anchor(ctx, now, thing)
@@ -68,9 +73,13 @@ def approach(ctx: Context, thing: str, holding: str | None) -> list[Leg]:
             if Rotation.from_matrix(rot.T @ turn).magnitude() > TURN_FIRST:  # turn in place
                 return np.r_[start.tcp[:2], max(start.tcp[2], ctx.home_z)], turn
             return hover, turn
+        region = ctx.scene.regions.get(thing)
+        if holding is None and region is not None and region.joint is not None:
+            point = drawer_front(ctx, now, thing)  # a drawer: in front of its handle
         if holding is None:
             return point + np.array([0.0, 0.0, HOVER]), ctx.base
-        return point + np.array([0.0, 0.0, CARRY]) + _carried_offset(now, holding), None
+        carried = point + np.array([0.0, 0.0, CARRY]) + _carried_offset(now, holding)
+        return np.r_[carried[:2], min(carried[2], ctx.home_z + CARRY_CEILING)], None
 
     gripper = GRIPPER_OPEN if holding is None else GRIPPER_CLOSED
     fine = holding is None and thing in ctx.categories  # the pick that follows descends

@@ -22,6 +22,9 @@ import numpy as np
 JOINT_SLIDE, JOINT_HINGE = "slide", "hinge"
 HANDLE_DEPTH = 0.015
 """How far behind a drawer's outermost point its handle's geoms may reach [m]."""
+KNOB_DEPTH = 0.015
+"""How far below the top of a knob's grip the TCP closes [m] (the fingertips reach about
+1 cm further down, still above the knob's base plate)."""
 
 
 @dataclass(frozen=True)
@@ -101,7 +104,10 @@ class Scene:
             fixture) -> its joints (LIBERO: open if any is open, closed if all are).
         leaves: a door fixture -> its leaf's point furthest from the hinge at ``q0``
             (world) [m].
-        knobs: a knob fixture -> its grip point at ``q0`` (world) [m].
+        knobs: a knob fixture -> its grip point at ``q0`` (world) [m]: on the knob's axis,
+            ``KNOB_DEPTH`` below the top of its grip (its tallest geom).
+        grips: a knob fixture -> the horizontal direction across its grip at ``q0`` (the
+            fingers close along it; world, unit).
         handles: a drawer's slide joint -> its handle's centre at ``q0`` (world) [m].
         extents: movable object -> (lower, upper) corners of its collision geometry in its
             upright frame [m].
@@ -117,6 +123,7 @@ class Scene:
     articulated: dict[str, tuple[str, ...]]
     leaves: dict[str, np.ndarray]
     knobs: dict[str, np.ndarray]
+    grips: dict[str, np.ndarray]
     handles: dict[str, np.ndarray]
     extents: dict[str, tuple[np.ndarray, np.ndarray]]
     parts: dict[str, list[tuple[np.ndarray, np.ndarray]]]
@@ -177,6 +184,28 @@ def _handle(model: Any, data: Any, joint: Joint) -> np.ndarray:
     return np.mean(front, axis=0)
 
 
+def _knob_grip(model: Any, data: Any, joint: Joint) -> tuple[np.ndarray, np.ndarray]:
+    """A knob's grip point and the direction across its grip: its tallest collision geom is
+    the grip (a bar standing on the knob's base plate); the point is where the knob's axis
+    passes through the bar's centre line, ``KNOB_DEPTH`` below its top; the fingers close
+    across the bar's narrower horizontal side."""
+    body = int(model.jnt_bodyid[model.joint(joint.name).id])
+    bodies = _subtree(model, body)
+    geoms = [g for g in range(model.ngeom) if model.geom_bodyid[g] in bodies
+             and (model.geom_contype[g] or model.geom_conaffinity[g])]  # fmt: skip
+    boxes = _geom_boxes(model, data, bodies)
+    tallest = int(np.argmax([np.ptp(box[:, 2]) for box in boxes]))
+    geom, top = geoms[tallest], float(boxes[tallest][:, 2].max())
+    rot = data.geom_xmat[geom].reshape(3, 3)
+    half = model.geom_aabb[geom][3:]
+    centre = data.geom_xpos[geom] + rot @ model.geom_aabb[geom][:3]
+    flat = [i for i in range(3) if abs(rot[2, i]) < 0.7]  # the local axes lying horizontal
+    along = rot[:, max(flat, key=lambda i: half[i])] * np.array([1.0, 1.0, 0.0])
+    along /= np.linalg.norm(along)
+    point = centre + along * float((joint.anchor - centre) @ along)
+    return np.r_[point[:2], top - KNOB_DEPTH], np.cross([0.0, 0.0, 1.0], along)
+
+
 def _thresholds(fixture: Any) -> tuple[float, float] | None:
     """(active, rest) from LIBERO's articulation ranges: the edge of each range nearest
     the other (its ``is_open``/``is_close``/``turn_on``/``turn_off`` compare to these)."""
@@ -218,6 +247,7 @@ def read_scene(env: Any, problem: Any) -> Scene:
     articulated: dict[str, tuple[str, ...]] = {}
     leaves: dict[str, np.ndarray] = {}
     knobs: dict[str, np.ndarray] = {}
+    grips: dict[str, np.ndarray] = {}
     for name in problem.fixtures:
         fixture = inner.get_object(name)
         found = [_joint(model, data, j, fixture) for j in getattr(fixture, "joints", None) or ()]
@@ -227,10 +257,9 @@ def read_scene(env: Any, problem: Any) -> Scene:
             continue
         moving = model.jnt_bodyid[mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_JOINT, mine[0].name)]
         corners = _geom_corners(model, data, _subtree(model, int(moving)))
-        centre = corners.mean(axis=0) if len(corners) else mine[0].anchor
         if hasattr(fixture, "turn_on"):
             articulated[name] = tuple(j.name for j in mine)
-            knobs[name] = np.r_[centre[:2], corners[:, 2].max() - 0.012]
+            knobs[name], grips[name] = _knob_grip(model, data, mine[0])
         elif all(j.kind == JOINT_HINGE for j in mine) and len(mine) == 1:
             articulated[name] = (mine[0].name,)
             radial = corners - mine[0].anchor
@@ -275,4 +304,5 @@ def read_scene(env: Any, problem: Any) -> Scene:
         for name, joint in joints.items()
         if joint.kind == JOINT_SLIDE
     }
-    return Scene(regions, joints, articulated, leaves, knobs, handles, extents, parts, frames)
+    return Scene(regions, joints, articulated, leaves, knobs, grips, handles, extents, parts,
+                 frames)  # fmt: skip
