@@ -8,6 +8,7 @@ from __future__ import annotations
 
 from collections.abc import Callable
 from dataclasses import dataclass
+from typing import Protocol
 
 import numpy as np
 from scipy.spatial.transform import Rotation
@@ -23,6 +24,14 @@ TURN_TOLERANCE = 0.1
 """A leg that names a rotation is reached only within this of it [rad]."""
 HOVER = 0.10
 """Height above a thing's grasp point the empty hand approaches [m]."""
+
+
+class Runner(Protocol):
+    """Runs one operator: ``act`` gives the next action, or None when it is done."""
+
+    def act(self, percept: LiberoPercept) -> np.ndarray | None:
+        """The next JOINT_POSITION action, or None when the operator is done."""
+        ...
 
 
 @dataclass(frozen=True)
@@ -65,6 +74,15 @@ class LegRunner:
 
     def act(self, percept: LiberoPercept) -> np.ndarray | None:
         """The next JOINT_POSITION action, or None when the last leg is done."""
+        command = self.command(percept)
+        if command is None:
+            return None
+        pos, rot, gripper = command
+        return self.context.driver.action(percept.joints, pos, rot, gripper)
+
+    def command(self, percept: LiberoPercept) -> tuple[np.ndarray, np.ndarray, float] | None:
+        """The next TCP target (position, rotation) and gripper command, or None when the
+        last leg is done (``act`` drives it; a recorder perturbs it first)."""
         while self.index < len(self.legs):
             leg = self.legs[self.index]
             if self.start is None:
@@ -79,9 +97,7 @@ class LegRunner:
                 self.steps += 1
                 if rot is not None:
                     self.context.rotation = rot
-                return self.context.driver.action(
-                    percept.joints, pos, self.context.rotation, leg.gripper
-                )
+                return pos, self.context.rotation, leg.gripper
             self.index, self.steps, self.start = self.index + 1, 0, None
         return None
 
