@@ -33,6 +33,7 @@ import numpy as np
 
 from osg_control import __version__
 from osg_control.data.datasets import CHECKSUM_ATTR, Dataset, content_sha256, hdf5_bytes, read_field
+from osg_control.data.datasets import STEP_FIELDS as PROJECT_FIELDS
 from osg_control.data.validation import check_attrs, check_episode_index, check_step_fields
 from osg_control.errors import DatasetError
 from osg_control.io_safety import atomic_write
@@ -40,15 +41,13 @@ from osg_control.libero.features import ACTION_DIM, ACTION_FIELDS, OBS_DIM, OBS_
 
 FORMAT = "osg-libero-skill-data"
 FORMAT_VERSION = 1
+WIDTHS = {"observations": OBS_DIM, "next_observations": OBS_DIM, "actions": ACTION_DIM}
 STEP_FIELDS: dict[str, tuple[tuple[int, ...], Any]] = {
-    "observations": ((OBS_DIM,), np.float32),
-    "next_observations": ((OBS_DIM,), np.float32),
-    "actions": ((ACTION_DIM,), np.float32),
-    "rewards": ((), np.float32),
-    "terminations": ((), np.bool_),
-    "truncations": ((), np.bool_),
-    "episode_ids": ((), np.int64),
+    key: (((WIDTHS[key],) if key in WIDTHS else shape), dtype)
+    for key, (shape, dtype) in PROJECT_FIELDS.items()
+    if key != "world_states"
 }
+"""The project's step fields (``data.datasets``) at the lifted widths, without world states."""
 EPISODE_FIELDS = ("episode_starts", "episode_lengths", "episode_successes", "episode_tasks",
                   "episode_init_states")  # fmt: skip
 

@@ -61,6 +61,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     train.add_argument("--steps", type=int, default=TRAIN_STEPS,
                        help=f"TD3+BC updates (default {TRAIN_STEPS})")  # fmt: skip
     train.add_argument("--seed", type=int, default=0)
+    train.add_argument("--threads", type=int, default=1, help="torch's CPU threads (default 1)")
     train.add_argument("--json", action="store_true")
     train.set_defaults(func=run_train)
 
@@ -144,7 +145,7 @@ def run_train(args: argparse.Namespace) -> int:
 
     datasets = [load_skill_data(path) for path in args.data]
     check_output_dir(args.out)
-    checkpoint, log = train_skill(datasets, args.steps, args.seed)
+    checkpoint, log = train_skill(datasets, args.steps, args.seed, threads=args.threads)
     command = shlex.join(["osg", *sys.argv[1:]])
     manifest = write_skills(args.out, checkpoint, datasets, command, log)
     summary = {"out": str(args.out), "manifest": str(manifest), "skill": checkpoint.skill.name,
