@@ -6,6 +6,7 @@ shipped weights, and bad command-line values exit 2."""
 from __future__ import annotations
 
 import json
+import shutil
 from pathlib import Path
 
 import h5py
@@ -17,6 +18,7 @@ pytest.importorskip("libero.libero", reason="needs the libero extra: pip install
 from osg_control import cli  # noqa: E402
 from osg_control.errors import CheckpointError, DatasetError  # noqa: E402
 from osg_control.libero import skills  # noqa: E402
+from osg_control.libero.benchmark import Job, run_job  # noqa: E402
 from osg_control.libero.features import ACTION_DIM, ACTION_SCALE, OBS_DIM  # noqa: E402
 from osg_control.libero.recording import (  # noqa: E402
     CollectJob,
@@ -44,6 +46,7 @@ def _synthetic(episodes: int = 6, seed: int = 0) -> list[Recorded]:
     return out
 
 
+@pytest.mark.slow
 def test_recording_is_seeded() -> None:
     """The same seed records the same pick (digest of every observation and action);
     another seed's noise records another one; the episode is the scripted pick's, in the
@@ -109,6 +112,29 @@ def test_tiny_training_gives_a_loadable_checkpoint(tmp_path: Path) -> None:
         skills.load_skills(tmp_path / "skills_dir")
 
 
+def test_the_skills_policy_runs_an_episode_from_the_shipped_weights() -> None:
+    """LIBERO-Object task 0, initial state 0 (not trained on: the data are states 10-29):
+    the plan runs, its pick-out by the learned network, perceived done, and the task is
+    scored a success by the env."""
+    assert skills.shipped()
+    job = Job("libero_object", 0, (0,), skills.skills_factory(DEFAULTS_DIR), 280, 0)
+    (episode,) = run_job(job)
+    picks = [line for line in episode.trace if " pick-out " in line]
+    assert picks == [picks[0]] and picks[0].endswith(
+        "alphabet_soup_1 floor_target_object_region: ok"
+    )
+    assert episode.success and len(episode.actions_sha256) == 64
+
+
+def test_the_benchmark_names_a_corrupt_skills_folder(tmp_path: Path, capsys) -> None:
+    shutil.copytree(DEFAULTS_DIR, tmp_path / "models")
+    (tmp_path / "models" / "skills" / "pick.json").write_text("{")
+    argv = ["--domain", "libero", "evaluate", "benchmark", "--suite", "libero_object",
+            "--task", "0", "--episodes", "1", "--models", str(tmp_path / "models")]  # fmt: skip
+    assert cli.main(argv) == 1
+    assert "pick.json" in capsys.readouterr().err
+
+
 @pytest.mark.parametrize(
     "argv,named",
     [
@@ -145,3 +171,16 @@ def test_without_shipped_skills_the_benchmark_refuses(monkeypatch: pytest.Monkey
     argv = ["--domain", "libero", "evaluate", "benchmark", "--suite", "libero_10", "--task", "0"]
     assert cli.main(argv) == 1
     assert "no learned LIBERO skills shipped" in capsys.readouterr().err
+
+
+def test_operator_outcomes_count_the_traced_effects() -> None:
+    from osg_control.libero.benchmark import Episode, operator_outcomes
+
+    trace = (
+        "0 plan (solved): 5 steps", "30 approach bowl_1: ok", "58 pick bowl_1 plate_1: FAILED",
+        "90 plan (solved): 4 steps", "120 pick bowl_1 plate_1: ok", "learned pick: stopped (x)",
+    )  # fmt: skip
+    episode = Episode(0, 0, False, 200, 0.0, 0.0, trace)
+    assert operator_outcomes([episode, episode]) == {
+        "approach": {"runs": 2, "ok": 2}, "pick": {"runs": 4, "ok": 2}
+    }  # fmt: skip

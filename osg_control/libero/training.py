@@ -114,9 +114,9 @@ def write_skills(
             "operators": list(OPERATORS[name]), "seed": checkpoint.seed,
             "updates": checkpoint.steps, "train_cpu_s": log["cpu_s"],
             "data": [{"file": Path(d.path).name, "sha256": sha256_file(d.path),
-                      "suite": str(d.attrs["suite"]), "seed": int(d.attrs["seed"]),
-                      "episodes": d.num_episodes, "steps": d.num_steps,
-                      "scripted_success_rate": round(d.success_rate, 4),
+                      "suite": str(d.attrs["suite"]), "command": str(d.attrs.get("command", "")),
+                      "seed": int(d.attrs["seed"]), "episodes": d.num_episodes,
+                      "steps": d.num_steps, "scripted_success_rate": round(d.success_rate, 4),
                       "init_states": sorted({int(s) for s in d.attrs["episode_init_states"]})}
                      for d in datasets],
         }},
