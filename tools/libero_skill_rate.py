@@ -8,7 +8,8 @@ the runs and perceived successes of the skill's operators (the summary's ``opera
 from the episodes' traces), and sets the manifest's ``success_rates[skill]`` (the rate
 an operator's plan cost is to come from) with ``measured[skill]``: the runs, successes,
 the policy, the commands and the initial states. Refuses (exit 2) outputs of another
-policy or without a run of the skill. Written atomically.
+policy or without a run of the skill. Written atomically; MANIFEST is the training's
+``--out`` folder's (the package refuses writes: the shipped folder is a copy of it).
 """
 
 from __future__ import annotations

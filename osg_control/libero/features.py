@@ -42,9 +42,11 @@ ACTION_SCALE = np.array([0.03, 0.03, 0.03, 0.3, 1.0])
 covers in a 50 ms step at the controller's 0.05 rad joint limit), a 0.3 rad wrist turn,
 and the gripper command (robosuite's: -1 opens, 1 closes)."""
 OBS_DIM, ACTION_DIM = len(OBS_FIELDS), len(ACTION_FIELDS)
-HELD_STEPS = 20
+HELD_STEPS = 60
 """``gripper_held`` counts the steps the last gripper command has been given up to this,
-as a fraction of it."""
+as a fraction of it: longer than the scripted pick's descent (40 steps), after which it
+closes wherever the hand is (a tall bottle stops the fingertips 1.3 cm above the grasp
+point; at 20 the learned pick could not tell when to close there and hovered)."""
 
 
 class GripperMemory:
