@@ -252,7 +252,7 @@ def hdf5_bytes(fill: Callable[[h5py.File], object], **options: Any) -> bytes:
     return buffer.getvalue()
 
 
-def _read_field(f: h5py.File, key: str, path: Path, checked: bool) -> np.ndarray:
+def read_field(f: h5py.File, key: str, path: Path, checked: bool) -> np.ndarray:
     """Read data set ``key``, checking its content sha256; ``checked``: whether the file
     stores checksums (then every field must carry one).
 
@@ -310,8 +310,8 @@ def load_dataset(path: str | Path, require_checksums: bool = False) -> Dataset:
             checked = require_checksums or any(
                 CHECKSUM_ATTR in f[key].attrs for key in keys if key in f
             )
-            arrays = {key: _read_field(f, key, path, checked) for key in STEP_FIELDS}
-            per_episode = {key: _read_field(f, key, path, checked) for key in PER_EPISODE_KINDS}
+            arrays = {key: read_field(f, key, path, checked) for key in STEP_FIELDS}
+            per_episode = {key: read_field(f, key, path, checked) for key in PER_EPISODE_KINDS}
             attrs = dict(f.attrs)
             fields = _field_spec(_world_width(f.attrs, path))
     except DatasetError:

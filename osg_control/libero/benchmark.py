@@ -136,10 +136,25 @@ def run_suite(
     return episodes
 
 
+def operator_outcomes(episodes: Sequence[Episode]) -> dict[str, dict[str, int]]:
+    """How often each operator ran and how often its effect was perceived, from the
+    episodes' traces (``"<step> <operator> <args>: ok"`` or ``": FAILED"``)."""
+    counts: dict[str, dict[str, int]] = {}
+    for episode in episodes:
+        for line in episode.trace:
+            words = line.split()
+            if len(words) > 2 and words[-1] in ("ok", "FAILED"):
+                row = counts.setdefault(words[1], {"runs": 0, "ok": 0})
+                row["runs"] += 1
+                row["ok"] += words[-1] == "ok"
+    return dict(sorted(counts.items()))
+
+
 def summarise(
     suite: str, policy_name: str, episodes: Sequence[Episode], seed: int = 0
 ) -> dict[str, Any]:
-    """The JSON summary: per-task and overall success with 95 % Wilson intervals."""
+    """The JSON summary: per-task and overall success with 95 % Wilson intervals, and
+    each operator's runs and perceived successes (``operator_outcomes``)."""
     per_task: dict[str, Any] = {}
     for task in sorted({e.task for e in episodes}):
         mine = [e for e in episodes if e.task == task]
@@ -164,6 +179,7 @@ def summarise(
         "success_rate": rate,
         "interval_95": [low, high],
         "tasks": per_task,
+        "operators": operator_outcomes(episodes),
         "timing": {
             "reset_s_mean": float(np.mean([e.reset_s for e in episodes])) if episodes else None,
             "step_s_mean": float(np.mean([e.step_s for e in episodes])) if episodes else None,

@@ -20,7 +20,7 @@ from osg_control.libero.controllers import operator_legs
 from osg_control.libero.drive import GRIPPER_OPEN, JointTargetDriver
 from osg_control.libero.facts import holds, perceived_init
 from osg_control.libero.insert import doorway_grasps
-from osg_control.libero.legs import Context, LegRunner, hold, up
+from osg_control.libero.legs import Context, Leg, LegRunner, Runner, hold, up
 from osg_control.libero.perception import LiberoPercept
 from osg_control.libero.pick_place import holding_ok
 from osg_control.libero.plan import plan_task
@@ -73,7 +73,7 @@ class PlanExecutor:
         self.trace: list[str] = []
         self.step, self.replans = 0, 0
         self.holding: str | None = None
-        self.runner: LegRunner | None = None
+        self.runner: Runner | None = None
         self.current: tuple[str, tuple[str, ...]] | None = None
         self.queue: list[tuple[str, tuple[str, ...]]] = []
         self._plan(percept)
@@ -121,8 +121,13 @@ class PlanExecutor:
             self.current = None
             return False
         self.start_z = float(percept.position(args[0])[2]) if args[0] in percept.objects else 0.0
-        self.runner = LegRunner(legs, self.ctx)
+        self.runner = self._runner(operator, args, legs)
         return True
+
+    def _runner(self, operator: str, args: tuple[str, ...], legs: list[Leg]) -> Runner:
+        """What runs an operator: its scripted controller's legs (a policy with learned
+        skills runs some operators otherwise: ``skills.SkillsExecutor``)."""
+        return LegRunner(legs, self.ctx)
 
     def act(self, percept: LiberoPercept) -> np.ndarray:
         """The next action: the running operator's, or the next one's; held still when

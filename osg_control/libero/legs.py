@@ -8,6 +8,7 @@ from __future__ import annotations
 
 from collections.abc import Callable
 from dataclasses import dataclass, field
+from typing import Protocol
 
 import numpy as np
 from scipy.spatial.transform import Rotation
@@ -25,6 +26,14 @@ HOVER = 0.10
 """Height above a thing's grasp point the empty hand approaches [m]."""
 GraspRule = Callable[[LiberoPercept], tuple[np.ndarray, np.ndarray]]
 """percept -> the TCP point and rotation an object is grasped at (``Context.grasps``)."""
+
+
+class Runner(Protocol):
+    """Runs one operator: ``act`` gives the next action, or None when it is done."""
+
+    def act(self, percept: LiberoPercept) -> np.ndarray | None:
+        """The next JOINT_POSITION action, or None when the operator is done."""
+        ...
 
 
 @dataclass(frozen=True)
@@ -70,6 +79,15 @@ class LegRunner:
 
     def act(self, percept: LiberoPercept) -> np.ndarray | None:
         """The next JOINT_POSITION action, or None when the last leg is done."""
+        command = self.command(percept)
+        if command is None:
+            return None
+        pos, rot, gripper = command
+        return self.context.driver.action(percept.joints, pos, rot, gripper)
+
+    def command(self, percept: LiberoPercept) -> tuple[np.ndarray, np.ndarray, float] | None:
+        """The next TCP target (position, rotation) and gripper command, or None when the
+        last leg is done (``act`` drives it; a recorder perturbs it first)."""
         while self.index < len(self.legs):
             leg = self.legs[self.index]
             if self.start is None:
@@ -84,9 +102,7 @@ class LegRunner:
                 self.steps += 1
                 if rot is not None:
                     self.context.rotation = rot
-                return self.context.driver.action(
-                    percept.joints, pos, self.context.rotation, leg.gripper
-                )
+                return pos, self.context.rotation, leg.gripper
             self.index, self.steps, self.start = self.index + 1, 0, None
         return None
 

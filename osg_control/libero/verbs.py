@@ -1,5 +1,5 @@
 """``osg --domain libero VERB``: the LIBERO domain's own verbs (it is not a skill-graph
-``Domain`` yet: its lifted skills are not shipped), registered through the
+``Domain``: one operator is learned, the others scripted), registered through the
 ``osg_control.domain_verbs`` entry point. Importing this module imports no LIBERO code;
 each verb checks its arguments (exit 2, nothing run), then needs the ``libero`` extra.
 
@@ -8,9 +8,10 @@ each verb checks its arguments (exit 2, nothing run), then needs the ``libero`` 
 - ``plan --suite S --task I [--planner P] [--time-limit S] [--json]``: the plan for one
   task's goal (exit status as ``osg plan``'s);
 - ``evaluate benchmark --suite S [--task I ...] [--episodes N | --init-states A:B]
-  [--policy scripted-plan] [--seed K] [--workers W] [--json]``: the benchmark's protocol
-  (``libero.benchmark``); without ``--policy`` it refuses (``NoPolicyError``): no learned
-  skills are shipped yet.
+  [--policy skills|scripted-plan] [--models DIR] [--seed K] [--workers W] [--json]``: the
+  benchmark's protocol (``libero.benchmark``); without ``--policy`` it runs ``skills`` from
+  the shipped skills folder, and refuses (``NoPolicyError``) where none is shipped;
+- ``collect`` and ``train`` (``skill_verbs``): a skill's data and its training.
 """
 
 from __future__ import annotations
@@ -20,20 +21,23 @@ from pathlib import Path
 
 from osg_control.commands.plan import EPILOG, EXIT_STATUS, PLANNER_NAMES, format_plan
 from osg_control.errors import OSGError, UsageError
+from osg_control.libero import skill_verbs
 from osg_control.libero.suites import INIT_STATES, max_steps, parse_init_states, suite_names
 
 
 class NoPolicyError(OSGError):
-    """No LIBERO policy to evaluate is shipped yet (exit 1)."""
+    """No learned LIBERO skills to evaluate: none shipped, none given (exit 1)."""
 
 
-POLICIES = ("scripted-plan",)
-"""The policies ``--policy`` runs: ``scripted-plan`` plans the task file's goal and runs it
-with scripted operator controllers (``executor.PlanExecutor``)."""
+POLICIES = ("skills", "scripted-plan")
+"""The policies ``--policy`` runs: ``skills`` plans the task file's goal and runs it with
+the learned skills for the operators they cover (``pick``, ``pick-out``) and scripted
+controllers for the others (``skills.SkillsExecutor``); ``scripted-plan`` runs every
+operator with its scripted controller (``executor.PlanExecutor``)."""
 NO_POLICY = (
-    "no learned LIBERO skills shipped yet: there is no skill graph to evaluate "
-    "(docs/libero.md); --policy scripted-plan runs the plans with scripted operator "
-    "controllers instead; nothing was run"
+    "no learned LIBERO skills shipped in this install and no --models given "
+    "(docs/libero.md: osg --domain libero collect, train); --policy scripted-plan runs "
+    "the plans with scripted operator controllers instead; nothing was run"
 )
 
 
@@ -112,10 +116,14 @@ def register(subparsers: argparse._SubParsersAction) -> None:
         "--policy",
         default=None,
         metavar="NAME",
-        help="what runs the episodes: scripted-plan (plans the task file's goal and runs "
-        "it with scripted operator controllers, replanning from percepts: not learned "
-        "skills). Without it the verb refuses: no learned LIBERO skills are shipped yet",
+        help="what runs the episodes: skills (the default: plans the task file's goal, "
+        "runs pick/pick-out with the learned skill and the other operators with scripted "
+        "controllers, replanning from percepts) or scripted-plan (every operator scripted)",
     )
+    bench.add_argument(
+        "--models", type=Path, default=None, metavar="DIR",
+        help="the skills folder of --policy skills (default: the shipped one)",
+    )  # fmt: skip
     bench.add_argument(
         "--seed", type=int, default=0,
         help="seed of the fixture sensor's noise (initial state s draws from (seed, s))",
@@ -123,6 +131,7 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     bench.add_argument("--workers", type=int, default=1)
     bench.add_argument("--json", action="store_true")
     bench.set_defaults(func=run_benchmark)
+    skill_verbs.register(subparsers)
 
 
 def run_export(args: argparse.Namespace) -> int:
@@ -179,7 +188,8 @@ def init_state_range(args: argparse.Namespace) -> range:
 
 def run_benchmark(args: argparse.Namespace) -> int:
     """Check the arguments, then run ``--policy``'s episodes and print the summary; without
-    ``--policy``, refuse: no skills are shipped yet (``NoPolicyError``)."""
+    ``--policy``, run ``skills`` from ``--models`` or the shipped folder, and refuse where
+    there is none (``NoPolicyError``)."""
     max_steps(args.suite)
     states = init_state_range(args)
     if args.policy is not None and args.policy not in POLICIES:
@@ -188,23 +198,35 @@ def run_benchmark(args: argparse.Namespace) -> int:
         raise UsageError(f"--workers must be at least 1, got {args.workers}")
     from osg_control.libero.tasks import check_task_indices
 
+    if args.models is not None and args.policy == "scripted-plan":
+        raise UsageError("--models: the scripted-plan policy loads no skills")
     tasks = check_task_indices(args.suite, args.task)
-    if args.policy is None:
-        raise NoPolicyError(NO_POLICY)
     from osg_control.json_files import dump_json
     from osg_control.libero.benchmark import run_suite, summarise
     from osg_control.libero.executor import PlanExecutor
+    from osg_control.libero.skills import learned_operators, shipped, skills_factory
+    from osg_control.libero.training import DEFAULTS_DIR, read_manifest
 
-    episodes = run_suite(args.suite, tasks, list(states), PlanExecutor, args.workers, args.seed)
-    summary = summarise(args.suite, PlanExecutor.name, episodes, args.seed)
+    policy = args.policy or ("skills" if args.models is not None or shipped() else None)
+    if policy is None:
+        raise NoPolicyError(NO_POLICY)
+    models = args.models or DEFAULTS_DIR
+    factory = skills_factory(models) if policy == "skills" else PlanExecutor
+    names = list(read_manifest(models)["skills"]) if policy == "skills" else []
+    learned, scripted = learned_operators(names)
+    episodes = run_suite(args.suite, tasks, list(states), factory, args.workers, args.seed)
+    summary = summarise(args.suite, policy, episodes, args.seed)
+    summary.update(operators_learned=learned, operators_scripted=scripted,
+                   models=str(models) if names else None)  # fmt: skip
     if args.json:
         print(dump_json(summary))
         return 0
     for task, row in summary["tasks"].items():
         print(f"task {task}: {row['successes']}/{row['episodes']}")
     low, high = summary["interval_95"]
+    kind = f"learned {', '.join(learned)}, scripted the rest" if learned else "scripted operators"
     print(
-        f"{args.suite} ({summary['policy']}: scripted operators, not learned skills): "
+        f"{args.suite} ({summary['policy']}: {kind}): "
         f"{100 * summary['success_rate']:.1f} % of {summary['episodes']} episodes "
         f"[95 % {100 * low:.1f}-{100 * high:.1f}], at most {summary['max_steps']} steps each"
     )
