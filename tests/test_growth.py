@@ -32,6 +32,7 @@ def _before_valve() -> Domain:
         name="kitchen-before-valve",
         skills=tuple(s for s in KITCHEN.skills if s.name not in VALVE_SKILLS),
         tasks=tuple(t for t in KITCHEN.tasks if "valve" not in t.name),
+        training={k: v for k, v in KITCHEN.training.items() if k not in VALVE_SKILLS},
     )
 
 
