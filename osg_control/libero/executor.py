@@ -29,10 +29,12 @@ from osg_control.planning.task import SearchLimits
 
 MAX_REPLANS = 4
 """Replans an episode may make before the executor holds still."""
-POSTURE_COST = 0.001
-"""The IK's pull toward the arm's home posture (``control.ik_backends.IKConfig``): twenty
-times its default, so the elbow stays up over the whole plan (at the default the forearm
-drifted down onto the cabinet while pushing a bottom drawer shut)."""
+POSTURE_COST = 0.01
+"""The IK's pull toward the arm's home posture (``control.ik_backends.IKConfig``): ten
+times its default, so the arm stays near it over the whole plan. At the default the forearm
+drifted down onto the cabinet while pushing a bottom drawer shut, and the first and third
+joints wound up against each other (1.1 and -1.0 rad) until a pick close to the arm's base
+folded the elbow near its limit and its descent crawled (6 cm in 40 steps)."""
 PLAN_TIME_S = 30.0
 """A search's time limit [s]."""
 EFFECTS: dict[str, tuple[str, int]] = {
@@ -153,5 +155,7 @@ class PlanExecutor:
             elif operator in ("place-on", "place-in"):
                 self.holding = None
             return
+        if operator in ("pick", "pick-out"):  # the retry grasps otherwise
+            self.ctx.failures[args[0]] = self.ctx.failures.get(args[0], 0) + 1
         self.current = None
         self.runner = LegRunner([hold(GRIPPER_OPEN, 8), up(0.10, GRIPPER_OPEN)], self.ctx)
