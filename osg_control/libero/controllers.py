@@ -8,11 +8,13 @@ motion (``legs``), every target computed from the current percept
 They are the first skills the plans run and the scripted collectors Algorithm 1's data
 will come from: told which operator to run, they script its motion; they are not learned.
 
-- ``approach ?x``: hover above ``?x`` (its grasp point, region, handle, knob or door).
+- ``approach ?x``: hover above ``?x`` (its grasp point, region, handle, knob or door),
+  the hand and what it holds kept clear above the objects on the way (``clearance``).
 - ``retreat ?x``: straight up to the home height (the node ``home`` is the safe height,
   not a fixed pose: going back to one would spend the step budget).
 - ``pick ?o ?s`` / ``pick-out ?o ?r``: down to the grasp point, close, lift. A bowl is
-  grasped at its rim (``RIM_GRASP``), anything else just above its origin.
+  grasped at its rim (``RIM_GRASP``), anything else near its origin where the open hand
+  clears its neighbours (``grasp.chosen_grip``; another grasp after a failed pick).
 - ``place-on ?o ?t`` / ``place-in ?o ?r``: over the target so the held object's origin is
   above the target's, lower until its bottom is ``DROP`` above the surface (``on``) or the
   region's floor (``in``), open, up.

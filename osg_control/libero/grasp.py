@@ -1,7 +1,9 @@
 """Where and how the hand grasps an object from above: the grasp point in the object's
-frame (``grip``: across its narrower side, or the slice of it that fits the open hand, or
-a bowl's or mug's rim) and the top-down rotation turned about the vertical to match
-(``grasp_rotation``, ``fingers_along``), all from the percept and the scene's geometry.
+frame (``grips``: across its narrower side, or a slice of it that fits the open hand; the
+one taken, ``chosen_grip``, keeps the open hand clear of the perceived neighbours and
+changes after a failed pick; or a bowl's or mug's rim) and the top-down rotation turned
+about the vertical to match (``grasp_rotation``, ``fingers_along``), all from the percept
+and the scene's geometry.
 """
 
 from __future__ import annotations
