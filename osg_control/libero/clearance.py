@@ -84,11 +84,21 @@ def hand_clearance(
         if other == obj or _overlap(box, np.array([tcp[:2], tcp[:2]]), 0.0):
             continue
         top = percept.position(other)[2] + ctx.scene.extents[other][1][2]
+        corners = np.array([[box[i][0], box[j][1]] for i in (0, 1) for j in (0, 1)])
         for half_along, half_across, lift in HAND_BOXES:
             if top <= tcp[2] + lift:
                 continue
-            corners = [tcp[:2] + a * half_along * axis + b * half_across * across
-                       for a in (-1, 1) for b in (-1, 1)]  # fmt: skip
-            hand = np.array([np.min(corners, axis=0), np.max(corners, axis=0)])
-            least = min(least, float(np.max(np.maximum(box[0] - hand[1], hand[0] - box[1]))))
+            hand = np.array([tcp[:2] + a * half_along * axis + b * half_across * across
+                             for a in (-1, 1) for b in (-1, 1)])  # fmt: skip
+            least = min(least, _separation(hand, corners, (axis, across)))
     return least
+
+
+def _separation(a: np.ndarray, b: np.ndarray, axes: tuple[np.ndarray, ...]) -> float:
+    """How far apart two convex xy polygons (corners) are along the separating axis that
+    parts them most, of the world's two and ``axes`` (negative: the least overlap)."""
+    gaps = []
+    for u in (np.array([1.0, 0.0]), np.array([0.0, 1.0]), *axes):
+        pa, pb = a @ u, b @ u
+        gaps.append(max(pb.min() - pa.max(), pa.min() - pb.max()))
+    return float(max(gaps))

@@ -114,9 +114,10 @@ def _finger_axis(ctx: Context, percept: LiberoPercept, obj: str, g: Grip) -> np.
 def chosen_grip(ctx: Context, percept: LiberoPercept, obj: str) -> Grip:
     """The grasp the hand takes: the first of ``grips`` whose hand stands
     ``GRASP_CLEARANCE`` clear of the perceived neighbours (``clearance.hand_clearance``),
-    else the clearest; each failed pick of ``obj`` (``Context.failures``) moves on to the
-    next grasp that differs (another axis, or ``RETRY_SHIFT`` along the object). Decided
-    once per attempt, again only when the object has moved ``REDECIDE``."""
+    else the preferred one (a slice at the object's end, taken for being the clearest,
+    tipped a standing book over); each failed pick of ``obj`` (``Context.failures``) moves
+    on to the next grasp that differs (another axis, or ``RETRY_SHIFT`` along the object).
+    Decided once per attempt, again only when the object has moved ``REDECIDE``."""
     tries = ctx.failures.get(obj, 0)
     pos, rot = percept.objects[obj]
     memo = ctx.grips.get(obj)
@@ -129,6 +130,8 @@ def chosen_grip(ctx: Context, percept: LiberoPercept, obj: str) -> Grip:
         scored.append((gap, g))
     clear = [g for gap, g in scored if gap >= GRASP_CLEARANCE]
     rest = [g for gap, g in sorted(scored, key=lambda s: -s[0]) if gap < GRASP_CLEARANCE]
+    if not clear:  # the preferred grasp first all the same, then the clearest
+        rest.sort(key=lambda g: g is not scored[0][1])
     distinct: list[Grip] = []
     for g in clear + rest:
         if all(g.axis != k.axis or np.linalg.norm(g.point[:2] - k.point[:2]) >= RETRY_SHIFT
