@@ -6,8 +6,6 @@ and ``place-on`` / ``place-in`` (over a spot, lower the held object until its bo
 
 from __future__ import annotations
 
-from collections.abc import Callable
-
 import numpy as np
 from scipy.spatial.transform import Rotation
 
@@ -30,13 +28,6 @@ clears a basket's rim)."""
 TRANSIT_SLACK = 0.01
 """How far below its transit height (``clearance.transit_height``) an approach may start
 without first going straight up [m]."""
-STALL_HEIGHT = 0.012
-"""How far above its grasp point a descending hand counts as stopped short [m]."""
-STALL_STEPS, STALL_DROP = 8, 0.003
-"""A descent that went down less than ``STALL_DROP`` [m] in ``STALL_STEPS`` steps has
-stalled."""
-BACK_OFF = 0.03
-"""How far a stalled descent backs up before going down again [m]."""
 LIFT = 0.12
 """How far a pick lifts before checking the object came with the hand [m]."""
 DROP = 0.02
@@ -113,35 +104,17 @@ def retreat(ctx: Context, holding: str | None) -> list[Leg]:
     return [Leg(target, GRIPPER_OPEN if holding is None else GRIPPER_CLOSED, 40, 0.02)]
 
 
-def _stalled(ctx: Context, obj: str) -> Callable[[LiberoPercept], bool]:
-    """Whether a descent to ``obj``'s grasp point has stopped short of it: the TCP still
-    ``STALL_HEIGHT`` above it and no lower than ``STALL_STEPS`` steps ago (a finger on a
-    rim or a neighbour)."""
-    heights: list[float] = []
-
-    def until(now: LiberoPercept) -> bool:
-        heights.append(float(now.tcp[2]))
-        above = now.tcp[2] - grasp_point(ctx, now, obj)[2] > STALL_HEIGHT
-        return above and len(heights) > STALL_STEPS and heights[-STALL_STEPS - 1] - heights[
-            -1] < STALL_DROP  # fmt: skip
-
-    return until
-
-
 def pick(ctx: Context, obj: str) -> list[Leg]:
     """Over the grasp point first (``approach``'s hover: nothing to do when the approach
     got there; an approach that ran out of steps made the descent sweep sideways into the
-    object), then down to it, close, lift ``LIFT``. A descent that stalls short of the
-    grasp (``_stalled``) backs up ``BACK_OFF`` and goes down again, the hand re-centred
-    on the way, before it closes."""
-    down = lambda now, start: (grasp_point(ctx, now, obj), grasp_rotation(ctx, now, obj))  # noqa: E731
-    reached = lambda now: now.tcp[2] - grasp_point(ctx, now, obj)[2] <= STALL_HEIGHT  # noqa: E731
-    back = lambda now, start: (np.r_[grasp_point(ctx, now, obj)[:2], start.tcp[2] + BACK_OFF],  # noqa: E731
-                               None)  # fmt: skip
+    object), then down to it, close, lift ``LIFT``."""
     return approach(ctx, obj, None) + [
-        Leg(down, GRIPPER_OPEN, 40, 0.008, until=_stalled(ctx, obj)),
-        Leg(back, GRIPPER_OPEN, 15, 0.01, until=reached),
-        Leg(down, GRIPPER_OPEN, 30, 0.008),
+        Leg(
+            lambda now, start: (grasp_point(ctx, now, obj), grasp_rotation(ctx, now, obj)),
+            GRIPPER_OPEN,
+            40,
+            0.008,
+        ),
         hold(GRIPPER_CLOSED, 12),
         up(LIFT, GRIPPER_CLOSED),
     ]
