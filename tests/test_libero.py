@@ -155,5 +155,3 @@ def test_harness_scores_by_check_success_within_the_budget() -> None:
     assert summary["success_rate"] == 0.0 and summary["max_steps"] == max_steps("libero_spatial")
     assert summary["interval_95"][0] == 0.0 and 0.6 < summary["interval_95"][1] < 0.7
     assert summary["tasks"]["2"]["init_states"] == [0, 7] and summary["perception"] == "env"
-
-

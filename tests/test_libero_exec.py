@@ -5,6 +5,7 @@ it): the fixture sensor, the facts read from percepts, an operator's controller,
 from __future__ import annotations
 
 import json
+from dataclasses import replace
 from types import SimpleNamespace
 
 import numpy as np
@@ -15,11 +16,24 @@ pytest.importorskip("libero.libero", reason="needs the libero extra: pip install
 
 from osg_control import cli  # noqa: E402
 from osg_control.libero.benchmark import Job, run_job  # noqa: E402
+from osg_control.libero.clearance import (  # noqa: E402
+    TRANSIT_CLEARANCE,
+    hand_clearance,
+    transit_height,
+)
 from osg_control.libero.controllers import operator_legs  # noqa: E402
 from osg_control.libero.drive import JointTargetDriver  # noqa: E402
 from osg_control.libero.env import LiberoEnv  # noqa: E402
 from osg_control.libero.executor import PlanExecutor  # noqa: E402
 from osg_control.libero.facts import holds, perceived_init  # noqa: E402
+from osg_control.libero.grasp import (  # noqa: E402
+    GRASP_CLEARANCE,
+    RETRY_SHIFT,
+    Grip,
+    chosen_grip,
+    grasp_point,
+    grip,
+)
 from osg_control.libero.insert import (  # noqa: E402
     DOOR_CLEARANCE,
     PALM_CLEAR,
@@ -277,3 +291,73 @@ def test_scripted_plan_opens_the_drawer_and_turns_the_knob(capsys, task, fixture
     assert f"approach {fixture}: ok" in " ".join(episode["trace"])
     assert sum("plan (" in line for line in episode["trace"]) == 1, episode["trace"]
     assert not any("FAILED" in line for line in episode["trace"])
+
+
+def _living_room(task: int, state: int):
+    """A LIBERO-10 living-room scene at an initial state: its env, scene, first percept
+    and a controllers' context."""
+    env = LiberoEnv("libero_10", task)
+    obs = env.reset(state)
+    scene, percept = LiberoPerception(env).reset(obs, state)
+    robot = mounted_panda(env.sim)
+    driver = JointTargetDriver(robot)
+    ctx = Context(scene, driver, driver.tcp_pose(percept.joints)[1], float(percept.tcp[2]),
+                  dict(env.problem.objects), np.r_[robot.mount[0][:2], 0.0])  # fmt: skip
+    return env, scene, percept, ctx
+
+
+def test_grasp_keeps_the_hand_clear_of_a_neighbour() -> None:
+    """LIBERO-10 task 1, state 0: the cream cheese box's preferred grasp (across its
+    middle) puts the palm on the milk carton beside it (its descent stopped on the carton);
+    the grasp taken is a slice of the box the open hand clears it at. A failed pick moves
+    the retry to another grasp."""
+    env, scene, percept, ctx = _living_room(1, 0)
+    try:
+        obj = "cream_cheese_1"
+        pos, rot = percept.objects[obj]
+
+        def gap(g: Grip) -> float:
+            along = rot[:, g.axis] if g.axis is not None else ctx.base[:, 1]
+            return hand_clearance(ctx, percept, pos + rot @ g.point, along, obj)
+
+        preferred, chosen = grip(ctx, obj), chosen_grip(ctx, percept, obj)
+        assert gap(preferred) < 0.0 <= GRASP_CLEARANCE <= gap(chosen)
+        assert np.allclose(grasp_point(ctx, percept, obj), pos + rot @ chosen.point)
+        ctx.failures[obj] = 1
+        retry = chosen_grip(ctx, percept, obj)
+        assert retry.axis != chosen.axis or np.linalg.norm(
+            retry.point[:2] - chosen.point[:2]) >= RETRY_SHIFT  # fmt: skip
+    finally:
+        env.close()
+
+
+def test_transit_keeps_clear_of_the_basket() -> None:
+    """LIBERO-10 task 7, state 0: with the hand inside the basket (as after a place in
+    it), on its way to the cream cheese box, it must first rise above the basket's rim;
+    on its way into the basket, or over open table, nothing holds it up."""
+    env, scene, percept, ctx = _living_room(7, 0)
+    try:
+        basket = percept.position("basket_1")
+        rim = basket[2] + scene.extents["basket_1"][1][2]
+        inside = replace(percept, tcp=basket + np.array([0.0, 0.0, 0.06]))
+        cheese = percept.position("cream_cheese_1")[:2]
+        assert transit_height(ctx, inside, cheese) == pytest.approx(rim + TRANSIT_CLEARANCE)
+        assert transit_height(ctx, inside, basket[:2]) == -np.inf
+        open_table = replace(percept, tcp=np.array([0.0, -0.35, 0.5]))
+        assert transit_height(ctx, open_table, cheese) == -np.inf
+    finally:
+        env.close()
+
+
+@pytest.mark.slow
+def test_scripted_plan_puts_the_cream_cheese_in_the_basket(capsys) -> None:
+    """LIBERO-10 task 7, initial state 0 (failed before the transit clearance: the hand,
+    leaving the basket on a straight line down to the cream cheese box, dragged the basket
+    onto the box): both objects into the basket within 520 steps, each pick the first
+    time."""
+    argv = ["--domain", "libero", "evaluate", "benchmark", "--suite", "libero_10", "--task",
+            "7", "--init-states", "0:1", "--policy", "scripted-plan", "--json"]  # fmt: skip
+    assert cli.main(argv) == 0
+    (episode,) = json.loads(capsys.readouterr().out)["episode_log"]
+    assert episode["success"], episode["trace"]
+    assert not any("FAILED" in line for line in episode["trace"]), episode["trace"]

@@ -8,11 +8,13 @@ motion (``legs``), every target computed from the current percept
 They are the first skills the plans run and the scripted collectors Algorithm 1's data
 will come from: told which operator to run, they script its motion; they are not learned.
 
-- ``approach ?x``: hover above ``?x`` (its grasp point, region, handle, knob or door).
+- ``approach ?x``: hover above ``?x`` (its grasp point, region, handle, knob or door),
+  the hand and what it holds kept clear above the objects on the way (``clearance``).
 - ``retreat ?x``: straight up to the home height (the node ``home`` is the safe height,
   not a fixed pose: going back to one would spend the step budget).
 - ``pick ?o ?s`` / ``pick-out ?o ?r``: down to the grasp point, close, lift. A bowl is
-  grasped at its rim (``RIM_GRASP``), anything else just above its origin.
+  grasped at its rim (``RIM_GRASP``), anything else near its origin where the open hand
+  clears its neighbours (``grasp.chosen_grip``; another grasp after a failed pick).
 - ``approach ?r`` holding an object / ``place-in ?o ?r`` into a region behind a door (the
   microwave's, roofed): in front of the doorway, then in through it sideways (``insert``;
   the object was grasped for it when picked).

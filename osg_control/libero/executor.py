@@ -30,10 +30,18 @@ from osg_control.planning.task import SearchLimits
 
 MAX_REPLANS = 4
 """Replans an episode may make before the executor holds still."""
-POSTURE_COST = 0.001
-"""The IK's pull toward the arm's home posture (``control.ik_backends.IKConfig``): twenty
-times its default, so the elbow stays up over the whole plan (at the default the forearm
-drifted down onto the cabinet while pushing a bottom drawer shut)."""
+POSTURE_COST = 0.01
+"""The IK's pull toward the arm's home posture (``control.ik_backends.IKConfig``): ten
+times its default, so the arm stays near it over the whole plan. At the default the forearm
+drifted down onto the cabinet while pushing a bottom drawer shut, and the first and third
+joints wound up against each other (1.1 and -1.0 rad) until a pick close to the arm's base
+folded the elbow near its limit and its descent crawled (6 cm in 40 steps)."""
+FIXTURE_POSTURE_COST = 0.001
+"""The posture pull while a drawer, door or knob is approached and worked
+(``FIXTURE_OPERATORS``): the fixture controllers' legs were written at it; at
+``POSTURE_COST`` the level hand's pull on LIBERO-Goal's middle drawer stopped short of the
+open threshold."""
+FIXTURE_OPERATORS = frozenset({"open", "close", "turn-on", "turn-off"})
 PLAN_TIME_S = 30.0
 """A search's time limit [s]."""
 EFFECTS: dict[str, tuple[str, int]] = {
@@ -63,9 +71,13 @@ class PlanExecutor:
         percept: LiberoPercept,
     ) -> None:  # fmt: skip
         """Plan the goal from the first percept."""
-        driver = JointTargetDriver(
-            robot, IKConfig(dt=1.0 / robot.control_hz, posture_cost=POSTURE_COST)
-        )
+        self.drivers = {
+            fixture: JointTargetDriver(
+                robot, IKConfig(dt=1.0 / robot.control_hz, posture_cost=cost)
+            )  # fmt: skip
+            for fixture, cost in ((False, POSTURE_COST), (True, FIXTURE_POSTURE_COST))
+        }
+        driver = self.drivers[False]
         self.ctx = Context(scene, driver, driver.tcp_pose(percept.joints)[1],
                            float(percept.tcp[2]), dict(problem.objects),
                            np.r_[robot.mount[0][:2], 0.0])  # fmt: skip
@@ -112,6 +124,9 @@ class PlanExecutor:
                 return False
         self.current = self.queue.pop(0)
         operator, args = self.current
+        at_fixture = self.holding is None and args[0] in self.ctx.scene.articulated
+        fixture = operator in FIXTURE_OPERATORS or (operator == "approach" and at_fixture)
+        self.ctx.driver = self.drivers[fixture]
         try:
             legs = operator_legs(self.ctx, operator, args, self.holding)
         except KeyError as err:
@@ -160,5 +175,7 @@ class PlanExecutor:
             elif operator in ("place-on", "place-in"):
                 self.holding = None
             return
+        if operator in ("pick", "pick-out"):  # the retry grasps otherwise
+            self.ctx.failures[args[0]] = self.ctx.failures.get(args[0], 0) + 1
         self.current = None
         self.runner = LegRunner([hold(GRIPPER_OPEN, 8), up(0.10, GRIPPER_OPEN)], self.ctx)

@@ -1,7 +1,9 @@
 """Where and how the hand grasps an object from above: the grasp point in the object's
-frame (``grip``: across its narrower side, or the slice of it that fits the open hand, or
-a bowl's or mug's rim) and the top-down rotation turned about the vertical to match
-(``grasp_rotation``, ``fingers_along``), all from the percept and the scene's geometry.
+frame (``grips``: across its narrower side, or a slice of it that fits the open hand; the
+one taken, ``chosen_grip``, keeps the open hand clear of the perceived neighbours and
+changes after a failed pick; or a bowl's or mug's rim) and the top-down rotation turned
+about the vertical to match (``grasp_rotation``, ``fingers_along``), all from the percept
+and the scene's geometry.
 """
 
 from __future__ import annotations
@@ -11,6 +13,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.spatial.transform import Rotation
 
+from osg_control.libero.clearance import hand_clearance
 from osg_control.libero.legs import Context
 from osg_control.libero.perception import LiberoPercept
 
@@ -40,6 +43,12 @@ GRIP_STEP = 0.005
 """The spacing of the slices ``grip`` tries [m]."""
 RIM_DEPTH = 0.02
 """How far below a rim the fingertips close [m]."""
+GRASP_CLEARANCE = 0.008
+"""The least gap between the hand at a grasp and a neighbour's footprint [m]."""
+RETRY_SHIFT = 0.015
+"""How far a retried grasp's point lies from the ones tried before, on the same axis [m]."""
+REDECIDE = 0.02
+"""How far an object must move before its grasp is chosen again [m]."""
 
 
 def _yaw(rotation: np.ndarray, angle: float) -> np.ndarray:
@@ -63,20 +72,21 @@ def slab(ctx: Context, obj: str, axis: int, centre: float) -> list[tuple[np.ndar
             if lo[other] < centre + FINGER_HALF and hi[other] > centre - FINGER_HALF]  # fmt: skip
 
 
-def grip(ctx: Context, obj: str) -> Grip:
-    """Where to grasp ``obj`` from above: just above its origin (at least ``GRASP_FLOOR``
-    above its bottom) across its narrower side when everything the fingers pass on the way
-    down fits between them (``GRIP_WIDTH``);
-    else the slice of the object, along either horizontal axis, that fits with the least
-    width (a moka pot's handle), at the origin's height clamped into that slice."""
+def grips(ctx: Context, obj: str) -> list[Grip]:
+    """Every way to grasp ``obj`` from above, the preferred first: just above its origin
+    (at least ``GRASP_FLOOR`` above its bottom) across its narrower side when everything
+    the fingers pass on the way down fits between them (``GRIP_WIDTH``); then each slice of
+    the object, along either horizontal axis, that fits, the narrowest and most central
+    first (a moka pot's handle), at the origin's height clamped into that slice. A round
+    object has one: unturned, above its origin."""
     low, high = ctx.scene.extents[obj]
     width = high[:2] - low[:2]
     axis = int(np.argmin(width))
     lift = min(low[2] + GRASP_FLOOR, (low[2] + high[2]) / 2)  # an origin at the bottom
     default = np.array([0.0, 0.0, max(GRASP_ABOVE_ORIGIN, lift)])
     if max(width) < ROUND * min(width) and min(width) <= GRIP_WIDTH:
-        return Grip(default, None)
-    candidates = []
+        return [Grip(default, None)]
+    candidates: list[tuple[float, int, Grip]] = []
     for a in (axis, 1 - axis):
         for centre in np.arange(low[1 - a], high[1 - a] + 1e-9, GRIP_STEP):
             boxes = slab(ctx, obj, a, float(centre))
@@ -89,13 +99,53 @@ def grip(ctx: Context, obj: str) -> Grip:
             point = np.zeros(3)
             point[a], point[1 - a] = (lo_a + hi_a) / 2, centre
             point[2] = max(bottom + BAND / 2, min(GRASP_ABOVE_ORIGIN, top - BAND / 2))
-            candidates.append((hi_a - lo_a + abs(centre) * 0.1, a, point))
-            if a == axis and abs(centre) < GRIP_STEP / 2 + 1e-9:
-                return Grip(point, a)
+            central = a == axis and abs(centre) < GRIP_STEP / 2 + 1e-9
+            cost = -np.inf if central else hi_a - lo_a + abs(centre) * 0.1
+            candidates.append((cost, len(candidates), Grip(point, a)))
     if not candidates:
-        return Grip(default, axis)
-    _, a, point = min(candidates, key=lambda c: c[0])
-    return Grip(point, a)
+        return [Grip(default, axis)]
+    return [g for _, _, g in sorted(candidates, key=lambda c: c[:2])]
+
+
+def grip(ctx: Context, obj: str) -> Grip:
+    """The preferred grasp of ``obj`` from its geometry alone (``grips``' first)."""
+    return grips(ctx, obj)[0]
+
+
+def _finger_axis(ctx: Context, percept: LiberoPercept, obj: str, g: Grip) -> np.ndarray:
+    """The world direction the fingers slide along for grasp ``g``."""
+    return ctx.base[:, 1] if g.axis is None else percept.objects[obj][1][:, g.axis]
+
+
+def chosen_grip(ctx: Context, percept: LiberoPercept, obj: str) -> Grip:
+    """The grasp the hand takes: the first of ``grips`` whose hand stands
+    ``GRASP_CLEARANCE`` clear of the perceived neighbours (``clearance.hand_clearance``),
+    else the preferred one (a slice at the object's end, taken for being the clearest,
+    tipped a standing book over); each failed pick of ``obj`` (``Context.failures``) moves
+    on to the next grasp that differs (another axis, or ``RETRY_SHIFT`` along the object).
+    Decided once per attempt, again only when the object has moved ``REDECIDE``."""
+    tries = ctx.failures.get(obj, 0)
+    pos, rot = percept.objects[obj]
+    memo = ctx.grips.get(obj)
+    if memo is not None and memo[0] == tries and np.linalg.norm(memo[1] - pos) < REDECIDE:
+        return memo[2]
+    scored = []
+    for g in grips(ctx, obj):
+        tcp = pos + rot @ g.point
+        gap = hand_clearance(ctx, percept, tcp, _finger_axis(ctx, percept, obj, g), obj)
+        scored.append((gap, g))
+    clear = [g for gap, g in scored if gap >= GRASP_CLEARANCE]
+    rest = [g for gap, g in sorted(scored, key=lambda s: -s[0]) if gap < GRASP_CLEARANCE]
+    if not clear:  # the preferred grasp first all the same, then the clearest
+        rest.sort(key=lambda g: g is not scored[0][1])
+    distinct: list[Grip] = []
+    for g in clear + rest:
+        if all(g.axis != k.axis or np.linalg.norm(g.point[:2] - k.point[:2]) >= RETRY_SHIFT
+               for k in distinct):  # fmt: skip
+            distinct.append(g)
+    chosen = distinct[tries % len(distinct)]
+    ctx.grips[obj] = (tries, pos.copy(), chosen)
+    return chosen
 
 
 def grasp_rotation(ctx: Context, percept: LiberoPercept, obj: str) -> np.ndarray:
@@ -106,10 +156,10 @@ def grasp_rotation(ctx: Context, percept: LiberoPercept, obj: str) -> np.ndarray
         return ctx.grasps[obj](percept)[1]
     if _rim(ctx, obj):  # the hand's long side across the reach: it fits under cabinets
         return fingers_along(ctx, percept.position(obj) - ctx.base_xy)
-    axis = grip(ctx, obj).axis
-    if axis is None:
+    g = chosen_grip(ctx, percept, obj)
+    if g.axis is None:
         return ctx.base
-    return fingers_along(ctx, percept.objects[obj][1][:, axis])
+    return fingers_along(ctx, _finger_axis(ctx, percept, obj, g))
 
 
 def fingers_along(ctx: Context, direction: np.ndarray) -> np.ndarray:
@@ -139,7 +189,7 @@ def grasp_point(ctx: Context, percept: LiberoPercept, obj: str) -> np.ndarray:
     pos, rot = percept.objects[obj]
     low, high = ctx.scene.extents[obj]
     if not _rim(ctx, obj):
-        return pos + rot @ grip(ctx, obj).point
+        return pos + rot @ chosen_grip(ctx, percept, obj).point
     axis = grasp_rotation(ctx, percept, obj)[:, 1] * np.array([1.0, 1.0, 0.0])
     axis /= np.linalg.norm(axis)
     radius = float(min(np.abs(low[:2]).min(), np.abs(high[:2]).min())) - RIM_INSET

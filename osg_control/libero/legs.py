@@ -8,7 +8,7 @@ from __future__ import annotations
 
 from collections.abc import Callable
 from dataclasses import dataclass, field
-from typing import Protocol
+from typing import Any, Protocol
 
 import numpy as np
 from scipy.spatial.transform import Rotation
@@ -53,9 +53,10 @@ class Context:
     """What every controller of an episode shares: the scene, the IK driver, the top-down
     rotation of the episode's start (``base``, which fixture controllers use), the last
     commanded rotation (``rotation``: a leg that names none keeps it), the home height,
-    the objects' categories, where the arm's base stands (``base_xy``), and the grasps
-    that replace the top-down one for objects the plan takes somewhere it does not fit
-    (``grasps``: set by the plan executor from what the plan does next, ``insert``)."""
+    the objects' categories, where the arm's base stands (``base_xy``), the grasps
+    chosen and failed so far, and those that replace the top-down one for objects the
+    plan takes somewhere it does not fit (``grasps``: set by the plan executor from what
+    the plan does next, ``insert``)."""
 
     scene: Scene
     driver: JointTargetDriver
@@ -67,6 +68,11 @@ class Context:
 
     def __post_init__(self) -> None:
         self.rotation = self.base
+        self.failures: dict[str, int] = {}
+        """Failed picks per object so far (the executor counts them; a retry grasps
+        otherwise: ``grasp.chosen_grip``)."""
+        self.grips: dict[str, Any] = {}
+        """The grasp chosen per object, with the attempt and where it was (``grasp``)."""
 
 
 class LegRunner:

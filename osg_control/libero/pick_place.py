@@ -9,6 +9,7 @@ from __future__ import annotations
 import numpy as np
 from scipy.spatial.transform import Rotation
 
+from osg_control.libero.clearance import footprint, transit_height
 from osg_control.libero.drive import GRIPPER_CLOSED, GRIPPER_OPEN
 from osg_control.libero.facts import held, region_pose
 from osg_control.libero.fixtures import door_point, drawer_front
@@ -27,6 +28,9 @@ clears a basket's rim)."""
 CARRY_CEILING = 0.10
 """The highest the hand carries an object, above the home height [m]: ``CARRY`` above a
 cabinet's top was at the edge of the arm's reach, and the approach ran out of steps."""
+TRANSIT_SLACK = 0.01
+"""How far below its transit height (``clearance.transit_height``) an approach may start
+without first going straight up [m]."""
 LIFT = 0.12
 """How far a pick lifts before checking the object came with the hand [m]."""
 DROP = 0.02
@@ -61,18 +65,16 @@ def _carried_offset(percept: LiberoPercept, obj: str | None) -> np.ndarray:
 def approach(ctx: Context, thing: str, holding: str | None) -> list[Leg]:
     """Hover above ``thing`` (a drawer: in front of its handle, ``fixtures.drawer_front``);
     with an object in hand, its origin ``CARRY`` above it (the hand at most
-    ``CARRY_CEILING`` above the home height)."""
+    ``CARRY_CEILING`` above the home height). On the way the hand (and what it holds) keeps
+    clear above the objects it passes (``clearance.transit_height``), going straight up
+    first where it is below that."""
 
-    def target(now: LiberoPercept, start: LiberoPercept) -> tuple[np.ndarray, np.ndarray | None]:
+    def goal(now: LiberoPercept) -> tuple[np.ndarray, np.ndarray | None]:
         point = anchor(ctx, now, thing)
         if holding is None and thing in now.objects:  # above the object's top
             top = now.position(thing)[2] + ctx.scene.extents[thing][1][2]
             hover = np.r_[point[:2], max(point[2] + HOVER, top + TOP_CLEARANCE)]
-            turn = grasp_rotation(ctx, now, thing)
-            _, rot = ctx.driver.tcp_pose(now.joints)
-            if Rotation.from_matrix(rot.T @ turn).magnitude() > TURN_FIRST:  # turn in place
-                return np.r_[start.tcp[:2], max(start.tcp[2], ctx.home_z)], turn
-            return hover, turn
+            return hover, grasp_rotation(ctx, now, thing)
         region = ctx.scene.regions.get(thing)
         if holding is None and region is not None and region.joint is not None:
             point = drawer_front(ctx, now, thing)  # a drawer: in front of its handle
@@ -81,9 +83,25 @@ def approach(ctx: Context, thing: str, holding: str | None) -> list[Leg]:
         carried = point + np.array([0.0, 0.0, CARRY]) + _carried_offset(now, holding)
         return np.r_[carried[:2], min(carried[2], ctx.home_z + CARRY_CEILING)], None
 
+    def floor(now: LiberoPercept) -> float:
+        return transit_height(ctx, now, goal(now)[0][:2], holding)
+
+    def rise(now: LiberoPercept, start: LiberoPercept) -> tuple[np.ndarray, np.ndarray | None]:
+        return np.r_[now.tcp[:2], max(floor(now), now.tcp[2])], goal(now)[1]
+
+    def target(now: LiberoPercept, start: LiberoPercept) -> tuple[np.ndarray, np.ndarray | None]:
+        point, rot = goal(now)
+        if holding is None and thing in now.objects and rot is not None:
+            _, current = ctx.driver.tcp_pose(now.joints)
+            if Rotation.from_matrix(current.T @ rot).magnitude() > TURN_FIRST:  # turn in place
+                return np.r_[start.tcp[:2], max(start.tcp[2], ctx.home_z)], rot
+        return np.r_[point[:2], max(point[2], floor(now))], rot
+
     gripper = GRIPPER_OPEN if holding is None else GRIPPER_CLOSED
     fine = holding is None and thing in ctx.categories  # the pick that follows descends
-    return [Leg(target, gripper, 90, 0.008 if fine else 0.02)]
+    clear = lambda now: now.tcp[2] >= floor(now) - TRANSIT_SLACK  # noqa: E731
+    return [Leg(rise, gripper, 40, 0.0, until=clear),
+            Leg(target, gripper, 90, 0.008 if fine else 0.02)]  # fmt: skip
 
 
 def retreat(ctx: Context, holding: str | None) -> list[Leg]:
@@ -126,17 +144,6 @@ def _surface(
     return pos + np.array([0.0, 0.0, -half[2] if inside else half[2]])
 
 
-def _footprint(ctx: Context, percept: LiberoPercept, obj: str) -> np.ndarray:
-    """An object's perceived footprint: the world xy box (lower, upper) round its
-    collision geometry (a moka pot's handle included)."""
-    pos, rot = percept.objects[obj]
-    low, high = ctx.scene.extents[obj]
-    corners = np.array([[x, y, z] for x in (low[0], high[0]) for y in (low[1], high[1])
-                        for z in (low[2], high[2])])  # fmt: skip
-    world = pos[:2] + (corners @ rot.T)[:, :2]
-    return np.array([world.min(axis=0), world.max(axis=0)])
-
-
 def _free_spot(
     ctx: Context, percept: LiberoPercept, centre: np.ndarray, half: np.ndarray, held_obj: str
 ) -> np.ndarray:
@@ -144,8 +151,8 @@ def _free_spot(
     ``CLEARANCE`` clear of every other object's footprint there, else the point of the
     region's footprint (less ``EDGE_MARGIN``) whose footprint stands clearest of them (up to
     ``CLEARANCE``), the nearest the centre among equals (the second moka pot on a stove)."""
-    own = _footprint(ctx, percept, held_obj) - percept.position(held_obj)[:2]
-    others = [_footprint(ctx, percept, o) for o in percept.objects if o != held_obj]
+    own = footprint(ctx, percept, held_obj) - percept.position(held_obj)[:2]
+    others = [footprint(ctx, percept, o) for o in percept.objects if o != held_obj]
 
     def clearance(spot: np.ndarray) -> float:
         box = own + spot
