@@ -19,6 +19,7 @@ import json
 import sys
 from pathlib import Path
 
+from osg_control.execution.bundle import RATES_KEY
 from osg_control.io_safety import atomic_write
 from osg_control.libero.recording import OPERATORS
 
@@ -46,7 +47,7 @@ def main(argv: list[str] | None = None) -> int:
         print(f"no run of {args.skill} in {', '.join(map(str, args.bench))}", file=sys.stderr)
         return 2
     manifest = json.loads(args.manifest.read_text())
-    manifest["success_rates"][args.skill] = round(ok / runs, 4)
+    manifest[RATES_KEY][args.skill] = round(ok / runs, 4)
     manifest.setdefault("measured", {})[args.skill] = {
         "runs": runs, "perceived_successes": ok, "policy": "skills",
         "command": args.command, "episodes": where,

@@ -34,7 +34,7 @@ from osg_control.libero.operators import SCHEMAS
 from osg_control.libero.perception import LiberoPercept
 from osg_control.libero.pick_place import holding_ok
 from osg_control.libero.recording import OPERATORS, SKILL_MAX_STEPS
-from osg_control.libero.training import DEFAULTS_DIR, SKILLS_DIR, read_manifest
+from osg_control.libero.training import DEFAULTS_DIR, MANIFEST, SKILLS_DIR, read_manifest
 
 POLICY = "skills"
 
@@ -60,7 +60,7 @@ def load_skills(directory: Path) -> dict[str, SkillPolicy]:
 
 def shipped() -> bool:
     """Whether the package ships learned LIBERO skills (``training.DEFAULTS_DIR``)."""
-    return (DEFAULTS_DIR / "manifest.json").is_file()
+    return (DEFAULTS_DIR / MANIFEST).is_file()
 
 
 def learned_operators(names: list[str]) -> tuple[list[str], list[str]]:

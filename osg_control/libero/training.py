@@ -27,6 +27,7 @@ import numpy as np
 from osg_control import __version__
 from osg_control.data.datasets import Dataset
 from osg_control.errors import CheckpointError
+from osg_control.execution.bundle import MANIFEST, RATES_KEY
 from osg_control.io_safety import atomic_write
 from osg_control.json_files import read_json_object
 from osg_control.learning.checkpoints import Checkpoint, save_checkpoint, sha256_file
@@ -38,7 +39,7 @@ from osg_control.paths import PACKAGE_DIR
 
 DEFAULTS_DIR = PACKAGE_DIR / "libero" / "defaults"
 """The shipped skills folder (package data: ``*/defaults/**/*``)."""
-SKILLS_DIR, MANIFEST = "skills", "manifest.json"
+SKILLS_DIR = "skills"
 MANIFEST_FORMAT = "osg-libero-skills"
 CONFIG = TD3BCConfig(gripper_switch_weight=1.0)
 """TD3+BC's settings: the project's defaults but for the gripper weight: the lifted
@@ -120,7 +121,7 @@ def write_skills(
                       "init_states": sorted({int(s) for s in d.attrs["episode_init_states"]})}
                      for d in datasets],
         }},
-        "success_rates": {},
+        RATES_KEY: {},
     }  # fmt: skip
     path = out / MANIFEST
     atomic_write(path, lambda tmp: tmp.write_text(json.dumps(manifest, indent=2) + "\n"))
