@@ -1,6 +1,7 @@
 """The approach's turn in place (``pick_place.approach``): a hand that must turn far for
-its grasp turns where it is, commanded at most ``TURN_STEP`` ahead of its rotation, so the
-IK does not buy the wrist's turn with the position (needs the ``libero`` extra)."""
+a bowl's grasp turns where it is, commanded at most ``TURN_STEP`` ahead of its rotation, so
+the IK does not buy the wrist's turn with the position; a mug's is commanded whole (needs
+the ``libero`` extra)."""
 
 from __future__ import annotations
 
@@ -16,7 +17,7 @@ from osg_control.libero.env import LiberoEnv  # noqa: E402
 from osg_control.libero.grasp import grasp_rotation  # noqa: E402
 from osg_control.libero.legs import Context, LegRunner  # noqa: E402
 from osg_control.libero.perception import LiberoPerception  # noqa: E402
-from osg_control.libero.pick_place import TURN_FIRST, TURN_STEP  # noqa: E402
+from osg_control.libero.pick_place import TURN_FIRST, TURN_LIMITED, TURN_STEP  # noqa: E402
 from osg_control.libero.robot import mounted_panda  # noqa: E402
 
 
@@ -56,5 +57,27 @@ def test_the_bowls_quarter_turn_holds_the_hand_in_place() -> None:
             steps += 1
         assert not turning, steps  # the turn was done within the approach
         assert drift < 0.04
+    finally:
+        env.close()
+
+
+def test_a_mug_turns_the_whole_way() -> None:
+    """LIBERO-10 task 4, state 1: the porcelain mug is not ``TURN_LIMITED`` (limited, its
+    first rim grasp failed on every retry): its approach commands the whole turn."""
+    env = LiberoEnv("libero_10", 4)
+    try:
+        obs = env.reset(1)
+        scene, percept = LiberoPerception(env).reset(obs, 1)
+        robot = mounted_panda(env.sim)
+        driver = JointTargetDriver(robot)
+        ctx = Context(scene, driver, driver.tcp_pose(percept.joints)[1], float(percept.tcp[2]),
+                      dict(env.problem.objects), np.r_[robot.mount[0][:2], 0.0])  # fmt: skip
+        mug = "porcelain_mug_1"
+        assert not any(word in ctx.categories[mug] for word in TURN_LIMITED)
+        whole = grasp_rotation(ctx, percept, mug)
+        now = driver.tcp_pose(percept.joints)[1]
+        assert Rotation.from_matrix(now.T @ whole).magnitude() > TURN_FIRST  # it turns in place
+        command = LegRunner(operator_legs(ctx, "approach", (mug,), None), ctx).command(percept)
+        assert command is not None and np.allclose(command[1], whole)
     finally:
         env.close()
