@@ -32,6 +32,7 @@ from osg_control.libero.grasp import (  # noqa: E402
     Grip,
     chosen_grip,
     grasp_point,
+    grasp_rotation,
     grip,
 )
 from osg_control.libero.insert import (  # noqa: E402
@@ -45,7 +46,12 @@ from osg_control.libero.insert import (  # noqa: E402
 )
 from osg_control.libero.legs import Context, LegRunner  # noqa: E402
 from osg_control.libero.perception import FIXTURE_NOISE, LiberoPerception  # noqa: E402
-from osg_control.libero.pick_place import holding_ok  # noqa: E402
+from osg_control.libero.pick_place import (  # noqa: E402
+    TURN_FIRST,
+    TURN_LEAD,
+    approach,
+    holding_ok,
+)
 from osg_control.libero.problem import Atom  # noqa: E402
 from osg_control.libero.robot import mounted_panda  # noqa: E402
 from osg_control.libero.scene import Joint, RegionBox, Scene  # noqa: E402
@@ -312,10 +318,10 @@ def test_scripted_plan_opens_the_drawer_and_turns_the_knob(capsys, task, fixture
     assert not any("FAILED" in line for line in episode["trace"])
 
 
-def _living_room(task: int, state: int):
-    """A LIBERO-10 living-room scene at an initial state: its env, scene, first percept
-    and a controllers' context."""
-    env = LiberoEnv("libero_10", task)
+def _living_room(task: int, state: int, suite: str = "libero_10"):
+    """A LIBERO-10 living-room scene (or another suite's) at an initial state: its env,
+    scene, first percept and a controllers' context."""
+    env = LiberoEnv(suite, task)
     obs = env.reset(state)
     scene, percept = LiberoPerception(env).reset(obs, state)
     robot = mounted_panda(env.sim)
@@ -323,6 +329,26 @@ def _living_room(task: int, state: int):
     ctx = Context(scene, driver, driver.tcp_pose(percept.joints)[1], float(percept.tcp[2]),
                   dict(env.problem.objects), np.r_[robot.mount[0][:2], 0.0])  # fmt: skip
     return env, scene, percept, ctx
+
+
+def test_a_turn_in_place_is_commanded_a_little_ahead() -> None:
+    """LIBERO-PRO ``libero_10_task`` task 5, state 0: the mug's rim grasp is a quarter turn
+    from the start (given at once, the IK tilted the hand and stalled); the approach turns
+    in place, commanding at most ``TURN_LEAD`` ahead of the hand's rotation."""
+    env, scene, percept, ctx = _living_room(5, 0, "libero_10_task")
+    try:
+        legs = approach(ctx, "white_yellow_mug_1", None)
+        _, current = ctx.driver.tcp_pose(percept.joints)
+        whole = grasp_rotation(ctx, percept, "white_yellow_mug_1")
+        assert Rotation.from_matrix(current.T @ whole).magnitude() > TURN_FIRST
+        point, rot = legs[1].target(percept, percept)
+        assert np.allclose(point[:2], percept.tcp[:2])
+        lead = Rotation.from_matrix(current.T @ rot).magnitude()
+        assert lead == pytest.approx(TURN_LEAD)
+        left = Rotation.from_matrix(rot.T @ whole).magnitude()
+        assert left == pytest.approx(Rotation.from_matrix(current.T @ whole).magnitude() - lead)
+    finally:
+        env.close()
 
 
 def test_grasp_keeps_the_hand_clear_of_a_neighbour() -> None:

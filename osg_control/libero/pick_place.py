@@ -20,6 +20,10 @@ from osg_control.libero.perception import LiberoPercept
 TURN_FIRST = 0.4
 """A hand that must turn more than this [rad] to grasp turns where it is, at least at
 the home height, before it moves (turning on the way swung the arm into the object)."""
+TURN_LEAD = 0.15
+"""How far ahead of the hand's rotation a turn in place is commanded [rad]: given the
+whole quarter turn at once, the IK tilted the hand 20 deg and stalled there (the mug and
+the bowl of LIBERO-PRO's study scene, ``libero_10_task`` / ``_object`` task 5)."""
 TOP_CLEARANCE = 0.05
 """Height above an object's top the empty hand hovers at least [m] (a standing book)."""
 CARRY = 0.30
@@ -93,8 +97,11 @@ def approach(ctx: Context, thing: str, holding: str | None) -> list[Leg]:
         point, rot = goal(now)
         if holding is None and thing in now.objects and rot is not None:
             _, current = ctx.driver.tcp_pose(now.joints)
-            if Rotation.from_matrix(current.T @ rot).magnitude() > TURN_FIRST:  # turn in place
-                return np.r_[start.tcp[:2], max(start.tcp[2], ctx.home_z)], rot
+            turn = Rotation.from_matrix(current.T @ rot).as_rotvec()
+            if np.linalg.norm(turn) > TURN_FIRST:  # turn in place, TURN_LEAD ahead
+                lead = turn * min(1.0, TURN_LEAD / np.linalg.norm(turn))
+                ahead = current @ Rotation.from_rotvec(lead).as_matrix()
+                return np.r_[start.tcp[:2], max(start.tcp[2], ctx.home_z)], ahead
         return np.r_[point[:2], max(point[2], floor(now))], rot
 
     gripper = GRIPPER_OPEN if holding is None else GRIPPER_CLOSED
