@@ -47,6 +47,7 @@ from osg_control.libero.insert import (  # noqa: E402
 from osg_control.libero.legs import Context, LegRunner  # noqa: E402
 from osg_control.libero.perception import FIXTURE_NOISE, LiberoPerception  # noqa: E402
 from osg_control.libero.pick_place import (  # noqa: E402
+    TILT_MAX,
     TURN_FIRST,
     TURN_LEAD,
     approach,
@@ -331,17 +332,26 @@ def _living_room(task: int, state: int, suite: str = "libero_10"):
     return env, scene, percept, ctx
 
 
-def test_a_turn_in_place_is_commanded_a_little_ahead() -> None:
+def test_a_tilted_turn_in_place_is_commanded_a_little_ahead() -> None:
     """LIBERO-PRO ``libero_10_task`` task 5, state 0: the mug's rim grasp is a quarter turn
-    from the start (given at once, the IK tilted the hand and stalled); the approach turns
-    in place, commanding at most ``TURN_LEAD`` ahead of the hand's rotation."""
+    from the start. The approach turns in place, the whole turn at once; with the hand
+    tilted (the wrist's joint 5 turned 0.3 rad: given the whole turn, the IK tilted it 20 deg
+    and stalled), it commands the turn only ``TURN_LEAD`` ahead of the hand's rotation."""
     env, scene, percept, ctx = _living_room(5, 0, "libero_10_task")
     try:
-        legs = approach(ctx, "white_yellow_mug_1", None)
+        mug = "white_yellow_mug_1"
+        target = approach(ctx, mug, None)[1].target
+        whole = grasp_rotation(ctx, percept, mug)
         _, current = ctx.driver.tcp_pose(percept.joints)
-        whole = grasp_rotation(ctx, percept, "white_yellow_mug_1")
         assert Rotation.from_matrix(current.T @ whole).magnitude() > TURN_FIRST
-        point, rot = legs[1].target(percept, percept)
+        point, rot = target(percept, percept)
+        assert np.allclose(point[:2], percept.tcp[:2]) and np.allclose(rot, whole)
+        joints = percept.joints + np.array([0.0, 0.0, 0.0, 0.0, 0.3, 0.0, 0.0])
+        tilted = replace(percept, joints=joints)
+        _, current = ctx.driver.tcp_pose(joints)
+        assert np.arccos(current[:, 2] @ whole[:, 2]) > TILT_MAX
+        assert Rotation.from_matrix(current.T @ whole).magnitude() > TURN_FIRST
+        point, rot = target(tilted, percept)
         assert np.allclose(point[:2], percept.tcp[:2])
         lead = Rotation.from_matrix(current.T @ rot).magnitude()
         assert lead == pytest.approx(TURN_LEAD)
