@@ -20,14 +20,6 @@ from osg_control.libero.perception import LiberoPercept
 TURN_FIRST = 0.4
 """A hand that must turn more than this [rad] to grasp turns where it is, at least at
 the home height, before it moves (turning on the way swung the arm into the object)."""
-TILT_MAX = 0.1
-"""How far a hand turning in place may tilt off the grasp's axis [rad] before its turn is
-commanded only ``TURN_LEAD`` ahead: given the whole quarter turn at once, the IK tilted
-the hand 20 deg and stalled there (the mug and the bowl of LIBERO-PRO's study scene,
-``libero_10_task`` / ``_object`` task 5)."""
-TURN_LEAD = 0.15
-"""How far ahead of the hand's rotation a tilted turn in place is commanded [rad] (always
-so, the turns were slower and LIBERO-10 task 4 ran out of steps)."""
 TOP_CLEARANCE = 0.05
 """Height above an object's top the empty hand hovers at least [m] (a standing book)."""
 CARRY = 0.30
@@ -101,12 +93,7 @@ def approach(ctx: Context, thing: str, holding: str | None) -> list[Leg]:
         point, rot = goal(now)
         if holding is None and thing in now.objects and rot is not None:
             _, current = ctx.driver.tcp_pose(now.joints)
-            turn = Rotation.from_matrix(current.T @ rot).as_rotvec()
-            if np.linalg.norm(turn) > TURN_FIRST:  # turn in place
-                tilt = np.arccos(np.clip(current[:, 2] @ rot[:, 2], -1.0, 1.0))
-                if tilt > TILT_MAX:  # the whole turn tilted the hand: TURN_LEAD ahead
-                    turn = turn * min(1.0, TURN_LEAD / np.linalg.norm(turn))
-                    rot = current @ Rotation.from_rotvec(turn).as_matrix()
+            if Rotation.from_matrix(current.T @ rot).magnitude() > TURN_FIRST:  # turn in place
                 return np.r_[start.tcp[:2], max(start.tcp[2], ctx.home_z)], rot
         return np.r_[point[:2], max(point[2], floor(now))], rot
 
