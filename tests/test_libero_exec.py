@@ -25,7 +25,7 @@ from osg_control.libero.controllers import operator_legs  # noqa: E402
 from osg_control.libero.drive import JointTargetDriver  # noqa: E402
 from osg_control.libero.env import LiberoEnv  # noqa: E402
 from osg_control.libero.executor import PlanExecutor  # noqa: E402
-from osg_control.libero.facts import holds, perceived_init  # noqa: E402
+from osg_control.libero.facts import holds, perceived_init, region_pose  # noqa: E402
 from osg_control.libero.grasp import (  # noqa: E402
     GRASP_CLEARANCE,
     RETRY_SHIFT,
@@ -122,6 +122,25 @@ def test_facts_are_read_from_the_percept(drawer_env: LiberoEnv) -> None:
     init = perceived_init(drawer_env.problem, scene, percept)
     assert Atom("open", (region,)) in init
     assert not any(a.predicate == "in" and a.args[0] == "akita_black_bowl_1" for a in init)
+
+
+def test_a_filled_drawer_pushed_short_is_still_open(drawer_env: LiberoEnv) -> None:
+    """A drawer the goal fills counts as open only when more than half-way open, while the
+    object is not in it yet; once the bowl is perceived inside, a drawer pushed short of
+    LIBERO's closed threshold is open (still to close), not closed with nothing planned."""
+    obs = drawer_env.reset(0)
+    scene, percept = LiberoPerception(drawer_env).reset(obs, 0)
+    region, bowl = "white_cabinet_1_bottom_region", "akita_black_bowl_1"
+    joint = scene.joints[DRAWER_JOINT]
+    short = joint.rest + 0.2 * (joint.active - joint.rest)  # past closed, not half-way
+    reading = replace(percept.fixtures[DRAWER_JOINT], value=short)
+    ajar = replace(percept, fixtures={**percept.fixtures, DRAWER_JOINT: reading})
+    assert not holds(scene, ajar, Atom("close", (region,)))
+    assert Atom("open", (region,)) not in perceived_init(drawer_env.problem, scene, ajar)
+    floor = region_pose(scene, ajar, region)[0]
+    inside = replace(ajar, objects={**ajar.objects, bowl: (floor, ajar.objects[bowl][1])})
+    assert holds(scene, inside, Atom("in", (bowl, region)))
+    assert Atom("open", (region,)) in perceived_init(drawer_env.problem, scene, inside)
 
 
 def test_pick_controller_lifts_the_object() -> None:

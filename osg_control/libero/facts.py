@@ -121,7 +121,9 @@ def perceived_init(
     is stated as the goal does not want it, so that the plan moves it; but a drawer the
     goal puts something in is open when more than half-way open (a closed drawer's noisy
     reading straddles its closed threshold, and read as half-way, so open, half the time;
-    LIBERO-10's open drawer starts 1-12 mm past its open threshold)."""
+    LIBERO-10's open drawer starts 1-12 mm past its open threshold), until that object is
+    perceived in it: a drawer pushed short of its closed threshold with the bowl inside
+    then read as closed, the plan was empty and the drawer never closed."""
     atoms: list[Atom] = []
     for obj in problem.objects:
         if obj not in percept.objects:
@@ -139,7 +141,10 @@ def perceived_init(
             mine = [a for a in problem.init if a.predicate in ("on", "in") and a.args[0] == obj]
         atoms += mine
     wanted = {a.args[0] for a in problem.goal if a.predicate in ("open", "turnon")}
-    filled = {a.args[1] for a in problem.goal if a.predicate == "in"}  # drawers filled
+    filled = {  # drawers the goal still has to fill
+        a.args[1] for a in problem.goal
+        if a.predicate == "in" and not holds(scene, percept, a)
+    }  # fmt: skip
     for thing in scene.articulated:
         predicate = "turnon" if thing in scene.knobs else "open"
         if thing in wanted:  # open / on only when perceived past LIBERO's threshold
