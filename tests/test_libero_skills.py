@@ -106,6 +106,8 @@ def test_tiny_training_gives_a_loadable_checkpoint(tmp_path: Path) -> None:
         np.testing.assert_array_equal(b1, b2)
     manifest = json.loads((tmp_path / "skills_dir" / "manifest.json").read_text())
     assert manifest["skills"]["pick"]["operators"] == ["pick", "pick-out"]
+    (data,) = manifest["skills"]["pick"]["data"]
+    assert data["tasks"] == [3] and data["init_states"] == list(range(10, 16))
     weights = tmp_path / "skills_dir" / "skills" / "pick.safetensors"
     weights.write_bytes(weights.read_bytes()[:-4] + b"\0\0\0\0")
     with pytest.raises(CheckpointError, match=r"pick\.safetensors: weights do not match"):
@@ -124,6 +126,19 @@ def test_the_skills_policy_runs_an_episode_from_the_shipped_weights() -> None:
         "alphabet_soup_1 floor_target_object_region: ok"
     )
     assert episode.success and len(episode.actions_sha256) == 64
+
+
+def test_the_shipped_rate_is_measured_on_states_the_data_never_used() -> None:
+    """The shipped manifest's ``success_rates`` come from held-out initial states: no
+    (suite, initial state) of its measurement is one its data were recorded on."""
+    manifest = json.loads((DEFAULTS_DIR / "manifest.json").read_text())
+    pick = manifest["skills"]["pick"]
+    trained = {(d["suite"], s) for d in pick["data"] for s in d["init_states"]}
+    rate = manifest["measured"]["pick"]
+    measured = {(e["suite"], s) for e in rate["episodes"]
+                for states in e["tasks"].values() for s in states}  # fmt: skip
+    assert measured and trained and not measured & trained
+    assert manifest["success_rates"]["pick"] == round(rate["perceived_successes"] / rate["runs"], 4)
 
 
 def test_the_benchmark_names_a_corrupt_skills_folder(tmp_path: Path, capsys) -> None:

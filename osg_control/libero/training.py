@@ -118,6 +118,7 @@ def write_skills(
                       "suite": str(d.attrs["suite"]), "command": str(d.attrs.get("command", "")),
                       "seed": int(d.attrs["seed"]), "episodes": d.num_episodes,
                       "steps": d.num_steps, "scripted_success_rate": round(d.success_rate, 4),
+                      "tasks": sorted({int(t) for t in d.attrs["episode_tasks"]}),
                       "init_states": sorted({int(s) for s in d.attrs["episode_init_states"]})}
                      for d in datasets],
         }},
