@@ -24,29 +24,15 @@ and the open fingers, each (half-length along the fingers' sliding axis, half-wi
 across it, height of its lower face above the TCP) [m]."""
 
 
-def footprint(ctx: Context, percept: LiberoPercept, obj: str, upright: bool = False) -> np.ndarray:
+def footprint(ctx: Context, percept: LiberoPercept, obj: str) -> np.ndarray:
     """An object's perceived footprint: the world xy box (lower, upper) round its
-    collision geometry (a moka pot's handle included); ``upright``: as it would stand at
-    its perceived yaw (``upright_rotation``: a pot carried tilted by its handle stands up
-    when set down)."""
+    collision geometry (a moka pot's handle included)."""
     pos, rot = percept.objects[obj]
-    if upright:
-        rot = upright_rotation(rot)
     low, high = ctx.scene.extents[obj]
     corners = np.array([[x, y, z] for x in (low[0], high[0]) for y in (low[1], high[1])
                         for z in (low[2], high[2])])  # fmt: skip
     world = pos[:2] + (corners @ rot.T)[:, :2]
     return np.array([world.min(axis=0), world.max(axis=0)])
-
-
-def upright_rotation(rot: np.ndarray) -> np.ndarray:
-    """The rotation about the vertical alone nearest ``rot``'s heading: the yaw of its x
-    axis, or of its y axis where that lies flatter (a turn about x leaves it so)."""
-    x, y = rot[:2, 0], rot[:2, 1]
-    yaw = np.arctan2(x[1], x[0]) if np.linalg.norm(x) >= np.linalg.norm(y) else (
-        np.arctan2(y[1], y[0]) - np.pi / 2)  # fmt: skip
-    c, s = np.cos(yaw), np.sin(yaw)
-    return np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
 
 
 def _overlap(a: np.ndarray, b: np.ndarray, margin: float) -> bool:

@@ -11,7 +11,7 @@ from scipy.spatial.transform import Rotation
 
 from osg_control.libero.clearance import footprint, transit_height
 from osg_control.libero.drive import GRIPPER_CLOSED, GRIPPER_OPEN
-from osg_control.libero.facts import held, holds, region_pose
+from osg_control.libero.facts import held, region_pose
 from osg_control.libero.fixtures import door_point, drawer_front
 from osg_control.libero.grasp import grasp_point, grasp_rotation
 from osg_control.libero.legs import HOVER, Context, Leg, hold, up
@@ -159,96 +159,39 @@ def _surface(
     ctx: Context, percept: LiberoPercept, target: str, inside: bool, held_obj: str
 ) -> np.ndarray:
     """The point the held object ``held_obj`` is set down over: an object's top centre, a
-    region's floor centre (``in``) or a free spot of its top (``on``, ``free_spot``)."""
+    region's floor centre (``in``) or a free spot of its top (``on``, ``_free_spot``)."""
     if target in percept.objects:
         pos, _ = percept.objects[target]
         return pos + np.array([0.0, 0.0, ctx.scene.extents[target][1][2]])
     pos, mat = region_pose(ctx.scene, percept, target)
     half = np.abs(mat @ ctx.scene.regions[target].size)
     if not inside:
-        pending = [footprint(ctx, percept, o, upright=True) - percept.position(o)[:2]
-                   for o in _still_to_come(ctx, percept, target, held_obj)]  # fmt: skip
-        own = footprint(ctx, percept, held_obj, bool(pending)) - percept.position(held_obj)[:2]
-        others = [footprint(ctx, percept, o) for o in percept.objects if o != held_obj]
-        spot = free_spot(own, others, pos[:2], half[:2], pending, ctx.base_xy[:2])
-        pos = np.r_[spot, pos[2]]
+        pos = _free_spot(ctx, percept, pos, half[:2], held_obj)
     return pos + np.array([0.0, 0.0, -half[2] if inside else half[2]])
 
 
-def _still_to_come(ctx: Context, percept: LiberoPercept, target: str, held_obj: str) -> list[str]:
-    """The other objects the goal puts on ``target`` that are not perceived there yet."""
-    return [a.args[0] for a in ctx.goal
-            if a.predicate == "on" and a.args[1] == target and a.args[0] != held_obj
-            and a.args[0] in percept.objects and not holds(ctx.scene, percept, a)]  # fmt: skip
-
-
-def _gap(a: np.ndarray, b: np.ndarray) -> float:
-    """How far apart two xy boxes (lower, upper) are along the axis that parts them most
-    (negative: they overlap)."""
-    return float(np.max(np.maximum(a[0] - b[1], b[0] - a[1])))
-
-
-def free_spot(
-    own: np.ndarray,
-    others: list[np.ndarray],
-    centre: np.ndarray,
-    half: np.ndarray,
-    pending: list[np.ndarray] | None = None,
-    base_xy: np.ndarray | None = None,
+def _free_spot(
+    ctx: Context, percept: LiberoPercept, centre: np.ndarray, half: np.ndarray, held_obj: str
 ) -> np.ndarray:
-    """Where on a region's top (``centre``, half-sizes ``half``) to set an object down whose
-    footprint about its origin is ``own``, its xy. When the goal still puts other objects
-    there after it (``pending``: their footprints about their origins), the region is
-    shared (``shared_spot``). Else its centre when it stands ``CLEARANCE`` clear of every
-    other object's footprint there (``others``, world), else the point of the region's
-    footprint (less ``EDGE_MARGIN``) that stands clearest of them (up to ``CLEARANCE``), the
-    nearest the centre among equals (the second moka pot on a stove)."""
-    if pending:
-        return shared_spot(own, others, centre, half, pending, base_xy)
+    """Where on a region's top to set ``held_obj`` down: its centre when it would stand
+    ``CLEARANCE`` clear of every other object's footprint there, else the point of the
+    region's footprint (less ``EDGE_MARGIN``) whose footprint stands clearest of them (up to
+    ``CLEARANCE``), the nearest the centre among equals (the second moka pot on a stove)."""
+    own = footprint(ctx, percept, held_obj) - percept.position(held_obj)[:2]
+    others = [footprint(ctx, percept, o) for o in percept.objects if o != held_obj]
 
     def clearance(spot: np.ndarray) -> float:
-        return min([CLEARANCE, *(_gap(o, own + spot) for o in others)])
+        box = own + spot
+        gaps = [float(np.max(np.maximum(o[0] - box[1], box[0] - o[1]))) for o in others]
+        return min([CLEARANCE, *gaps])
 
-    if clearance(centre) >= CLEARANCE:
-        return np.asarray(centre, dtype=float)
+    if clearance(centre[:2]) >= CLEARANCE:
+        return centre
     reach = np.maximum(half - EDGE_MARGIN, 0.0)
     grid = np.linspace(-1.0, 1.0, 9)
-    spots = [centre + reach * (a, b) for a in grid for b in grid]
-    return max(spots, key=lambda s: (clearance(s), -float(np.linalg.norm(s - centre))))
-
-
-def shared_spot(
-    own: np.ndarray,
-    others: list[np.ndarray],
-    centre: np.ndarray,
-    half: np.ndarray,
-    pending: list[np.ndarray],
-    base_xy: np.ndarray | None = None,
-) -> np.ndarray:
-    """Where to set an object down on a region's top that the goal fills with it and the
-    ``pending`` objects after it: the region cut into as many equal slots as there are
-    objects to come, across the axis along which their footprints (``own``, ``pending``,
-    about their origins) leave the most room; the centre of the slot that stands
-    clearest of ``others`` (up to ``CLEARANCE``), then the farthest from the arm's base
-    ``base_xy`` (LIBERO-10 task 8, states 0-19: 17 / 20, the nearest 11 / 20). A first
-    moka pot set down at a stove's centre left the second no room; set down at the
-    region's edge it toppled off it."""
-    boxes = [own, *pending]
-    room = [2 * half[k] - sum(float(b[1][k] - b[0][k]) for b in boxes) for k in (0, 1)]
-    axis = int(np.argmax(room))
-    count = len(boxes)
-    spots = []
-    for i in range(count):
-        spot = np.array(centre, dtype=float)
-        spot[axis] += ((2 * i + 1) / count - 1.0) * half[axis]
-        spots.append(spot)
-    base = np.zeros(2) if base_xy is None else np.asarray(base_xy, dtype=float)
-
-    def rank(spot: np.ndarray) -> tuple[float, float]:
-        gaps = [_gap(o, own + spot) for o in others]
-        return min([CLEARANCE, *gaps]), float(np.linalg.norm(spot - base))
-
-    return max(spots, key=rank)
+    spots = [centre[:2] + reach * (a, b) for a in grid for b in grid]
+    best = max(spots, key=lambda s: (clearance(s), -float(np.linalg.norm(s - centre[:2]))))
+    return np.r_[best, centre[2]]
 
 
 def place(ctx: Context, obj: str, target: str, inside: bool) -> list[Leg]:
