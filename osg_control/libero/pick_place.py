@@ -20,17 +20,6 @@ from osg_control.libero.perception import LiberoPercept
 TURN_FIRST = 0.4
 """A hand that must turn more than this [rad] to grasp turns where it is, at least at
 the home height, before it moves (turning on the way swung the arm into the object)."""
-TURN_STEP = 0.15
-"""How far ahead of the hand's rotation a turn in place is commanded [rad] (more than
-``legs.TURN_TOLERANCE``: the leg does not end on it). Told the whole turn at once, the IK
-bought the saturated wrist's turn with the position: the hand drifted 14 cm while it
-turned a bowl's quarter turn (LIBERO-Goal tasks 1, 3, 4, 8), the approach ran out of its
-steps and the pick repeated it, 150 of the 300 steps spent on the bowl's grasp. Only for
-``TURN_LIMITED``."""
-TURN_LIMITED = ("bowl",)
-"""Object categories whose turn in place is limited to ``TURN_STEP``: limited, the mug's
-first rim grasp of LIBERO-10 task 4 state 1 failed on every retry (it failed once and
-then held at 4d7b444) and its budget ran out; the mugs and moka pots turn unlimited."""
 TOP_CLEARANCE = 0.05
 """Height above an object's top the empty hand hovers at least [m] (a standing book)."""
 CARRY = 0.30
@@ -97,30 +86,15 @@ def approach(ctx: Context, thing: str, holding: str | None) -> list[Leg]:
     def floor(now: LiberoPercept) -> float:
         return transit_height(ctx, now, goal(now)[0][:2], holding)
 
-    def turning(now: LiberoPercept, rot: np.ndarray | None) -> np.ndarray | None:
-        """While the hand must still turn more than ``TURN_FIRST`` for the grasp's ``rot``:
-        the rotation it turns to in place (``TURN_STEP`` ahead of its own for a
-        ``TURN_LIMITED`` object, else ``rot``); else None."""
-        if holding is not None or thing not in now.objects or rot is None:
-            return None
-        _, current = ctx.driver.tcp_pose(now.joints)
-        turn = Rotation.from_matrix(current.T @ rot).as_rotvec()
-        if np.linalg.norm(turn) <= TURN_FIRST:
-            return None
-        if not any(word in ctx.categories.get(thing, "") for word in TURN_LIMITED):
-            return rot
-        return current @ Rotation.from_rotvec(turn * TURN_STEP / np.linalg.norm(turn)).as_matrix()
-
     def rise(now: LiberoPercept, start: LiberoPercept) -> tuple[np.ndarray, np.ndarray | None]:
-        rot = goal(now)[1]
-        step = turning(now, rot)
-        return np.r_[now.tcp[:2], max(floor(now), now.tcp[2])], rot if step is None else step
+        return np.r_[now.tcp[:2], max(floor(now), now.tcp[2])], goal(now)[1]
 
     def target(now: LiberoPercept, start: LiberoPercept) -> tuple[np.ndarray, np.ndarray | None]:
         point, rot = goal(now)
-        step = turning(now, rot)
-        if step is not None:  # turn in place
-            return np.r_[start.tcp[:2], max(start.tcp[2], ctx.home_z)], step
+        if holding is None and thing in now.objects and rot is not None:
+            _, current = ctx.driver.tcp_pose(now.joints)
+            if Rotation.from_matrix(current.T @ rot).magnitude() > TURN_FIRST:  # turn in place
+                return np.r_[start.tcp[:2], max(start.tcp[2], ctx.home_z)], rot
         return np.r_[point[:2], max(point[2], floor(now))], rot
 
     gripper = GRIPPER_OPEN if holding is None else GRIPPER_CLOSED
