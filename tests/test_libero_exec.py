@@ -102,8 +102,8 @@ def test_an_episode_is_the_same_in_any_job() -> None:
     fresh one, with the same seed: the same actions (their digest), trace and outcome. (The
     gripper's command state used to carry over from the previous episode, and the fixtures'
     placement came from whatever NumPy's global generator had drawn before.)"""
-    after = run_job(Job("libero_10", 3, (0, 1), PlanExecutor, max_steps=200, seed=0))[1]
-    alone = run_job(Job("libero_10", 3, (1,), PlanExecutor, max_steps=200, seed=0))[0]
+    after = run_job(Job("libero_10", 3, (0, 1), PlanExecutor, max_steps=150, seed=0))[1]
+    alone = run_job(Job("libero_10", 3, (1,), PlanExecutor, max_steps=150, seed=0))[0]
     assert after.init_state == alone.init_state == 1
     assert len(after.trace) > 2  # the pick ran: the comparison covers contacts
     assert (after.actions_sha256, after.trace, after.steps, after.success) == (
