@@ -290,6 +290,19 @@ def test_scripted_plan_puts_it_in_and_closes(capsys, task: int, placed: str) -> 
     assert any(line.endswith(f"{placed}: ok") for line in episode["trace"])
 
 
+@pytest.mark.slow
+def test_the_hand_turns_for_the_push_clear_of_the_handle(capsys) -> None:
+    """LIBERO-10 task 9, initial state 14: let go in the microwave, the hand backs out to
+    the push's standoff before it turns for the push (backed out a fixed 6 cm, a finger
+    caught the mug's handle and tipped the mug over, and the episode failed)."""
+    argv = ["--domain", "libero", "evaluate", "benchmark", "--suite", "libero_10", "--task",
+            "9", "--init-states", "14:15", "--policy", "scripted-plan", "--json"]  # fmt: skip
+    assert cli.main(argv) == 0
+    (episode,) = json.loads(capsys.readouterr().out)["episode_log"]
+    assert episode["success"], episode["trace"]
+    assert not any(line.endswith("FAILED") for line in episode["trace"]), episode["trace"]
+
+
 @pytest.mark.parametrize(
     ("task", "fixture"),
     [
