@@ -33,9 +33,10 @@ from osg_control.libero.grasp import (
     FINGER_HALF,
     GRIP_STEP,
     GRIP_WIDTH,
-    TURN_WINDOW,
     fingers_along,
+    in_turn_window,
     slab,
+    turned_from_start,
 )
 from osg_control.libero.legs import Context, GraspRule, Leg, Target, here, hold
 from osg_control.libero.perception import LiberoPercept
@@ -188,7 +189,7 @@ def reaching_in(ctx: Context, rotation: np.ndarray, way: Doorway) -> np.ndarray:
     window (``grasp.TURN_WINDOW``) allows: with the other the arm wound its wrist and
     stalled short of the doorway (LIBERO-10 task 9, state 4)."""
     turned = rotation @ np.diag([-1.0, -1.0, 1.0])
-    allowed = Rotation.from_matrix(ctx.base.T @ turned).magnitude() <= np.pi / 2 + TURN_WINDOW
+    allowed = in_turn_window(turned_from_start(ctx, turned))
     inward = allowed and turned[:, 0] @ way.normal < rotation[:, 0] @ way.normal
     return turned if inward else rotation
 
