@@ -31,8 +31,10 @@ from osg_control.libero.grasp import (  # noqa: E402
     RETRY_SHIFT,
     Grip,
     chosen_grip,
+    fingers_along,
     grasp_point,
     grip,
+    turned_from_start,
 )
 from osg_control.libero.insert import (  # noqa: E402
     DOOR_CLEARANCE,
@@ -290,6 +292,19 @@ def test_scripted_plan_puts_it_in_and_closes(capsys, task: int, placed: str) -> 
     assert any(line.endswith(f"{placed}: ok") for line in episode["trace"])
 
 
+@pytest.mark.slow
+def test_the_hand_turns_for_the_push_clear_of_the_handle(capsys) -> None:
+    """LIBERO-10 task 9, initial state 14: let go in the microwave, the hand backs out to
+    the push's standoff before it turns for the push (backed out a fixed 6 cm, a finger
+    caught the mug's handle and tipped the mug over, and the episode failed)."""
+    argv = ["--domain", "libero", "evaluate", "benchmark", "--suite", "libero_10", "--task",
+            "9", "--init-states", "14:15", "--policy", "scripted-plan", "--json"]  # fmt: skip
+    assert cli.main(argv) == 0
+    (episode,) = json.loads(capsys.readouterr().out)["episode_log"]
+    assert episode["success"], episode["trace"]
+    assert not any(line.endswith("FAILED") for line in episode["trace"]), episode["trace"]
+
+
 @pytest.mark.parametrize(
     ("task", "fixture"),
     [
@@ -310,6 +325,29 @@ def test_scripted_plan_opens_the_drawer_and_turns_the_knob(capsys, task, fixture
     assert f"approach {fixture}: ok" in " ".join(episode["trace"])
     assert sum("plan (" in line for line in episode["trace"]) == 1, episode["trace"]
     assert not any("FAILED" in line for line in episode["trace"])
+
+
+def test_the_wrist_turns_further_counter_clockwise() -> None:
+    """Of the two top-down turns whose fingers slide along a direction, the one nearer the
+    last commanded rotation, within a quarter turn of the start's and 25 deg more
+    counter-clockwise (seen from above: the wrist's last joint has the room), 15 deg more
+    clockwise. LIBERO-10 task 4's second mug lies 105.4 deg counter-clockwise of the
+    start's fingers: its rim grasp turns 30 deg on from the first mug's, not 150 back."""
+    start = Rotation.from_euler("z", np.radians(88.0)).as_matrix() @ np.diag([1.0, -1.0, -1.0])
+
+    def towards(angle: float) -> np.ndarray:  # degrees from the start's finger axis
+        return Rotation.from_euler("z", np.radians(angle)).as_matrix() @ start[:, 1]
+
+    def turn(direction_deg: float, last_deg: float) -> float:
+        last = Rotation.from_euler("z", np.radians(last_deg)).as_matrix() @ start
+        ctx = SimpleNamespace(base=start, rotation=last)
+        rotation = fingers_along(ctx, towards(direction_deg))  # type: ignore[arg-type]
+        return float(np.degrees(turned_from_start(ctx, rotation)))  # type: ignore[arg-type]
+
+    assert turn(105.4, 74.0) == pytest.approx(105.4)
+    assert turn(-74.6, 74.0) == pytest.approx(105.4)
+    assert turn(120.0, 74.0) == pytest.approx(-60.0)  # past 115 deg: the other way round
+    assert turn(-110.0, -100.0) == pytest.approx(70.0)  # past 105 deg clockwise
 
 
 def _living_room(task: int, state: int):

@@ -13,9 +13,10 @@ closed stop, covers: the doorway's plane and its outward normal) and the percept
 - ``approach`` carries it to in front of the doorway, at the height it goes in at
   (``INSERT_LIFT`` above the region's floor);
 - ``insert`` takes it in until the hand reaches the doorway (``ENTRY``), sets it down, lets
-  go and backs out, then pushes it with the closed hand, pitched ``PUSH_PITCH`` so that the
-  palm stays outside and below the roof, until its outer side is ``DOOR_CLEARANCE`` inside
-  the doorway's plane (the door then closes over it) but its inner side stays
+  go and backs out until the hand stands ``PUSH_STANDOFF`` outside the object's outer side,
+  then pushes it with the closed hand, pitched ``PUSH_PITCH`` so that the palm stays
+  outside and below the roof, until its outer side is ``DOOR_CLEARANCE`` inside the
+  doorway's plane (the door then closes over it) but its inner side stays
   ``WALL_CLEARANCE`` off the region's back (``goal_depth``).
 """
 
@@ -32,9 +33,10 @@ from osg_control.libero.grasp import (
     FINGER_HALF,
     GRIP_STEP,
     GRIP_WIDTH,
-    TURN_WINDOW,
     fingers_along,
+    in_turn_window,
     slab,
+    turned_from_start,
 )
 from osg_control.libero.legs import Context, GraspRule, Leg, Target, here, hold
 from osg_control.libero.perception import LiberoPercept
@@ -60,12 +62,15 @@ ENTRY = 0.04
 (robosuite's Panda hand is 3.2 cm thick either side of the TCP: it stays clear of the
 roof's front edge)."""
 BACK_OUT = 0.06
-"""How far the hand backs out along the doorway's normal [m]."""
+"""How far the hand backs out along the doorway's normal after the push [m]."""
 PUSH_HEIGHT = 0.025
 """Height above the object's bottom the closed hand pushes it at [m] (low: it slides
 rather than tips)."""
 PUSH_STANDOFF = 0.05
-"""How far outside the object's outer side the push starts [m]."""
+"""How far outside the object's outer side the hand backs out to after letting go, and the
+push starts [m]: the hand turns for the push there. (Backed out a fixed 6 cm, it stood 2.4
+cm off the end of the mug's handle; the turning hand drifts 1-2 cm inward, and a finger
+caught the handle and tipped the mug over: LIBERO-10 task 9, states 14, 16, 23, 32.)"""
 PUSH_BITE = 0.02
 """How far inside the object's outer side the push aims, the target moving with it [m]."""
 
@@ -184,7 +189,7 @@ def reaching_in(ctx: Context, rotation: np.ndarray, way: Doorway) -> np.ndarray:
     window (``grasp.TURN_WINDOW``) allows: with the other the arm wound its wrist and
     stalled short of the doorway (LIBERO-10 task 9, state 4)."""
     turned = rotation @ np.diag([-1.0, -1.0, 1.0])
-    allowed = Rotation.from_matrix(ctx.base.T @ turned).magnitude() <= np.pi / 2 + TURN_WINDOW
+    allowed = in_turn_window(turned_from_start(ctx, turned))
     inward = allowed and turned[:, 0] @ way.normal < rotation[:, 0] @ way.normal
     return turned if inward else rotation
 
@@ -245,9 +250,10 @@ def approach(ctx: Context, region: str, holding: str) -> list[Leg]:
 
 def insert(ctx: Context, obj: str, region: str) -> list[Leg]:
     """In through the doorway until the TCP is ``ENTRY`` outside its plane, down until the
-    object, upright, would stand ``DROP`` above the floor, let go, back out; then push its
-    outer side with the closed hand, pitched, ``PUSH_HEIGHT`` above its bottom, until its
-    origin is at ``goal_depth`` (perceived), and back out ``BACK_OUT``."""
+    object, upright, would stand ``DROP`` above the floor, let go, back out until the TCP is
+    ``PUSH_STANDOFF`` outside the object's outer side (perceived); then push its outer side
+    with the closed hand, pitched, ``PUSH_HEIGHT`` above its bottom, until its origin is at
+    ``goal_depth`` (perceived), and back out ``BACK_OUT``."""
     way = doorway(ctx.scene, region)
     assert way is not None
     n = way.normal
@@ -277,13 +283,17 @@ def insert(ctx: Context, obj: str, region: str) -> list[Leg]:
 
         return target
 
+    def clear_out(now: LiberoPercept, start: LiberoPercept) -> tuple[np.ndarray, None]:
+        side = float(n @ now.position(obj)) + reach(ctx, now, obj, n) + PUSH_STANDOFF
+        return start.tcp + n * (side - float(n @ start.tcp)), None
+
     def pushed(now: LiberoPercept) -> bool:
         outer, inner = reach(ctx, now, obj, n), reach(ctx, now, obj, -n)
         return float(n @ now.position(obj)) <= goal_depth(way, outer, inner)
 
     return [
         Leg(entry, GRIPPER_CLOSED, 40, 0.01), Leg(down, GRIPPER_CLOSED, 30, 0.01),
-        hold(GRIPPER_OPEN, 10), Leg(here(tuple(n * BACK_OUT)), GRIPPER_OPEN, 20, 0.02),
+        hold(GRIPPER_OPEN, 10), Leg(clear_out, GRIPPER_OPEN, 30, 0.01),
         Leg(behind(PUSH_STANDOFF), GRIPPER_CLOSED, 40, 0.01),
         Leg(behind(-PUSH_BITE), GRIPPER_CLOSED, 50, 0.0, pushed),
         Leg(here(tuple(n * BACK_OUT)), GRIPPER_CLOSED, 20, 0.02),
