@@ -7,7 +7,7 @@ from __future__ import annotations
 import numpy as np
 
 from osg_control.libero.drive import GRIPPER_CLOSED, GRIPPER_OPEN
-from osg_control.libero.pick_place import DESCENT_TOLERANCE
+from osg_control.libero.pick_place import CLOSING_STEPS, DESCENT_TOLERANCE
 from osg_control.libero.stall_close import LATERAL, STALL_STEPS, StallClose
 
 
@@ -46,3 +46,14 @@ def test_no_close_while_the_hand_closes_in_across_rising_a_little() -> None:
     task 2's moka pot, the pick starting 8 cm to the side)."""
     across = [(0.08 - 0.003 * i, 0.0, 0.12 + 0.001 * i) for i in range(28)]
     assert set(_run(across)) == {GRIPPER_OPEN}
+
+
+def test_a_stalled_close_that_holds_nothing_has_missed() -> None:
+    rule = StallClose(DESCENT_TOLERANCE)
+    descent = [(0.0, 0.0, 0.15 - 0.01 * i) for i in range(6)]
+    for offset in descent + [(0.003, 0.0, 0.09)] * (STALL_STEPS + 1):
+        rule.gripper(np.array(offset), GRIPPER_OPEN)
+    assert rule.closed and not rule.missed(holding=False)  # the fingers are still closing
+    for _ in range(CLOSING_STEPS):
+        rule.gripper(np.array((0.003, 0.0, 0.09)), GRIPPER_OPEN)
+    assert rule.missed(holding=False) and not rule.missed(holding=True)

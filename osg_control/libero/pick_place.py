@@ -42,6 +42,8 @@ EDGE_MARGIN = 0.01
 DESCENT_TOLERANCE = 0.008
 """How near the grasp point a pick's descent closes [m]; farther, it closes when its steps
 run out (the hand stopped above: ``stall_close`` states the rule for the learned pick)."""
+CLOSING_STEPS = 12
+"""Steps a pick holds still closing the gripper before it lifts (the fingers' travel)."""
 
 
 def anchor(ctx: Context, percept: LiberoPercept, thing: str) -> np.ndarray:
@@ -127,7 +129,7 @@ def pick(ctx: Context, obj: str) -> list[Leg]:
             40,
             DESCENT_TOLERANCE,
         ),
-        hold(GRIPPER_CLOSED, 12),
+        hold(GRIPPER_CLOSED, CLOSING_STEPS),
         up(LIFT, GRIPPER_CLOSED),
     ]
 

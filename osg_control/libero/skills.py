@@ -23,6 +23,7 @@ from osg_control.learning.checkpoints import check_action_scale, checkpoint_path
 from osg_control.learning.policy import SkillPolicy
 from osg_control.libero.benchmark import PolicyFactory
 from osg_control.libero.executor import PlanExecutor
+from osg_control.libero.facts import held
 from osg_control.libero.features import (
     ACTION_DIM,
     ACTION_SCALE,
@@ -84,10 +85,14 @@ class LearnedRunner:
 
     def act(self, percept: LiberoPercept) -> np.ndarray | None:
         """The network's next action as a JOINT_POSITION action; None when the effect is
-        perceived, the budget is spent, or the network gave no finite action (traced)."""
+        perceived, the budget is spent, the stalled close missed or the network gave no
+        finite action (traced)."""
         if self.steps >= SKILL_MAX_STEPS or (
             self.steps and holding_ok(self.ctx, percept, self.obj, self.start_z)
         ):
+            return None
+        if self.stall.missed(held(self.ctx.scene, percept, self.obj)):
+            self.trace.append(f"learned {self.policy.skill.name}: the stalled close missed")
             return None
         try:
             obs = observe(self.ctx, percept, self.obj, self.start_z, self.gripper)

@@ -9,8 +9,10 @@ hand open, come down ``DESCENDED`` since the skill started (a hand still at the 
 not descending), over the grasp point (``LATERAL`` across) but farther than the tolerance
 from it, and come less than ``STALL_APPROACH`` closer to it over the last ``STALL_STEPS``
 percepts both down and across (a hand still closing in across, its height unchanged, is
-on its way), close, and keep it closed. The network still decides every motion and every
-other close.
+on its way), close, and keep it closed; if the object is not held once the fingers had
+``CLOSING_STEPS`` to close, the pick has missed and ends (the network would lift the
+empty hand for the rest of its budget, and the retry start far above). The network still
+decides every motion and every other close.
 """
 
 from __future__ import annotations
@@ -20,6 +22,7 @@ from collections import deque
 import numpy as np
 
 from osg_control.libero.drive import GRIPPER_CLOSED
+from osg_control.libero.pick_place import CLOSING_STEPS
 
 STALL_STEPS = 5
 """Percepts over which a stalled descent is judged: a descending hand comes ~4 cm closer."""
@@ -41,6 +44,7 @@ class StallClose:
         self.offsets: deque[tuple[float, float]] = deque(maxlen=STALL_STEPS + 1)
         self.start_height: float | None = None
         self.closed = False
+        self.closed_steps = 0
 
     def gripper(self, to_grasp: np.ndarray, command: float) -> float:
         """The gripper command to send given the network's ``command`` and the TCP minus
@@ -57,4 +61,9 @@ class StallClose:
             descended = self.start_height - offset[0] >= DESCENDED
             far = float(np.linalg.norm(to_grasp)) > self.tolerance
             self.closed = stalled and descended and far and offset[1] < LATERAL
+        self.closed_steps += self.closed
         return GRIPPER_CLOSED if self.closed else command
+
+    def missed(self, holding: bool) -> bool:
+        """Whether the rule's close has missed: given ``CLOSING_STEPS`` and not ``holding``."""
+        return self.closed_steps >= CLOSING_STEPS and not holding
