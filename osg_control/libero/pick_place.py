@@ -39,6 +39,11 @@ CLEARANCE = 0.02
 """The gap between footprints a place on a region's top keeps where it can [m]."""
 EDGE_MARGIN = 0.01
 """How far inside a region's footprint an object is set down at most [m]."""
+DESCENT_TOLERANCE = 0.008
+"""How near the grasp point a pick's descent closes [m]; farther, it closes when its steps
+run out (the hand stopped above: ``stall_close`` states the rule for the learned pick)."""
+CLOSING_STEPS = 12
+"""Steps a pick holds still closing the gripper before it lifts (the fingers' travel)."""
 
 
 def anchor(ctx: Context, percept: LiberoPercept, thing: str) -> np.ndarray:
@@ -122,9 +127,9 @@ def pick(ctx: Context, obj: str) -> list[Leg]:
             lambda now, start: (grasp_point(ctx, now, obj), grasp_rotation(ctx, now, obj)),
             GRIPPER_OPEN,
             40,
-            0.008,
+            DESCENT_TOLERANCE,
         ),
-        hold(GRIPPER_CLOSED, 12),
+        hold(GRIPPER_CLOSED, CLOSING_STEPS),
         up(LIFT, GRIPPER_CLOSED),
     ]
 

@@ -6,7 +6,9 @@ A learned skill decides each step from the lifted observation (``features.observ
 its action becomes a TCP target for ``drive.JointTargetDriver`` (``features.command``). It
 ends when its effect is perceived (``pick_place.holding_ok``) or its step budget
 (``recording.SKILL_MAX_STEPS``) is spent; the executor then checks the effect as for a
-scripted operator (and lets go, lifts and replans on a failure).
+scripted operator (and lets go, lifts and replans on a failure). A rule closes the gripper
+when the network's descent stalls over the grasp point (``stall_close``: the scripted
+pick's close there, which the network did not learn).
 """
 
 from __future__ import annotations
@@ -21,6 +23,7 @@ from osg_control.learning.checkpoints import check_action_scale, checkpoint_path
 from osg_control.learning.policy import SkillPolicy
 from osg_control.libero.benchmark import PolicyFactory
 from osg_control.libero.executor import PlanExecutor
+from osg_control.libero.facts import held
 from osg_control.libero.features import (
     ACTION_DIM,
     ACTION_SCALE,
@@ -32,8 +35,9 @@ from osg_control.libero.features import (
 from osg_control.libero.legs import Context, Leg, Runner
 from osg_control.libero.operators import SCHEMAS
 from osg_control.libero.perception import LiberoPercept
-from osg_control.libero.pick_place import holding_ok
+from osg_control.libero.pick_place import DESCENT_TOLERANCE, holding_ok
 from osg_control.libero.recording import OPERATORS, SKILL_MAX_STEPS
+from osg_control.libero.stall_close import StallClose
 from osg_control.libero.training import DEFAULTS_DIR, MANIFEST, SKILLS_DIR, read_manifest
 
 POLICY = "skills"
@@ -77,13 +81,18 @@ class LearnedRunner:
     ) -> None:
         self.ctx, self.policy, self.obj, self.start_z = ctx, policy, obj, start_z
         self.trace, self.steps, self.gripper = trace, 0, GripperMemory()
+        self.stall = StallClose(DESCENT_TOLERANCE)
 
     def act(self, percept: LiberoPercept) -> np.ndarray | None:
         """The network's next action as a JOINT_POSITION action; None when the effect is
-        perceived, the budget is spent, or the network gave no finite action (traced)."""
+        perceived, the budget is spent, the stalled close missed or the network gave no
+        finite action (traced)."""
         if self.steps >= SKILL_MAX_STEPS or (
             self.steps and holding_ok(self.ctx, percept, self.obj, self.start_z)
         ):
+            return None
+        if self.stall.missed(held(self.ctx.scene, percept, self.obj)):
+            self.trace.append(f"learned {self.policy.skill.name}: the stalled close missed")
             return None
         try:
             obs = observe(self.ctx, percept, self.obj, self.start_z, self.gripper)
@@ -91,6 +100,10 @@ class LearnedRunner:
         except ValueError as err:
             self.trace.append(f"learned {self.policy.skill.name}: stopped ({err})")
             return None
+        closed = self.stall.closed
+        gripper = self.stall.gripper(obs[:3], gripper)
+        if self.stall.closed and not closed:
+            self.trace.append(f"learned {self.policy.skill.name}: closed on a stalled descent")
         action = self.ctx.driver.action(percept.joints, position, rotation, gripper)
         if not np.all(np.isfinite(action)):
             self.trace.append(f"learned {self.policy.skill.name}: non-finite joint action")
