@@ -80,7 +80,7 @@ class PlanExecutor:
         driver = self.drivers[False]
         self.ctx = Context(scene, driver, driver.tcp_pose(percept.joints)[1],
                            float(percept.tcp[2]), dict(problem.objects),
-                           np.r_[robot.mount[0][:2], 0.0])  # fmt: skip
+                           np.r_[robot.mount[0][:2], 0.0], goal=problem.goal)  # fmt: skip
         self.problem = problem
         self.trace: list[str] = []
         self.step, self.replans = 0, 0

@@ -13,7 +13,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.spatial.transform import Rotation
 
-from osg_control.libero.clearance import hand_clearance
+from osg_control.libero.clearance import HAND_BOXES, hand_clearance
 from osg_control.libero.legs import Context
 from osg_control.libero.perception import LiberoPercept
 
@@ -55,6 +55,12 @@ RETRY_SHIFT = 0.015
 """How far a retried grasp's point lies from the ones tried before, on the same axis [m]."""
 REDECIDE = 0.02
 """How far an object must move before its grasp is chosen again [m]."""
+TOP_RISE = 0.015
+"""The least height a part must stand above the rest of an object for the fingers to
+close on it from above with their lower faces over the rest (``HAND_BOXES``: 1.2 cm below
+the TCP; the pads reach 4 mm below it) [m]: a moka pot's lid knob stands 1.9 cm up."""
+TOP_GAP = 0.003
+"""How far the fingers' lower faces keep above the rest of the object at a top grasp [m]."""
 
 
 def _yaw(rotation: np.ndarray, angle: float) -> np.ndarray:
@@ -93,6 +99,11 @@ def grips(ctx: Context, obj: str) -> list[Grip]:
     if max(width) < ROUND * min(width) and min(width) <= GRIP_WIDTH:
         return [Grip(default, None)]
     candidates: list[tuple[float, int, Grip]] = []
+    if not _fits(slab(ctx, obj, axis, 0.0), axis):  # wider than the hand at its centre
+        for a in (axis, 1 - axis):
+            top = _top_grip(slab(ctx, obj, a, 0.0), a)
+            if top is not None:
+                candidates.append((-np.inf, len(candidates), top))
     for a in (axis, 1 - axis):
         for centre in np.arange(low[1 - a], high[1 - a] + 1e-9, GRIP_STEP):
             boxes = slab(ctx, obj, a, float(centre))
@@ -111,6 +122,31 @@ def grips(ctx: Context, obj: str) -> list[Grip]:
     if not candidates:
         return [Grip(default, axis)]
     return [g for _, _, g in sorted(candidates, key=lambda c: c[:2])]
+
+
+def _fits(boxes: list[tuple[np.ndarray, np.ndarray]], axis: int) -> bool:
+    return (
+        bool(boxes)
+        and max(b[1][axis] for b in boxes) - min(b[0][axis] for b in boxes) <= GRIP_WIDTH
+    )
+
+
+def _top_grip(boxes: list[tuple[np.ndarray, np.ndarray]], axis: int) -> Grip | None:
+    """A grasp over the object's centre on the part of a slab that stands ``TOP_RISE``
+    above the rest of it and fits the open hand (a moka pot's lid knob: carried by its
+    handle, the pot hung 35-57 deg tilted and fell over when set down; hung from above its
+    centre it hangs level), the fingers' lower faces ``TOP_GAP`` over the rest; None when
+    no part stands so."""
+    top = max((b[1][2] for b in boxes), default=-np.inf)
+    for level in sorted({float(b[1][2]) for b in boxes if b[1][2] < top}, reverse=True):
+        upper = [b for b in boxes if b[1][2] > level]
+        if top - level < TOP_RISE or not _fits(upper, axis):
+            continue
+        point = np.zeros(3)
+        point[axis] = (min(b[0][axis] for b in upper) + max(b[1][axis] for b in upper)) / 2
+        point[2] = level - HAND_BOXES[-1][2] + TOP_GAP
+        return Grip(point, axis)
+    return None
 
 
 def grip(ctx: Context, obj: str) -> Grip:

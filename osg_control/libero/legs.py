@@ -15,6 +15,7 @@ from scipy.spatial.transform import Rotation
 
 from osg_control.libero.drive import JointTargetDriver
 from osg_control.libero.perception import LiberoPercept
+from osg_control.libero.problem import Atom
 from osg_control.libero.scene import Scene
 
 Target = Callable[[LiberoPercept, LiberoPercept], tuple[np.ndarray, np.ndarray | None]]
@@ -56,7 +57,8 @@ class Context:
     the objects' categories, where the arm's base stands (``base_xy``), the grasps
     chosen and failed so far, and those that replace the top-down one for objects the
     plan takes somewhere it does not fit (``grasps``: set by the plan executor from what
-    the plan does next, ``insert``)."""
+    the plan does next, ``insert``), and the task's goal atoms (``goal``: a place leaves
+    room for what the goal still puts beside it)."""
 
     scene: Scene
     driver: JointTargetDriver
@@ -65,6 +67,7 @@ class Context:
     categories: dict[str, str]
     base_xy: np.ndarray
     grasps: dict[str, GraspRule] = field(default_factory=dict)
+    goal: tuple[Atom, ...] = ()
 
     def __post_init__(self) -> None:
         self.rotation = self.base

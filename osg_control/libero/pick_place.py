@@ -11,7 +11,7 @@ from scipy.spatial.transform import Rotation
 
 from osg_control.libero.clearance import footprint, transit_height
 from osg_control.libero.drive import GRIPPER_CLOSED, GRIPPER_OPEN
-from osg_control.libero.facts import held, region_pose
+from osg_control.libero.facts import held, holds, region_pose
 from osg_control.libero.fixtures import door_point, drawer_front
 from osg_control.libero.grasp import grasp_point, grasp_rotation
 from osg_control.libero.legs import HOVER, Context, Leg, hold, up
@@ -138,15 +138,59 @@ def _surface(
     ctx: Context, percept: LiberoPercept, target: str, inside: bool, held_obj: str
 ) -> np.ndarray:
     """The point the held object ``held_obj`` is set down over: an object's top centre, a
-    region's floor centre (``in``) or a free spot of its top (``on``, ``_free_spot``)."""
+    region's floor centre (``in``), or on a region's top its place in the row it shares
+    with what the goal still puts there (``_row_spot``), else a free spot (``_free_spot``)."""
     if target in percept.objects:
         pos, _ = percept.objects[target]
         return pos + np.array([0.0, 0.0, ctx.scene.extents[target][1][2]])
     pos, mat = region_pose(ctx.scene, percept, target)
     half = np.abs(mat @ ctx.scene.regions[target].size)
     if not inside:
-        pos = _free_spot(ctx, percept, pos, half[:2], held_obj)
+        coming = _still_to_come(ctx, percept, target, held_obj)
+        spot = (_row_spot(ctx, percept, pos, held_obj, coming) if coming else
+                _free_spot(ctx, percept, pos, half[:2], held_obj))  # fmt: skip
+        pos = np.r_[spot[:2], pos[2]]
     return pos + np.array([0.0, 0.0, -half[2] if inside else half[2]])
+
+
+def _still_to_come(ctx: Context, percept: LiberoPercept, target: str, held_obj: str) -> list[str]:
+    """The other objects the goal puts on ``target`` that are not perceived there yet."""
+    return [a.args[0] for a in ctx.goal
+            if a.predicate == "on" and a.args[1] == target and a.args[0] != held_obj
+            and a.args[0] in percept.objects and not holds(ctx.scene, percept, a)]  # fmt: skip
+
+
+def _gap(a: np.ndarray, b: np.ndarray) -> float:
+    """How far apart two xy boxes (lower, upper) are along the axis that parts them most
+    (negative: they overlap)."""
+    return float(np.max(np.maximum(a[0] - b[1], b[0] - a[1])))
+
+
+def _row_spot(
+    ctx: Context, percept: LiberoPercept, centre: np.ndarray, held_obj: str, coming: list[str]
+) -> np.ndarray:
+    """Where on a region's top to set ``held_obj`` down when the goal puts ``coming`` there
+    after it: their footprints (about their origins, at their perceived yaw) in a row
+    ``CLEARANCE`` apart along the axis they leave most room along, centred on the
+    region's centre, ``held_obj`` at the end of the row that stands clearest of the other
+    objects (up to ``CLEARANCE``), then the farther from the arm's base (two moka pots on
+    one stove: the first set down at its centre left the second no room)."""
+    boxes = [footprint(ctx, percept, o) - percept.position(o)[:2] for o in [held_obj, *coming]]
+    axis = int(np.argmin([sum(float(b[1][k] - b[0][k]) for b in boxes) for k in (0, 1)]))
+    row = sum(float(b[1][axis] - b[0][axis]) for b in boxes) + CLEARANCE * len(coming)
+    own = boxes[0]
+    ends = []
+    for side, edge in ((1.0, own[1][axis]), (-1.0, own[0][axis])):
+        spot = np.array(centre[:2], dtype=float)
+        spot[axis] += side * row / 2 - edge
+        ends.append(spot)
+    others = [footprint(ctx, percept, o) for o in percept.objects if o != held_obj]
+
+    def rank(spot: np.ndarray) -> tuple[float, float]:
+        gaps = [_gap(o, own + spot) for o in others]
+        return min([CLEARANCE, *gaps]), float(np.linalg.norm(spot - ctx.base_xy[:2]))
+
+    return max(ends, key=rank)
 
 
 def _free_spot(
@@ -160,9 +204,7 @@ def _free_spot(
     others = [footprint(ctx, percept, o) for o in percept.objects if o != held_obj]
 
     def clearance(spot: np.ndarray) -> float:
-        box = own + spot
-        gaps = [float(np.max(np.maximum(o[0] - box[1], box[0] - o[1]))) for o in others]
-        return min([CLEARANCE, *gaps])
+        return min([CLEARANCE, *(_gap(o, own + spot) for o in others)])
 
     if clearance(centre[:2]) >= CLEARANCE:
         return centre
