@@ -9,7 +9,7 @@ from __future__ import annotations
 import numpy as np
 from scipy.spatial.transform import Rotation
 
-from osg_control.libero.clearance import footprint, transit_height
+from osg_control.libero.clearance import HAND_BOXES, footprint, transit_height
 from osg_control.libero.drive import GRIPPER_CLOSED, GRIPPER_OPEN
 from osg_control.libero.facts import held, holds, region_pose
 from osg_control.libero.fixtures import door_point, drawer_front
@@ -198,8 +198,10 @@ def _free_spot(
 ) -> np.ndarray:
     """Where on a region's top to set ``held_obj`` down: its centre when it would stand
     ``CLEARANCE`` clear of every other object's footprint there, else the point of the
-    region's footprint (less ``EDGE_MARGIN``) whose footprint stands clearest of them (up to
-    ``CLEARANCE``), the nearest the centre among equals (the second moka pot on a stove)."""
+    region's footprint (less ``EDGE_MARGIN``) whose footprint stands clearest of them and
+    of the hand turning a knob the goal still turns (``_knob_sweeps``; off the centre it
+    can crowd the knob) (up to ``CLEARANCE``), the nearest the centre among equals (the
+    second moka pot on a stove)."""
     own = footprint(ctx, percept, held_obj) - percept.position(held_obj)[:2]
     others = [footprint(ctx, percept, o) for o in percept.objects if o != held_obj]
 
@@ -208,11 +210,22 @@ def _free_spot(
 
     if clearance(centre[:2]) >= CLEARANCE:
         return centre
+    others += _knob_sweeps(ctx, percept)
     reach = np.maximum(half - EDGE_MARGIN, 0.0)
     grid = np.linspace(-1.0, 1.0, 9)
     spots = [centre[:2] + reach * (a, b) for a in grid for b in grid]
     best = max(spots, key=lambda s: (clearance(s), -float(np.linalg.norm(s - centre[:2]))))
     return np.r_[best, centre[2]]
+
+
+def _knob_sweeps(ctx: Context, percept: LiberoPercept) -> list[np.ndarray]:
+    """The xy boxes the turning hand sweeps at each knob the goal still turns: the palm's
+    half-length (``clearance.HAND_BOXES``) round the knob's grip point (a moka pot set
+    down beside a frying pan's handle, next to the knob, was pushed off by the turn)."""
+    reach = HAND_BOXES[0][0]
+    pending = [a.args[0] for a in ctx.goal if a.predicate in ("turnon", "turnoff")
+               and a.args[0] in ctx.scene.knobs and not holds(ctx.scene, percept, a)]  # fmt: skip
+    return [ctx.scene.knobs[f][:2] + np.array([[-reach], [reach]]) for f in pending]
 
 
 def place(ctx: Context, obj: str, target: str, inside: bool) -> list[Leg]:
