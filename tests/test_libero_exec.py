@@ -155,8 +155,7 @@ def test_pick_controller_lifts_the_object() -> None:
         scene, percept = perception.reset(obs, 0)
         robot = mounted_panda(env.sim)
         driver = JointTargetDriver(robot)
-        ctx = Context(scene, driver, driver.tcp_pose(percept.joints)[1], float(percept.tcp[2]),
-                      dict(env.problem.objects), np.r_[robot.mount[0][:2], 0.0])  # fmt: skip
+        ctx = replace(Context.at_start(scene, driver, robot, percept, env.problem), goal=())
         start_z = float(obs["alphabet_soup_1_pos"][2])
         for operator in ("approach", "pick"):
             runner = LegRunner(operator_legs(ctx, operator, ("alphabet_soup_1",), None), ctx)
@@ -358,8 +357,7 @@ def _living_room(task: int, state: int):
     scene, percept = LiberoPerception(env).reset(obs, state)
     robot = mounted_panda(env.sim)
     driver = JointTargetDriver(robot)
-    ctx = Context(scene, driver, driver.tcp_pose(percept.joints)[1], float(percept.tcp[2]),
-                  dict(env.problem.objects), np.r_[robot.mount[0][:2], 0.0])  # fmt: skip
+    ctx = replace(Context.at_start(scene, driver, robot, percept, env.problem), goal=())
     return env, scene, percept, ctx
 
 

@@ -33,9 +33,7 @@ def _scene(suite: str, task: int) -> tuple[LiberoPercept, Context, Context]:
         scene, percept = LiberoPerception(env).reset(obs, 0)
         robot = mounted_panda(env.sim)
         driver = JointTargetDriver(robot)
-        ctx = Context(scene, driver, driver.tcp_pose(percept.joints)[1], float(percept.tcp[2]),
-                      dict(env.problem.objects), np.r_[robot.mount[0][:2], 0.0],
-                      goal=env.problem.goal)  # fmt: skip
+        ctx = Context.at_start(scene, driver, robot, percept, env.problem)
     finally:
         env.close()
     assert any(a.predicate == "turnon" for a in ctx.goal)

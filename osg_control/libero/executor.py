@@ -78,9 +78,7 @@ class PlanExecutor:
             for fixture, cost in ((False, POSTURE_COST), (True, FIXTURE_POSTURE_COST))
         }
         driver = self.drivers[False]
-        self.ctx = Context(scene, driver, driver.tcp_pose(percept.joints)[1],
-                           float(percept.tcp[2]), dict(problem.objects),
-                           np.r_[robot.mount[0][:2], 0.0], goal=problem.goal)  # fmt: skip
+        self.ctx = Context.at_start(scene, driver, robot, percept, problem)
         self.problem = problem
         self.trace: list[str] = []
         self.step, self.replans = 0, 0

@@ -13,9 +13,10 @@ from typing import Any, Protocol
 import numpy as np
 from scipy.spatial.transform import Rotation
 
+from osg_control.control.description import RobotDescription
 from osg_control.libero.drive import JointTargetDriver
 from osg_control.libero.perception import LiberoPercept
-from osg_control.libero.problem import Atom
+from osg_control.libero.problem import Atom, LiberoProblem
 from osg_control.libero.scene import Scene
 
 Target = Callable[[LiberoPercept, LiberoPercept], tuple[np.ndarray, np.ndarray | None]]
@@ -76,6 +77,17 @@ class Context:
         otherwise: ``grasp.chosen_grip``)."""
         self.grips: dict[str, Any] = {}
         """The grasp chosen per object, with the attempt and where it was (``grasp``)."""
+
+    @classmethod
+    def at_start(
+        cls, scene: Scene, driver: JointTargetDriver, robot: RobotDescription,
+        percept: LiberoPercept, problem: LiberoProblem,
+    ) -> Context:  # fmt: skip
+        """An episode's context from its first percept: the hand's rotation and height
+        there, the problem's objects and goal, the arm's base where ``robot`` is mounted."""
+        return cls(scene, driver, driver.tcp_pose(percept.joints)[1], float(percept.tcp[2]),
+                   dict(problem.objects), np.r_[robot.mount[0][:2], 0.0],
+                   goal=problem.goal)  # fmt: skip
 
 
 class LegRunner:
