@@ -107,11 +107,9 @@ def grips(ctx: Context, obj: str) -> list[Grip]:
     for a in (axis, 1 - axis):
         for centre in np.arange(low[1 - a], high[1 - a] + 1e-9, GRIP_STEP):
             boxes = slab(ctx, obj, a, float(centre))
-            if not boxes:
+            if not _fits(boxes, a):
                 continue
-            lo_a, hi_a = min(b[0][a] for b in boxes), max(b[1][a] for b in boxes)
-            if hi_a - lo_a > GRIP_WIDTH:
-                continue
+            lo_a, hi_a = _span(boxes, a)
             top, bottom = max(b[1][2] for b in boxes), min(b[0][2] for b in boxes)
             point = np.zeros(3)
             point[a], point[1 - a] = (lo_a + hi_a) / 2, centre
@@ -124,11 +122,17 @@ def grips(ctx: Context, obj: str) -> list[Grip]:
     return [g for _, _, g in sorted(candidates, key=lambda c: c[:2])]
 
 
+def _span(boxes: list[tuple[np.ndarray, np.ndarray]], axis: int) -> tuple[float, float]:
+    """The lowest and highest extent of ``boxes`` along ``axis``."""
+    return min(b[0][axis] for b in boxes), max(b[1][axis] for b in boxes)
+
+
 def _fits(boxes: list[tuple[np.ndarray, np.ndarray]], axis: int) -> bool:
-    return (
-        bool(boxes)
-        and max(b[1][axis] for b in boxes) - min(b[0][axis] for b in boxes) <= GRIP_WIDTH
-    )
+    """Whether a slab's ``boxes`` fit between the open fingers along ``axis``."""
+    if not boxes:
+        return False
+    low, high = _span(boxes, axis)
+    return high - low <= GRIP_WIDTH
 
 
 def _top_grip(boxes: list[tuple[np.ndarray, np.ndarray]], axis: int) -> Grip | None:
@@ -143,7 +147,7 @@ def _top_grip(boxes: list[tuple[np.ndarray, np.ndarray]], axis: int) -> Grip | N
         if top - level < TOP_RISE or not _fits(upper, axis):
             continue
         point = np.zeros(3)
-        point[axis] = (min(b[0][axis] for b in upper) + max(b[1][axis] for b in upper)) / 2
+        point[axis] = sum(_span(upper, axis)) / 2
         point[2] = level - HAND_BOXES[-1][2] + TOP_GAP
         return Grip(point, axis)
     return None
