@@ -26,6 +26,7 @@ from osg_control.libero.pick_place import holding_ok
 from osg_control.libero.plan import plan_task
 from osg_control.libero.problem import Atom, LiberoProblem
 from osg_control.libero.scene import Scene
+from osg_control.libero.tall import neck_grasps
 from osg_control.planning.task import SearchLimits
 
 MAX_REPLANS = 4
@@ -95,7 +96,8 @@ class PlanExecutor:
         result = plan_task(perceived, self.planner, SearchLimits(time_s=PLAN_TIME_S))
         steps = [s.action.split() for s in result.steps or ()]
         self.queue = [(s[0], tuple(s[1:])) for s in steps]
-        self.ctx.grasps = doorway_grasps(self.ctx, self.queue)  # chosen for where it goes
+        grasps = doorway_grasps(self.ctx, self.queue)  # chosen for where it goes
+        self.ctx.grasps = grasps | neck_grasps(self.ctx, percept, self.queue)
         self.trace.append(f"{self.step} plan ({result.status}): {len(self.queue)} steps")
 
     def _effect_holds(self, percept: LiberoPercept) -> bool:
