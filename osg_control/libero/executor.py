@@ -97,7 +97,7 @@ class PlanExecutor:
         steps = [s.action.split() for s in result.steps or ()]
         self.queue = [(s[0], tuple(s[1:])) for s in steps]
         grasps = doorway_grasps(self.ctx, self.queue)  # chosen for where it goes
-        self.ctx.grasps = grasps | neck_grasps(self.ctx, percept, self.queue)
+        self.ctx.grasps = grasps | neck_grasps(self.ctx, self.queue)
         self.trace.append(f"{self.step} plan ({result.status}): {len(self.queue)} steps")
 
     def _effect_holds(self, percept: LiberoPercept) -> bool:

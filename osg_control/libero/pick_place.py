@@ -76,9 +76,10 @@ def approach(ctx: Context, thing: str, holding: str | None) -> list[Leg]:
     """Hover above ``thing`` (a drawer: in front of its handle, ``fixtures.drawer_front``);
     with an object in hand, its origin ``CARRY`` above it (the hand at most
     ``CARRY_CEILING`` above the home height, or as high as the held object's bottom needs
-    to pass ``HELD_CLEARANCE`` above the target's anchor). On the way the hand (and what it
-    holds) keeps clear above the objects it passes (``clearance.transit_height``), going
-    straight up first where it is below that."""
+    to pass ``HELD_CLEARANCE`` above the target's anchor, and then straight up to that
+    height first: on the way a bottle hung from its neck caught on the wine rack). On the
+    way the hand (and what it holds) keeps clear above the objects it passes
+    (``clearance.transit_height``), going straight up first where it is below that."""
 
     def goal(now: LiberoPercept) -> tuple[np.ndarray, np.ndarray | None]:
         point = anchor(ctx, now, thing)
@@ -97,8 +98,10 @@ def approach(ctx: Context, thing: str, holding: str | None) -> list[Leg]:
         ceiling = max(ctx.home_z + CARRY_CEILING, clear)
         return np.r_[carried[:2], min(carried[2], ceiling)], None
 
-    def floor(now: LiberoPercept) -> float:
-        return transit_height(ctx, now, goal(now)[0][:2], holding)
+    def floor(now: LiberoPercept) -> float:  # above the ceiling: up there first
+        point = goal(now)[0]
+        high = holding is not None and point[2] > ctx.home_z + CARRY_CEILING
+        return max(transit_height(ctx, now, point[:2], holding), point[2] if high else -np.inf)
 
     def rise(now: LiberoPercept, start: LiberoPercept) -> tuple[np.ndarray, np.ndarray | None]:
         return np.r_[now.tcp[:2], max(floor(now), now.tcp[2])], goal(now)[1]
