@@ -55,6 +55,27 @@ def test_the_bottle_is_grasped_with_the_palm_over_its_top(task: int) -> None:
     assert not neck_grasps(ctx, [("place-on", ("cream_cheese_1", RACK))])
 
 
+class _LearnedPick(PlanExecutor):
+    """A plan executor whose ``pick`` a learned skill runs (as ``skills.SkillsExecutor``)."""
+
+    def _learned(self, operator: str) -> bool:
+        return operator == "pick"
+
+
+def test_a_learned_pick_keeps_the_grasp_it_was_recorded_on() -> None:
+    """The learned pick was recorded before the neck grasp: it is not given it (task 9
+    states 0-2, 0 / 3 with it)."""
+    env = LiberoEnv("libero_goal", 9)
+    try:
+        obs = env.reset(0)
+        scene, percept = LiberoPerception(env).reset(obs, 0)
+        policy = _LearnedPick()
+        policy.start(env.problem, mounted_panda(env.sim), scene, percept)
+    finally:
+        env.close()
+    assert not policy.ctx.grasps
+
+
 def test_the_carry_keeps_the_held_bottom_clear_of_the_target() -> None:
     """Held 13 cm below the hand, the bottle is carried with its bottom at least
     ``HELD_CLEARANCE`` above the rack's anchor, above the carry ceiling (under it the
