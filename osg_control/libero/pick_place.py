@@ -28,6 +28,11 @@ clears a basket's rim)."""
 CARRY_CEILING = 0.10
 """The highest the hand carries an object, above the home height [m]: ``CARRY`` above a
 cabinet's top was at the edge of the arm's reach, and the approach ran out of steps."""
+HELD_CLEARANCE = 0.05
+"""The least height of the held object's bottom above the target's anchor on the way,
+over ``CARRY_CEILING`` where it needs [m]: a bottle hung from its neck (``tall``), 13 cm
+below the hand, was carried into the wine rack under the ceiling and tipped out of the
+hand."""
 TRANSIT_SLACK = 0.01
 """How far below its transit height (``clearance.transit_height``) an approach may start
 without first going straight up [m]."""
@@ -70,9 +75,11 @@ def _carried_offset(percept: LiberoPercept, obj: str | None) -> np.ndarray:
 def approach(ctx: Context, thing: str, holding: str | None) -> list[Leg]:
     """Hover above ``thing`` (a drawer: in front of its handle, ``fixtures.drawer_front``);
     with an object in hand, its origin ``CARRY`` above it (the hand at most
-    ``CARRY_CEILING`` above the home height). On the way the hand (and what it holds) keeps
-    clear above the objects it passes (``clearance.transit_height``), going straight up
-    first where it is below that."""
+    ``CARRY_CEILING`` above the home height, or as high as the held object's bottom needs
+    to pass ``HELD_CLEARANCE`` above the target's anchor, and then straight up to that
+    height first: on the way a bottle hung from its neck caught on the wine rack). On the
+    way the hand (and what it holds) keeps clear above the objects it passes
+    (``clearance.transit_height``), going straight up first where it is below that."""
 
     def goal(now: LiberoPercept) -> tuple[np.ndarray, np.ndarray | None]:
         point = anchor(ctx, now, thing)
@@ -85,11 +92,16 @@ def approach(ctx: Context, thing: str, holding: str | None) -> list[Leg]:
             point = drawer_front(ctx, now, thing)  # a drawer: in front of its handle
         if holding is None:
             return point + np.array([0.0, 0.0, HOVER]), ctx.base
-        carried = point + np.array([0.0, 0.0, CARRY]) + _carried_offset(now, holding)
-        return np.r_[carried[:2], min(carried[2], ctx.home_z + CARRY_CEILING)], None
+        offset = _carried_offset(now, holding)
+        carried = point + np.array([0.0, 0.0, CARRY]) + offset
+        clear = point[2] + HELD_CLEARANCE - ctx.scene.extents[holding][0][2] + offset[2]
+        ceiling = max(ctx.home_z + CARRY_CEILING, clear)
+        return np.r_[carried[:2], min(carried[2], ceiling)], None
 
-    def floor(now: LiberoPercept) -> float:
-        return transit_height(ctx, now, goal(now)[0][:2], holding)
+    def floor(now: LiberoPercept) -> float:  # above the ceiling: up there first
+        point = goal(now)[0]
+        high = holding is not None and point[2] > ctx.home_z + CARRY_CEILING
+        return max(transit_height(ctx, now, point[:2], holding), point[2] if high else -np.inf)
 
     def rise(now: LiberoPercept, start: LiberoPercept) -> tuple[np.ndarray, np.ndarray | None]:
         return np.r_[now.tcp[:2], max(floor(now), now.tcp[2])], goal(now)[1]

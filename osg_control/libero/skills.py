@@ -123,6 +123,9 @@ class SkillsExecutor(PlanExecutor):
         super().__init__(planner)
         self.by_operator = {op: p for name, p in policies.items() for op in OPERATORS[name]}
 
+    def _learned(self, operator: str) -> bool:
+        return operator in self.by_operator
+
     def _runner(self, operator: str, args: tuple[str, ...], legs: list[Leg]) -> Runner:
         policy = self.by_operator.get(operator)
         if policy is None:
