@@ -72,6 +72,14 @@ PUSH_STANDOFF = 0.05
 push starts [m]: the hand turns for the push there. (Backed out a fixed 6 cm, it stood 2.4
 cm off the end of the mug's handle; the turning hand drifts 1-2 cm inward, and a finger
 caught the handle and tipped the mug over: LIBERO-10 task 9, states 14, 16, 23, 32.)"""
+PUSH_ARRIVED = 0.005
+"""How near its push target the hand is when it has arrived without the object moving on
+(the object's box reaches further out than the part the hand meets: a mug turned askew,
+its box's corner 1.2 cm beyond its handle) [m]."""
+PUSH_DEEPEN = 0.002
+"""How much further in the push aims, each step the hand has arrived [m]."""
+PUSH_DEEPEST = 0.05
+"""How far past ``PUSH_BITE`` the push aims at most [m]."""
 PATH_STEP = 0.01
 """Spacing of the points a carried object's way is tested at against a body [m]."""
 PUSH_BITE = 0.02
@@ -315,14 +323,18 @@ def insert(ctx: Context, obj: str, region: str) -> list[Leg]:
 
     push_turn: list[np.ndarray] = []  # the pushing hand's rotation, decided once
 
-    def behind(standoff: float) -> Target:
+    def behind(standoff: float, deepen: bool = False) -> Target:
+        bite = [0.0]  # how far past ``standoff`` the push aims now (``deepen``)
+
         def target(now: LiberoPercept, start: LiberoPercept) -> tuple[np.ndarray, np.ndarray]:
             if not push_turn:
                 level = reaching_in(ctx, fingers_along(ctx, across), way)
                 push_turn.append(pitched(level, -n, PUSH_PITCH))
             origin = now.position(obj)
             side = float(n @ origin) + reach(ctx, now, obj, n) + standoff
-            point = n * side + across * float(across @ origin)
+            if deepen and float(n @ now.tcp) < side + bite[0] + PUSH_ARRIVED:
+                bite[0] = max(bite[0] - PUSH_DEEPEN, -PUSH_DEEPEST)
+            point = n * (side + bite[0]) + across * float(across @ origin)
             return np.r_[point[:2], origin[2] + PUSH_HEIGHT], push_turn[0]
 
         return target
@@ -339,6 +351,6 @@ def insert(ctx: Context, obj: str, region: str) -> list[Leg]:
         Leg(entry, GRIPPER_CLOSED, 40, 0.01), Leg(down, GRIPPER_CLOSED, 30, 0.01),
         hold(GRIPPER_OPEN, 10), Leg(clear_out, GRIPPER_OPEN, 30, 0.01),
         Leg(behind(PUSH_STANDOFF), GRIPPER_CLOSED, 40, 0.01),
-        Leg(behind(-PUSH_BITE), GRIPPER_CLOSED, 50, 0.0, pushed),
+        Leg(behind(-PUSH_BITE, deepen=True), GRIPPER_CLOSED, 50, 0.0, pushed),
         Leg(here(tuple(n * BACK_OUT)), GRIPPER_CLOSED, 20, 0.02),
     ]  # fmt: skip
