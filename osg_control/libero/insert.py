@@ -27,6 +27,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.spatial.transform import Rotation
 
+from osg_control.libero.clearance import TRANSIT_CLEARANCE, footprint
 from osg_control.libero.drive import GRIPPER_CLOSED, GRIPPER_OPEN
 from osg_control.libero.fixtures import pitched
 from osg_control.libero.grasp import (
@@ -71,6 +72,16 @@ PUSH_STANDOFF = 0.05
 push starts [m]: the hand turns for the push there. (Backed out a fixed 6 cm, it stood 2.4
 cm off the end of the mug's handle; the turning hand drifts 1-2 cm inward, and a finger
 caught the handle and tipped the mug over: LIBERO-10 task 9, states 14, 16, 23, 32.)"""
+PUSH_ARRIVED = 0.005
+"""How near its push target the hand is when it has arrived without the object moving on
+(the object's box reaches further out than the part the hand meets: a mug turned askew,
+its box's corner 1.2 cm beyond its handle) [m]."""
+PUSH_DEEPEN = 0.002
+"""How much further in the push aims, each step the hand has arrived [m]."""
+PUSH_DEEPEST = 0.05
+"""How far past ``PUSH_BITE`` the push aims at most [m]."""
+PATH_STEP = 0.01
+"""Spacing of the points a carried object's way is tested at against a body [m]."""
 PUSH_BITE = 0.02
 """How far inside the object's outer side the push aims, the target moving with it [m]."""
 
@@ -235,17 +246,58 @@ def _upright(percept: LiberoPercept, obj: str) -> np.ndarray:
     return Rotation.from_rotvec([0.0, 0.0, np.arctan2(x[1], x[0])]).as_matrix()
 
 
+def crosses(start: np.ndarray, end: np.ndarray, low: np.ndarray, high: np.ndarray) -> bool:
+    """Whether the xy segment from ``start`` to ``end`` passes through the xy box
+    (``low``, ``high``), tested every ``PATH_STEP`` along it."""
+    count = int(np.ceil(np.linalg.norm(end[:2] - start[:2]) / PATH_STEP)) + 1
+    points = np.linspace(start[:2], end[:2], count + 1)
+    return bool(np.any(np.all((points > low[:2]) & (points < high[:2]), axis=1)))
+
+
 def approach(ctx: Context, region: str, holding: str) -> list[Leg]:
     """Carry ``holding`` to in front of the doorway into ``region``: its inner side
-    ``OUTSIDE`` out of the plane, its bottom ``INSERT_LIFT`` above the region's floor."""
+    ``OUTSIDE`` out of the plane, its bottom ``INSERT_LIFT`` above the region's floor.
+    Where its straight way there passes through the door fixture's body
+    (``Scene.housings``: the object starts behind or beside it), it goes up until its
+    bottom is ``TRANSIT_CLEARANCE`` above the body, over to above the doorway's front,
+    then down (decided once, at the start)."""
     way = doorway(ctx.scene, region)
     assert way is not None
 
-    def target(now: LiberoPercept, start: LiberoPercept) -> tuple[np.ndarray, None]:
+    def front(now: LiberoPercept) -> np.ndarray:
         depth = way.plane + reach(ctx, now, holding, -way.normal) + OUTSIDE
-        return _origin_at(ctx, now, holding, way, depth, INSERT_LIFT) + _carried(now, holding), None
+        return _origin_at(ctx, now, holding, way, depth, INSERT_LIFT)
 
-    return [Leg(target, GRIPPER_CLOSED, 90, 0.015)]
+    def target(now: LiberoPercept, start: LiberoPercept) -> tuple[np.ndarray, None]:
+        return front(now) + _carried(now, holding), None
+
+    legs = [Leg(target, GRIPPER_CLOSED, 90, 0.015)]
+    housing = ctx.scene.housings.get(ctx.scene.regions[region].parent)
+    if housing is None:
+        return legs
+    route: list[float] = []  # the TCP height that carries the object over the body, or none
+
+    def over(now: LiberoPercept) -> float | None:
+        if not route:
+            sides = footprint(ctx, now, holding) - now.position(holding)[:2]
+            low, high = housing[0][:2] - sides[1], housing[1][:2] - sides[0]
+            blocked = crosses(now.position(holding), front(now), low, high)
+            drop = float(now.tcp[2] - now.position(holding)[2] - ctx.scene.extents[holding][0][2])
+            route.append(float(housing[1][2]) + TRANSIT_CLEARANCE + drop if blocked else -np.inf)
+        return route[0] if np.isfinite(route[0]) else None
+
+    def rise(now: LiberoPercept, start: LiberoPercept) -> tuple[np.ndarray, None]:
+        height = over(now)
+        return np.r_[start.tcp[:2], start.tcp[2] if height is None else height], None
+
+    def across(now: LiberoPercept, start: LiberoPercept) -> tuple[np.ndarray, None]:
+        height = over(now)
+        point = target(now, start)[0]
+        return (start.tcp if height is None else np.r_[point[:2], height]), None
+
+    return [Leg(rise, GRIPPER_CLOSED, 40, 0.015, until=lambda now: over(now) is None),
+            Leg(across, GRIPPER_CLOSED, 90, 0.02, until=lambda now: over(now) is None),
+            *legs]  # fmt: skip
 
 
 def insert(ctx: Context, obj: str, region: str) -> list[Leg]:
@@ -271,14 +323,18 @@ def insert(ctx: Context, obj: str, region: str) -> list[Leg]:
 
     push_turn: list[np.ndarray] = []  # the pushing hand's rotation, decided once
 
-    def behind(standoff: float) -> Target:
+    def behind(standoff: float, deepen: bool = False) -> Target:
+        bite = [0.0]  # how far past ``standoff`` the push aims now (``deepen``)
+
         def target(now: LiberoPercept, start: LiberoPercept) -> tuple[np.ndarray, np.ndarray]:
             if not push_turn:
                 level = reaching_in(ctx, fingers_along(ctx, across), way)
                 push_turn.append(pitched(level, -n, PUSH_PITCH))
             origin = now.position(obj)
             side = float(n @ origin) + reach(ctx, now, obj, n) + standoff
-            point = n * side + across * float(across @ origin)
+            if deepen and float(n @ now.tcp) < side + bite[0] + PUSH_ARRIVED:
+                bite[0] = max(bite[0] - PUSH_DEEPEN, -PUSH_DEEPEST)
+            point = n * (side + bite[0]) + across * float(across @ origin)
             return np.r_[point[:2], origin[2] + PUSH_HEIGHT], push_turn[0]
 
         return target
@@ -295,6 +351,6 @@ def insert(ctx: Context, obj: str, region: str) -> list[Leg]:
         Leg(entry, GRIPPER_CLOSED, 40, 0.01), Leg(down, GRIPPER_CLOSED, 30, 0.01),
         hold(GRIPPER_OPEN, 10), Leg(clear_out, GRIPPER_OPEN, 30, 0.01),
         Leg(behind(PUSH_STANDOFF), GRIPPER_CLOSED, 40, 0.01),
-        Leg(behind(-PUSH_BITE), GRIPPER_CLOSED, 50, 0.0, pushed),
+        Leg(behind(-PUSH_BITE, deepen=True), GRIPPER_CLOSED, 50, 0.0, pushed),
         Leg(here(tuple(n * BACK_OUT)), GRIPPER_CLOSED, 20, 0.02),
     ]  # fmt: skip

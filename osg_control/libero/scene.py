@@ -13,7 +13,7 @@ from the fixture sensor (``perception``).
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Any
 
 import mujoco
@@ -116,6 +116,8 @@ class Scene:
         frames: movable object -> its upright frame in its body frame (``upright_axes``):
             LIBERO's assets are modelled with any axis up (a can lying on its side has
             its body z horizontal); objects' poses, extents and regions are read in it.
+        housings: a door fixture -> the world box (lower, upper) round its collision geoms
+            other than its leaf's [m]: the body a thing carried to its doorway passes over.
     """
 
     regions: dict[str, RegionBox]
@@ -128,6 +130,7 @@ class Scene:
     extents: dict[str, tuple[np.ndarray, np.ndarray]]
     parts: dict[str, list[tuple[np.ndarray, np.ndarray]]]
     frames: dict[str, np.ndarray]
+    housings: dict[str, tuple[np.ndarray, np.ndarray]] = field(default_factory=dict)
 
 
 def upright_axes(rotation: np.ndarray) -> np.ndarray:
@@ -246,6 +249,7 @@ def read_scene(env: Any, problem: Any) -> Scene:
     joints: dict[str, Joint] = {}
     articulated: dict[str, tuple[str, ...]] = {}
     leaves: dict[str, np.ndarray] = {}
+    housings: dict[str, tuple[np.ndarray, np.ndarray]] = {}
     knobs: dict[str, np.ndarray] = {}
     grips: dict[str, np.ndarray] = {}
     for name in problem.fixtures:
@@ -265,6 +269,11 @@ def read_scene(env: Any, problem: Any) -> Scene:
             radial = corners - mine[0].anchor
             radial -= np.outer(radial @ mine[0].axis, mine[0].axis)
             leaves[name] = corners[int(np.argmax(np.linalg.norm(radial, axis=1)))]
+            root = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_BODY, fixture.root_body)
+            leaf = _subtree(model, int(moving))
+            body = _geom_corners(model, data, [b for b in _subtree(model, root) if b not in leaf])
+            if len(body):
+                housings[name] = (body.min(axis=0), body.max(axis=0))
     frames = {
         obj: upright_axes(data.xmat[inner.obj_body_id[obj]].reshape(3, 3))
         for obj in problem.objects
@@ -305,4 +314,4 @@ def read_scene(env: Any, problem: Any) -> Scene:
         if joint.kind == JOINT_SLIDE
     }
     return Scene(regions, joints, articulated, leaves, knobs, grips, handles, extents, parts,
-                 frames)  # fmt: skip
+                 frames, housings)  # fmt: skip
