@@ -24,7 +24,7 @@ from osg_control.libero.clearance import (  # noqa: E402
 from osg_control.libero.controllers import operator_legs  # noqa: E402
 from osg_control.libero.drive import JointTargetDriver  # noqa: E402
 from osg_control.libero.env import LiberoEnv  # noqa: E402
-from osg_control.libero.executor import PlanExecutor  # noqa: E402
+from osg_control.libero.executor import SETTLE_STEPS, SETTLED, PlanExecutor  # noqa: E402
 from osg_control.libero.facts import holds, perceived_init, region_pose  # noqa: E402
 from osg_control.libero.grasp import (  # noqa: E402
     GRASP_CLEARANCE,
@@ -245,6 +245,29 @@ def test_outer_grip_takes_the_handle_toward_the_doorway() -> None:
     ctx.scene.parts["mug_1"] = ctx.scene.parts["mug_1"][:1]
     with pytest.raises(KeyError, match="no slice"):
         outer_grip(ctx, "mug_1", np.array([1.0, 0.0, 0.0]))  # type: ignore[arg-type]
+
+
+def test_the_first_operator_waits_for_the_scene_to_come_to_rest() -> None:
+    """LIBERO-10 task 0's initial state throws cartons up: the executor holds the arm still
+    while an object moves more than ``SETTLED`` a step, then moves (the faster hand met the
+    soup can in the air and knocked it 14 cm away)."""
+    env = LiberoEnv("libero_10", 0)
+    try:
+        perception = LiberoPerception(env)
+        scene, percept = perception.reset(env.reset(1), 1)
+        policy = PlanExecutor()
+        policy.start(env.problem, mounted_panda(env.sim), scene, percept)
+        moved, held = [], 0
+        while not np.any((action := policy.act(percept))[:7]):
+            held += 1
+            before = {o: percept.position(o) for o in percept.objects}
+            percept = perception.percept(env.step(action))
+            moved.append(max(np.linalg.norm(percept.position(o) - p) for o, p in before.items()))
+        assert 10 < held < SETTLE_STEPS
+        assert max(moved) > 0.1 and moved[-1] <= SETTLED
+        assert f"{held + 1} at rest" in policy.trace
+    finally:
+        env.close()
 
 
 def test_the_plan_chooses_the_doorway_grasp_at_pick_time() -> None:

@@ -11,8 +11,13 @@ pytest.importorskip("libero.libero", reason="needs the libero extra: pip install
 from osg_control.control.ik import DiffIKController  # noqa: E402
 from osg_control.control.ik_backends import IKConfig  # noqa: E402
 from osg_control.control.robot_model import check_models  # noqa: E402
-from osg_control.libero.drive import JOINTS_OBS, JointTargetDriver  # noqa: E402
-from osg_control.libero.env import LiberoEnv  # noqa: E402
+from osg_control.libero.drive import (  # noqa: E402
+    CAREFUL_DELTA,
+    JOINTS_OBS,
+    TURN_STEP,
+    JointTargetDriver,
+)
+from osg_control.libero.env import CONTROL_HZ, JOINT_DELTA_LIMIT, JOINT_KP, LiberoEnv  # noqa: E402
 from osg_control.libero.robot import libero_panda, mounted_panda  # noqa: E402
 
 
@@ -55,6 +60,42 @@ def test_ik_reaches_above_an_observed_object(soup_env: LiberoEnv) -> None:
         obs = soup_env.step(action)
     assert start > 0.15
     assert np.linalg.norm(obs["robot0_eef_pos"] - target) < 0.005
+
+
+def test_controller_takes_the_panda_speed_over_a_step(soup_env: LiberoEnv) -> None:
+    """Every reset rebuilds robosuite's controller with our stiffness and the scale of the
+    Panda's fastest joint over one step (robosuite's default 0.05 rad capped the arm)."""
+    assert JOINT_DELTA_LIMIT == pytest.approx(max(libero_panda().arm.velocity) / CONTROL_HZ)
+    for state in (0, 1):
+        soup_env.reset(state)
+        controller = soup_env.env.env.robots[0].controller
+        np.testing.assert_allclose(controller.output_max, JOINT_DELTA_LIMIT)
+        np.testing.assert_allclose(controller.output_min, -JOINT_DELTA_LIMIT)
+        np.testing.assert_allclose(controller.kp, JOINT_KP)
+        np.testing.assert_allclose(controller.kd, 2.0 * np.sqrt(JOINT_KP))
+
+
+def test_driver_paces_transit_and_careful_legs() -> None:
+    """A far target: a transit step takes a joint to its own speed limit over the step,
+    past the careful pace, and none past its limit; a careful step stays within
+    ``CAREFUL_DELTA``. A transit turn is told ``TURN_STEP`` at a time, so the hand turning
+    in place holds its position."""
+    robot = libero_panda()
+    driver = JointTargetDriver(robot)
+    q = np.array(robot.home_q)
+    pos, rot = driver.tcp_pose(q)
+    limits = np.array(robot.arm.velocity) / CONTROL_HZ
+    fast = driver.action(q, pos + np.array([0.3, 0.2, -0.2]), rot, transit=True)[:7]
+    careful = driver.action(q, pos + np.array([0.3, 0.2, -0.2]), rot)[:7]
+    fast, careful = fast * JOINT_DELTA_LIMIT, careful * JOINT_DELTA_LIMIT
+    assert np.all(np.abs(fast) <= limits + 1e-9) and np.max(np.abs(fast)) > CAREFUL_DELTA
+    assert np.max(np.abs(careful)) <= CAREFUL_DELTA + 1e-9
+    turned = rot @ np.array([[0.0, -1.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, 1.0]])  # 90 deg
+    step = driver.action(q, pos, turned, transit=True)[:7] * JOINT_DELTA_LIMIT
+    moved, now = driver.tcp_pose(q + step)
+    assert np.linalg.norm(moved - pos) < 0.002
+    angle = np.arccos(np.clip((np.trace(rot.T @ now) - 1.0) / 2.0, -1.0, 1.0))
+    assert TURN_STEP * 0.9 < angle <= TURN_STEP + 1e-6
 
 
 def test_reach_tool_reports_its_figures() -> None:

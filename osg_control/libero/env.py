@@ -18,6 +18,7 @@ from osg_control.libero.extra import require_libero
 from osg_control.libero.problem import LiberoProblem
 from osg_control.libero.suites import INIT_STATES
 from osg_control.libero.tasks import init_states, task_file, task_problem
+from osg_control.robots.panda import PANDA
 
 ENV_OPTIONS: dict[str, Any] = {
     "has_renderer": False,
@@ -28,14 +29,21 @@ ENV_OPTIONS: dict[str, Any] = {
 CONTROLLER = "JOINT_POSITION"
 """robosuite's controller the arm is driven through: the action is 7 joint deltas divided
 by ``JOINT_DELTA_LIMIT`` (so in [-1, 1]) and the gripper command in [-1, 1] (1 closes)."""
+CONTROL_HZ = 20.0
+"""LIBERO's control rate [Hz] (``ControlEnv``'s ``control_freq``): one action a step."""
 JOINT_KP = 300.0
-"""The JOINT_POSITION controller's stiffness set after each reset: the top of robosuite's own
-kp range (its default 50 lets the arm cover only a small part of a commanded 0.05 rad per
-step: a 20 cm reach took 38-54 steps at 50, 17-24 at 300; docs/libero.md). The controller is
-the agent's side of the benchmark; the env, its states and its scoring are untouched."""
-JOINT_DELTA_LIMIT = 0.05
-"""robosuite's JOINT_POSITION scale: an action of 1 is a joint delta of this [rad] (its
-default config's ``output_max``)."""
+"""The JOINT_POSITION controller's stiffness (its config's ``kp``, critically damped as
+robosuite's): the top of robosuite's own kp range (its default 50 lets the arm cover only a
+small part of a commanded step: a 20 cm reach took 38-54 steps at 50, 17-24 at 300;
+docs/libero.md). The controller is the agent's side of the benchmark; the env, its states
+and its scoring are untouched."""
+JOINT_DELTA_LIMIT = max(PANDA.arm.velocity) / CONTROL_HZ
+"""The JOINT_POSITION scale (its config's ``output_max``): an action of 1 is a joint delta of
+this [rad], the Panda's fastest joint's speed limit over one step (0.13 rad). robosuite's
+default 0.05 capped every joint near 1 rad/s, and the arm, which covers about 0.43 of a
+commanded delta a step at ``JOINT_KP`` (``sqrt(kp) / 2`` of it a second), crawled at 0.36
+rad/s: the 220 steps of LIBERO-Spatial ran out in every failed episode. The IK caps each
+joint at its own limit (``drive.JointTargetDriver``)."""
 
 
 def episode_seeds(seed: int, init_state: int) -> tuple[int, int]:
@@ -76,6 +84,10 @@ class LiberoEnv:
             bddl_file_name=str(task_file(suite, index)), controller=controller, **ENV_OPTIONS
         )
         self.controller = controller
+        if controller == CONTROLLER:  # every reset rebuilds the arm's controller from this
+            self.env.env.robots[0].controller_config.update(
+                kp=JOINT_KP, output_max=JOINT_DELTA_LIMIT, output_min=-JOINT_DELTA_LIMIT
+            )
         low, high = self.env.env.action_spec
         self.action_low, self.action_high = np.asarray(low), np.asarray(high)
         self.steps = 0
@@ -101,10 +113,6 @@ class LiberoEnv:
         self.env.reset()
         for robot in self.env.env.robots:
             _reset_grippers(robot.gripper)
-        controller = self.env.env.robots[0].controller  # rebuilt by every reset
-        if self.controller == CONTROLLER:
-            controller.kp = np.full_like(controller.kp, JOINT_KP)
-            controller.kd = 2.0 * np.sqrt(controller.kp)  # critically damped, as robosuite's
         self.steps = 0
         return dict(self.env.set_init_state(self._states[init_state]))
 

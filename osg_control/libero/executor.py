@@ -43,6 +43,13 @@ FIXTURE_POSTURE_COST = 0.001
 ``POSTURE_COST`` the level hand's pull on LIBERO-Goal's middle drawer stopped short of the
 open threshold."""
 FIXTURE_OPERATORS = frozenset({"open", "close", "turn-on", "turn-off"})
+SETTLED = 0.002
+"""How far an object may move between two percepts [m] for the scene to count as at rest:
+the first operator waits for it (``SETTLE_STEPS`` at most). LIBERO's initial states start
+some objects moving (LIBERO-10 task 0's cartons thrown 30 cm up for 15 steps); the hand at
+its transit pace met the soup can in the air and knocked it 14 cm away."""
+SETTLE_STEPS = 30
+"""The most steps the first operator waits for the scene to come to rest."""
 PLAN_TIME_S = 30.0
 """A search's time limit [s]."""
 EFFECTS: dict[str, tuple[str, int]] = {
@@ -87,6 +94,7 @@ class PlanExecutor:
         self.runner: Runner | None = None
         self.current: tuple[str, tuple[str, ...]] | None = None
         self.queue: list[tuple[str, tuple[str, ...]]] = []
+        self.seen: dict[str, np.ndarray] | None = _positions(percept)  # None: at rest
         self._plan(percept)
 
     def _plan(self, percept: LiberoPercept) -> None:
@@ -157,6 +165,14 @@ class PlanExecutor:
         """The next action: the running operator's, or the next one's; held still when
         the plan is done or no plan is left."""
         self.step += 1
+        if self.seen is not None:  # the scene settling (seen from one step on): hold still
+            seen, self.seen = self.seen, _positions(percept)
+            moved = max((float(np.linalg.norm(p - seen[o])) for o, p in self.seen.items()),
+                        default=0.0)  # fmt: skip
+            if (self.step == 1 or moved > SETTLED) and self.step <= SETTLE_STEPS:
+                return np.r_[np.zeros(7), GRIPPER_OPEN]
+            self.seen = None
+            self.trace.append(f"{self.step} at rest")
         for _ in range(len(self.queue) + MAX_REPLANS + 3):
             if self.runner is None and not self._next(percept):
                 break
@@ -188,3 +204,8 @@ class PlanExecutor:
             self.ctx.failures[args[0]] = self.ctx.failures.get(args[0], 0) + 1
         self.current = None
         self.runner = LegRunner([hold(GRIPPER_OPEN, 8), up(0.10, GRIPPER_OPEN)], self.ctx)
+
+
+def _positions(percept: LiberoPercept) -> dict[str, np.ndarray]:
+    """Each movable object's perceived position."""
+    return {obj: percept.position(obj) for obj in percept.objects}

@@ -41,13 +41,16 @@ class Runner(Protocol):
 @dataclass(frozen=True)
 class Leg:
     """One leg: move the TCP to a target with a gripper command until within
-    ``tolerance`` (0: for all ``steps``), or until ``until`` holds, or ``steps`` run out."""
+    ``tolerance`` (0: for all ``steps``), or until ``until`` holds, or ``steps`` run out;
+    at the arm's full pace in free space (``transit``), else at the careful pace of a leg
+    near contact (``drive.JointTargetDriver.action``)."""
 
     target: Target
     gripper: float
     steps: int
     tolerance: float = 0.01
     until: Callable[[LiberoPercept], bool] | None = None
+    transit: bool = False
 
 
 @dataclass
@@ -104,7 +107,8 @@ class LegRunner:
         if command is None:
             return None
         pos, rot, gripper = command
-        return self.context.driver.action(percept.joints, pos, rot, gripper)
+        transit = self.legs[self.index].transit
+        return self.context.driver.action(percept.joints, pos, rot, gripper, transit)
 
     def command(self, percept: LiberoPercept) -> tuple[np.ndarray, np.ndarray, float] | None:
         """The next TCP target (position, rotation) and gripper command, or None when the

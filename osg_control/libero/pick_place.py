@@ -117,8 +117,8 @@ def approach(ctx: Context, thing: str, holding: str | None) -> list[Leg]:
     gripper = GRIPPER_OPEN if holding is None else GRIPPER_CLOSED
     fine = holding is None and thing in ctx.categories  # the pick that follows descends
     clear = lambda now: now.tcp[2] >= floor(now) - TRANSIT_SLACK  # noqa: E731
-    return [Leg(rise, gripper, 40, 0.0, until=clear),
-            Leg(target, gripper, 90, 0.008 if fine else 0.02)]  # fmt: skip
+    return [Leg(rise, gripper, 40, 0.0, until=clear, transit=True),
+            Leg(target, gripper, 90, 0.008 if fine else 0.02, transit=True)]  # fmt: skip
 
 
 def retreat(ctx: Context, holding: str | None) -> list[Leg]:
@@ -127,7 +127,8 @@ def retreat(ctx: Context, holding: str | None) -> list[Leg]:
     def target(now: LiberoPercept, start: LiberoPercept) -> tuple[np.ndarray, None]:
         return np.r_[start.tcp[:2], max(ctx.home_z, start.tcp[2] + 0.05)], None
 
-    return [Leg(target, GRIPPER_OPEN if holding is None else GRIPPER_CLOSED, 40, 0.02)]
+    gripper = GRIPPER_OPEN if holding is None else GRIPPER_CLOSED
+    return [Leg(target, gripper, 40, 0.02, transit=True)]
 
 
 def pick(ctx: Context, obj: str) -> list[Leg]:
