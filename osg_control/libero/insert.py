@@ -259,8 +259,8 @@ def approach(ctx: Context, region: str, holding: str) -> list[Leg]:
     ``OUTSIDE`` out of the plane, its bottom ``INSERT_LIFT`` above the region's floor.
     Where its straight way there passes through the door fixture's body
     (``Scene.housings``: the object starts behind or beside it), it goes up until its
-    bottom is ``TRANSIT_CLEARANCE`` above the body, over to above the doorway's front,
-    then down (decided once, at the start)."""
+    bottom is ``TRANSIT_CLEARANCE`` above the body, over to above the doorway's front (at
+    the transit pace: in free space), then down (decided once, at the start)."""
     way = doorway(ctx.scene, region)
     assert way is not None
 
@@ -295,8 +295,11 @@ def approach(ctx: Context, region: str, holding: str) -> list[Leg]:
         point = target(now, start)[0]
         return (start.tcp if height is None else np.r_[point[:2], height]), None
 
-    return [Leg(rise, GRIPPER_CLOSED, 40, 0.015, until=lambda now: over(now) is None),
-            Leg(across, GRIPPER_CLOSED, 90, 0.02, until=lambda now: over(now) is None),
+    def routed(now: LiberoPercept) -> bool:
+        return over(now) is None
+
+    return [Leg(rise, GRIPPER_CLOSED, 40, 0.015, until=routed, transit=True),
+            Leg(across, GRIPPER_CLOSED, 90, 0.02, until=routed, transit=True),
             *legs]  # fmt: skip
 
 
