@@ -26,13 +26,15 @@ BOTTLE = "wine_bottle_1"
 RACK = "wine_rack_1_top_region"
 
 
-def _started(task: int) -> tuple[PlanExecutor, LiberoPercept]:
-    """The plan executor started on LIBERO-Goal ``task``, initial state 0, and its percept."""
+def _started(
+    task: int, executor: type[PlanExecutor] = PlanExecutor
+) -> tuple[PlanExecutor, LiberoPercept]:
+    """``executor`` started on LIBERO-Goal ``task``, initial state 0, and its percept."""
     env = LiberoEnv("libero_goal", task)
     try:
         obs = env.reset(0)
         scene, percept = LiberoPerception(env).reset(obs, 0)
-        policy = PlanExecutor()
+        policy = executor()
         policy.start(env.problem, mounted_panda(env.sim), scene, percept)
     finally:
         env.close()
@@ -65,14 +67,7 @@ class _LearnedPick(PlanExecutor):
 def test_a_learned_pick_keeps_the_grasp_it_was_recorded_on() -> None:
     """The learned pick was recorded before the neck grasp: it is not given it (task 9
     states 0-2, 0 / 3 with it)."""
-    env = LiberoEnv("libero_goal", 9)
-    try:
-        obs = env.reset(0)
-        scene, percept = LiberoPerception(env).reset(obs, 0)
-        policy = _LearnedPick()
-        policy.start(env.problem, mounted_panda(env.sim), scene, percept)
-    finally:
-        env.close()
+    policy, _ = _started(9, _LearnedPick)
     assert not policy.ctx.grasps
 
 

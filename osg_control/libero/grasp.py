@@ -14,8 +14,10 @@ import numpy as np
 from scipy.spatial.transform import Rotation
 
 from osg_control.libero.clearance import HAND_BOXES, hand_clearance
+from osg_control.libero.facts import holds
 from osg_control.libero.legs import Context
 from osg_control.libero.perception import LiberoPercept
+from osg_control.libero.problem import Atom
 
 TURN_WINDOW = (np.radians(15.0), np.radians(25.0))
 """How far past a quarter turn from the start a grasp may turn the hand about the vertical,
@@ -209,15 +211,18 @@ def grasp_rotation(ctx: Context, percept: LiberoPercept, obj: str) -> np.ndarray
 
 
 def _rim_rotation(ctx: Context, percept: LiberoPercept, obj: str) -> np.ndarray:
-    """A rim grasp's hand: its long side across the reach (the fingers along it) when the
-    goal puts ``obj`` into a drawer (the hand then fits under the cabinet's top), else
+    """A rim grasp's hand: its long side across the reach (the fingers along it) when
+    ``obj`` is perceived in a drawer or the goal puts it into one (the hand then fits under
+    the cabinet's top: turned the other way it stalled 3 cm above a bowl in the top drawer,
+    LIBERO-Spatial task 4, 0 / 50), else
     whichever of that and the fingers across the reach turns the hand less from the start:
     turning a bowl's grasp a quarter turn in place took the approach's 90 steps, and the
     pick repeated it (LIBERO-Goal tasks 1, 4, 8, the bowl, out of their 300 steps)."""
     reach = percept.position(obj) - ctx.base_xy
     along = fingers_along(ctx, reach)
     drawers = {r for r, box in ctx.scene.regions.items() if box.joint is not None}
-    if any(a.predicate == "in" and a.args[0] == obj and a.args[1] in drawers for a in ctx.goal):
+    into = any(a.predicate == "in" and a.args[0] == obj and a.args[1] in drawers for a in ctx.goal)
+    if into or any(holds(ctx.scene, percept, Atom("in", (obj, r))) for r in drawers):
         return along
     across = fingers_along(ctx, np.array([-reach[1], reach[0], 0.0]))
     return min((along, across), key=lambda r: abs(turned_from_start(ctx, r)))

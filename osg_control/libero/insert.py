@@ -39,7 +39,7 @@ from osg_control.libero.grasp import (
     slab,
     turned_from_start,
 )
-from osg_control.libero.legs import Context, GraspRule, Leg, Target, here, hold
+from osg_control.libero.legs import Context, GraspRule, Leg, Step, Target, first_places, here, hold
 from osg_control.libero.perception import LiberoPercept
 from osg_control.libero.pick_place import DROP
 from osg_control.libero.scene import Scene
@@ -221,18 +221,14 @@ def doorway_grasp(ctx: Context, obj: str, way: Doorway) -> GraspRule:
     return rule
 
 
-def doorway_grasps(ctx: Context, steps: list[tuple[str, tuple[str, ...]]]) -> dict[str, GraspRule]:
+def doorway_grasps(ctx: Context, steps: list[Step]) -> dict[str, GraspRule]:
     """The grasps a plan's ``steps`` need: for each object whose next place is into a
     region behind a door, ``doorway_grasp`` (the others keep the top-down one)."""
     grasps: dict[str, GraspRule] = {}
-    placed: set[str] = set()
-    for operator, args in steps:
-        if operator not in ("place-in", "place-on") or args[0] in placed:
-            continue
-        placed.add(args[0])
-        way = doorway(ctx.scene, args[1]) if operator == "place-in" else None
+    for operator, obj, target in first_places(steps):
+        way = doorway(ctx.scene, target) if operator == "place-in" else None
         if way is not None:
-            grasps[args[0]] = doorway_grasp(ctx, args[0], way)
+            grasps[obj] = doorway_grasp(ctx, obj, way)
     return grasps
 
 

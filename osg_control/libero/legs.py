@@ -30,6 +30,20 @@ GraspRule = Callable[[LiberoPercept], tuple[np.ndarray, np.ndarray]]
 """percept -> the TCP point and rotation an object is grasped at (``Context.grasps``)."""
 
 
+Step = tuple[str, tuple[str, ...]]
+"""One ground operator of a plan: its name and arguments."""
+
+
+def first_places(steps: list[Step]) -> list[tuple[str, str, str]]:
+    """Each object's first place in a plan's ``steps`` (``place-in`` / ``place-on``), in
+    order, as (operator, object, target): an object is grasped for where it goes next."""
+    places: dict[str, tuple[str, str, str]] = {}
+    for operator, args in steps:
+        if operator in ("place-in", "place-on") and args[0] not in places:
+            places[args[0]] = (operator, args[0], args[1])
+    return list(places.values())
+
+
 class Runner(Protocol):
     """Runs one operator: ``act`` gives the next action, or None when it is done."""
 

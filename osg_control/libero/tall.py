@@ -21,7 +21,7 @@ import numpy as np
 
 from osg_control.libero.clearance import HAND_BOXES
 from osg_control.libero.grasp import GRIP_WIDTH, grip
-from osg_control.libero.legs import Context, GraspRule
+from osg_control.libero.legs import Context, GraspRule, Step, first_places
 from osg_control.libero.perception import LiberoPercept
 
 PALM_GAP = 0.005
@@ -56,19 +56,13 @@ def neck_grasp(ctx: Context, obj: str, height: float) -> GraspRule:
     return rule
 
 
-def neck_grasps(ctx: Context, steps: list[tuple[str, tuple[str, ...]]]) -> dict[str, GraspRule]:
+def neck_grasps(ctx: Context, steps: list[Step]) -> dict[str, GraspRule]:
     """The grasps a plan's ``steps`` need: for each object whose next place is on a
     region's top and whose top the palm would land on, ``neck_grasp``."""
     grasps: dict[str, GraspRule] = {}
-    placed: set[str] = set()
-    for operator, args in steps:
-        if operator not in ("place-in", "place-on") or args[0] in placed:
-            continue
-        placed.add(args[0])
-        obj, target = args[0], args[1]
-        if operator != "place-on" or target not in ctx.scene.regions:
-            continue
-        height = neck_height(ctx, obj)
+    for operator, obj, target in first_places(steps):
+        on_region = operator == "place-on" and target in ctx.scene.regions
+        height = neck_height(ctx, obj) if on_region else None
         if height is not None:
             grasps[obj] = neck_grasp(ctx, obj, height)
     return grasps
