@@ -40,6 +40,17 @@ def _overlap(a: np.ndarray, b: np.ndarray, margin: float) -> bool:
     return bool(np.all(a[0] < b[1] + margin) and np.all(b[0] < a[1] + margin))
 
 
+def carried(percept: LiberoPercept, held: str) -> np.ndarray:
+    """The TCP minus the ``held`` object's perceived origin: where the hand is relative to
+    what it carries (a target for the object plus this is the hand's)."""
+    return percept.tcp - percept.position(held)
+
+
+def hang(ctx: Context, percept: LiberoPercept, held: str) -> float:
+    """How far the ``held`` object's bottom hangs below the TCP [m]."""
+    return float(percept.tcp[2] - percept.position(held)[2] - ctx.scene.extents[held][0][2])
+
+
 def transit_height(
     ctx: Context, percept: LiberoPercept, goal_xy: np.ndarray, held: str | None = None
 ) -> float:
@@ -54,7 +65,7 @@ def transit_height(
     drop = 0.0  # how far the lowest point hangs below the TCP
     if held is not None:
         here = footprint(ctx, percept, held)
-        drop = float(tcp[2] - percept.position(held)[2] - ctx.scene.extents[held][0][2])
+        drop = hang(ctx, percept, held)
     floor = -np.inf
     for obj in percept.objects:
         if obj == held:

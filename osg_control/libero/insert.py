@@ -27,7 +27,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.spatial.transform import Rotation
 
-from osg_control.libero.clearance import TRANSIT_CLEARANCE, footprint
+from osg_control.libero.clearance import TRANSIT_CLEARANCE, carried, footprint, hang
 from osg_control.libero.drive import GRIPPER_CLOSED, GRIPPER_OPEN
 from osg_control.libero.fixtures import pitched
 from osg_control.libero.grasp import (
@@ -232,10 +232,6 @@ def doorway_grasps(ctx: Context, steps: list[Step]) -> dict[str, GraspRule]:
     return grasps
 
 
-def _carried(percept: LiberoPercept, obj: str) -> np.ndarray:
-    return percept.tcp - percept.position(obj)
-
-
 def _upright(percept: LiberoPercept, obj: str) -> np.ndarray:
     """``obj``'s perceived rotation less any tilt: its yaw about the vertical."""
     x = percept.objects[obj][1][:, 0] * np.array([1.0, 1.0, 0.0])
@@ -265,7 +261,7 @@ def approach(ctx: Context, region: str, holding: str) -> list[Leg]:
         return _origin_at(ctx, now, holding, way, depth, INSERT_LIFT)
 
     def target(now: LiberoPercept, start: LiberoPercept) -> tuple[np.ndarray, None]:
-        return front(now) + _carried(now, holding), None
+        return front(now) + carried(now, holding), None
 
     legs = [Leg(target, GRIPPER_CLOSED, 90, 0.015)]
     housing = ctx.scene.housings.get(ctx.scene.regions[region].parent)
@@ -278,8 +274,8 @@ def approach(ctx: Context, region: str, holding: str) -> list[Leg]:
             sides = footprint(ctx, now, holding) - now.position(holding)[:2]
             low, high = housing[0][:2] - sides[1], housing[1][:2] - sides[0]
             blocked = crosses(now.position(holding), front(now), low, high)
-            drop = float(now.tcp[2] - now.position(holding)[2] - ctx.scene.extents[holding][0][2])
-            route.append(float(housing[1][2]) + TRANSIT_CLEARANCE + drop if blocked else -np.inf)
+            top = float(housing[1][2]) + TRANSIT_CLEARANCE + hang(ctx, now, holding)
+            route.append(top if blocked else -np.inf)
         return route[0] if np.isfinite(route[0]) else None
 
     def rise(now: LiberoPercept, start: LiberoPercept) -> tuple[np.ndarray, None]:
@@ -311,9 +307,9 @@ def insert(ctx: Context, obj: str, region: str) -> list[Leg]:
     across = np.cross([0.0, 0.0, 1.0], n)
 
     def entry(now: LiberoPercept, start: LiberoPercept) -> tuple[np.ndarray, None]:
-        carried = _carried(now, obj)
-        depth = way.plane + ENTRY - float(n @ carried)
-        return _origin_at(ctx, now, obj, way, depth, INSERT_LIFT) + carried, None
+        hand = carried(now, obj)
+        depth = way.plane + ENTRY - float(n @ hand)
+        return _origin_at(ctx, now, obj, way, depth, INSERT_LIFT) + hand, None
 
     def down(now: LiberoPercept, start: LiberoPercept) -> tuple[np.ndarray, None]:
         grip_z = outer_grip(ctx, obj, _upright(now, obj).T @ n)[0][2]

@@ -9,7 +9,7 @@ from __future__ import annotations
 import numpy as np
 from scipy.spatial.transform import Rotation
 
-from osg_control.libero.clearance import HAND_BOXES, footprint, transit_height
+from osg_control.libero.clearance import HAND_BOXES, carried, footprint, transit_height
 from osg_control.libero.drive import GRIPPER_CLOSED, GRIPPER_OPEN
 from osg_control.libero.facts import held, holds, region_pose
 from osg_control.libero.fixtures import door_point, drawer_front
@@ -67,11 +67,6 @@ def anchor(ctx: Context, percept: LiberoPercept, thing: str) -> np.ndarray:
     raise KeyError(f"nothing to approach named {thing!r}")
 
 
-def _carried_offset(percept: LiberoPercept, obj: str | None) -> np.ndarray:
-    """TCP minus the held object's origin (zero when nothing is held)."""
-    return np.zeros(3) if obj is None else percept.tcp - percept.position(obj)
-
-
 def approach(ctx: Context, thing: str, holding: str | None) -> list[Leg]:
     """Hover above ``thing`` (a drawer: in front of its handle, ``fixtures.drawer_front``);
     with an object in hand, its origin ``CARRY`` above it (the hand at most
@@ -92,11 +87,11 @@ def approach(ctx: Context, thing: str, holding: str | None) -> list[Leg]:
             point = drawer_front(ctx, now, thing)  # a drawer: in front of its handle
         if holding is None:
             return point + np.array([0.0, 0.0, HOVER]), ctx.base
-        offset = _carried_offset(now, holding)
-        carried = point + np.array([0.0, 0.0, CARRY]) + offset
+        offset = carried(now, holding)
+        hand = point + np.array([0.0, 0.0, CARRY]) + offset
         clear = point[2] + HELD_CLEARANCE - ctx.scene.extents[holding][0][2] + offset[2]
         ceiling = max(ctx.home_z + CARRY_CEILING, clear)
-        return np.r_[carried[:2], min(carried[2], ceiling)], None
+        return np.r_[hand[:2], min(hand[2], ceiling)], None
 
     def floor(now: LiberoPercept) -> float:  # above the ceiling: up there first
         point = goal(now)[0]
@@ -254,7 +249,7 @@ def place(ctx: Context, obj: str, target: str, inside: bool) -> list[Leg]:
         surface = chosen[0]
         bottom = ctx.scene.extents[obj][0][2]  # the object's bottom below its origin
         origin = surface + np.array([0.0, 0.0, DROP - bottom])
-        return origin + _carried_offset(now, obj), None
+        return origin + carried(now, obj), None
 
     def over(now: LiberoPercept, start: LiberoPercept) -> tuple[np.ndarray, None]:
         point, _ = down(now, start)  # at the carrying height first: nothing swept

@@ -260,7 +260,8 @@ def read_scene(env: Any, problem: Any) -> Scene:
         if not mine:
             continue
         moving = model.jnt_bodyid[mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_JOINT, mine[0].name)]
-        corners = _geom_corners(model, data, _subtree(model, int(moving)))
+        leaf = _subtree(model, int(moving))
+        corners = _geom_corners(model, data, leaf)
         if hasattr(fixture, "turn_on"):
             articulated[name] = tuple(j.name for j in mine)
             knobs[name], grips[name] = _knob_grip(model, data, mine[0])
@@ -270,7 +271,6 @@ def read_scene(env: Any, problem: Any) -> Scene:
             radial -= np.outer(radial @ mine[0].axis, mine[0].axis)
             leaves[name] = corners[int(np.argmax(np.linalg.norm(radial, axis=1)))]
             root = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_BODY, fixture.root_body)
-            leaf = _subtree(model, int(moving))
             body = _geom_corners(model, data, [b for b in _subtree(model, root) if b not in leaf])
             if len(body):
                 housings[name] = (body.min(axis=0), body.max(axis=0))
