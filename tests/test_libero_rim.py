@@ -1,7 +1,8 @@
 """A bowl's rim grasp turns the hand the least it can (the ``libero`` extra, skipped
 without it): across the reach or along it, whichever is nearer the start's hand, save for
 a bowl in a drawer or that the goal puts into one (its hand's long side then stays across
-the reach)."""
+the reach); in a drawer its TCP closes further inside the rim, the outer finger just
+outside it."""
 
 from __future__ import annotations
 
@@ -12,7 +13,13 @@ pytest.importorskip("libero.libero", reason="needs the libero extra: pip install
 
 from osg_control.libero.drive import JointTargetDriver  # noqa: E402
 from osg_control.libero.env import LiberoEnv  # noqa: E402
-from osg_control.libero.grasp import grasp_rotation, turned_from_start  # noqa: E402
+from osg_control.libero.grasp import (  # noqa: E402
+    FINGER_HALF,
+    RIM_INSET,
+    grasp_point,
+    grasp_rotation,
+    turned_from_start,
+)
 from osg_control.libero.legs import Context  # noqa: E402
 from osg_control.libero.perception import LiberoPercept, LiberoPerception  # noqa: E402
 from osg_control.libero.robot import mounted_panda  # noqa: E402
@@ -69,3 +76,28 @@ def test_a_bowl_in_a_drawer_keeps_the_hand_across_the_reach() -> None:
     ctx, percept = _context("libero_spatial", 4, settle=10)
     rotation = grasp_rotation(ctx, percept, BOWL)
     assert _fingers_along_reach(ctx, percept, rotation) > 0.9
+
+
+def _inset(ctx: Context, percept: LiberoPercept) -> float:
+    """How far inside the bowl's outer radius (its footprint's, as perceived) the grasp's
+    TCP lies, seen from above [m]."""
+    low, high = ctx.scene.extents[BOWL]
+    radius = float(min(np.abs(low[:2]).min(), np.abs(high[:2]).min()))
+    return radius - float(
+        np.linalg.norm((grasp_point(ctx, percept, BOWL) - percept.position(BOWL))[:2])
+    )
+
+
+def test_a_bowl_in_a_drawer_is_grasped_with_the_outer_finger_beside_the_rim() -> None:
+    """LIBERO-Spatial task 4: the TCP closes half the open span less a finger's half-width
+    inside the rim (the outer finger then comes down just outside the rim, not on the
+    drawer's front wall, where at ``RIM_INSET`` it stalled: 7 of 50 picks failed)."""
+    ctx, percept = _context("libero_spatial", 4, settle=10)
+    assert ctx.open_span == pytest.approx(0.08)
+    assert _inset(ctx, percept) == pytest.approx(ctx.open_span / 2 - FINGER_HALF, abs=1e-6)
+
+
+def test_a_bowl_on_the_table_keeps_the_rim_inset() -> None:
+    """LIBERO-Goal task 3's bowl (on the table, bound for a drawer) keeps ``RIM_INSET``."""
+    ctx, percept = _context("libero_goal", 3)
+    assert _inset(ctx, percept) == pytest.approx(RIM_INSET, abs=1e-6)

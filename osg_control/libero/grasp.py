@@ -31,7 +31,8 @@ RIM_GRASP = ("bowl", "mug")
 """Object categories grasped at the rim (their origin is inside them, or they are wider
 than the open hand)."""
 RIM_INSET = 0.012
-"""How far inside the rim's outer radius the TCP closes [m]."""
+"""How far inside the rim's outer radius the TCP closes [m] (but in a drawer:
+``_rim_inset``)."""
 ROUND = 1.3
 """An object whose horizontal sides differ by less than this ratio is grasped unturned."""
 GRASP_ABOVE_ORIGIN = 0.005
@@ -220,12 +221,32 @@ def _rim_rotation(ctx: Context, percept: LiberoPercept, obj: str) -> np.ndarray:
     pick repeated it (LIBERO-Goal tasks 1, 4, 8, the bowl, out of their 300 steps)."""
     reach = percept.position(obj) - ctx.base_xy
     along = fingers_along(ctx, reach)
-    drawers = {r for r, box in ctx.scene.regions.items() if box.joint is not None}
-    into = any(a.predicate == "in" and a.args[0] == obj and a.args[1] in drawers for a in ctx.goal)
-    if into or any(holds(ctx.scene, percept, Atom("in", (obj, r))) for r in drawers):
+    into = any(a.predicate == "in" and a.args[0] == obj and a.args[1] in _drawers(ctx)
+               for a in ctx.goal)  # fmt: skip
+    if into or _in_drawer(ctx, percept, obj):
         return along
     across = fingers_along(ctx, np.array([-reach[1], reach[0], 0.0]))
     return min((along, across), key=lambda r: abs(turned_from_start(ctx, r)))
+
+
+def _drawers(ctx: Context) -> set[str]:
+    return {r for r, box in ctx.scene.regions.items() if box.joint is not None}
+
+
+def _in_drawer(ctx: Context, percept: LiberoPercept, obj: str) -> bool:
+    """Whether ``obj`` is perceived in a drawer."""
+    return any(holds(ctx.scene, percept, Atom("in", (obj, r))) for r in _drawers(ctx))
+
+
+def _rim_inset(ctx: Context, percept: LiberoPercept, obj: str) -> float:
+    """How far inside the rim's outer radius the TCP closes on ``obj`` [m]:
+    ``RIM_INSET``, but in a drawer, whose front wall stands about a finger beyond a bowl's
+    rim, so far that the outer open finger comes down just outside the rim (half the open
+    span less a finger's half-width): at ``RIM_INSET`` it landed on the wall's top and the
+    pick failed (LIBERO-Spatial task 4, 7 of 50)."""
+    if _in_drawer(ctx, percept, obj):
+        return ctx.open_span / 2 - FINGER_HALF
+    return RIM_INSET
 
 
 def in_turn_window(angle: float) -> bool:
@@ -271,7 +292,8 @@ def grasp_point(ctx: Context, percept: LiberoPercept, obj: str) -> np.ndarray:
         return pos + rot @ chosen_grip(ctx, percept, obj).point
     axis = grasp_rotation(ctx, percept, obj)[:, 1] * np.array([1.0, 1.0, 0.0])
     axis /= np.linalg.norm(axis)
-    radius = float(min(np.abs(low[:2]).min(), np.abs(high[:2]).min())) - RIM_INSET
+    radius = float(min(np.abs(low[:2]).min(), np.abs(high[:2]).min()))
+    radius -= _rim_inset(ctx, percept, obj)
     centre = pos + rot @ ((low + high) / 2)
     rims = [pos + side * radius * axis for side in (1.0, -1.0)]
     rim = max(rims, key=lambda p: float(np.linalg.norm((p - centre)[:2])))

@@ -72,7 +72,8 @@ class Context:
     """What every controller of an episode shares: the scene, the IK driver, the top-down
     rotation of the episode's start (``base``, which fixture controllers use), the last
     commanded rotation (``rotation``: a leg that names none keeps it), the home height,
-    the objects' categories, where the arm's base stands (``base_xy``), the grasps
+    the objects' categories, where the arm's base stands (``base_xy``), the distance
+    between the open fingers (``open_span``, from the robot's gripper), the grasps
     chosen and failed so far, and those that replace the top-down one for objects the
     plan takes somewhere it does not fit (``grasps``: set by the plan executor from what
     the plan does next, ``insert``), and the task's goal atoms (``goal``: a place leaves
@@ -84,6 +85,7 @@ class Context:
     home_z: float
     categories: dict[str, str]
     base_xy: np.ndarray
+    open_span: float
     grasps: dict[str, GraspRule] = field(default_factory=dict)
     goal: tuple[Atom, ...] = ()
 
@@ -104,7 +106,7 @@ class Context:
         there, the problem's objects and goal, the arm's base where ``robot`` is mounted."""
         return cls(scene, driver, driver.tcp_pose(percept.joints)[1], float(percept.tcp[2]),
                    dict(problem.objects), np.r_[robot.mount[0][:2], 0.0],
-                   goal=problem.goal)  # fmt: skip
+                   robot.gripper.max_opening, goal=problem.goal)  # fmt: skip
 
 
 class LegRunner:
