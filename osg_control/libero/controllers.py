@@ -34,6 +34,7 @@ from __future__ import annotations
 from osg_control.libero import insert
 from osg_control.libero.fixtures import door, drawer, knob
 from osg_control.libero.legs import Context, Leg
+from osg_control.libero.operators import PICKS, PLACES
 from osg_control.libero.pick_place import approach, pick, place, retreat
 
 
@@ -52,11 +53,11 @@ def operator_legs(
         return approach(ctx, args[0], holding)
     if operator == "retreat":
         return retreat(ctx, holding)
-    if operator in ("pick", "pick-out"):
+    if operator in PICKS:
         return pick(ctx, args[0])
     if operator == "place-in" and into_doorway:
         return insert.insert(ctx, args[0], args[1])
-    if operator in ("place-on", "place-in"):
+    if operator in PLACES:
         return place(ctx, args[0], args[1], inside=operator == "place-in")
     if operator in ("open", "close") and args[0] in ctx.scene.leaves and operator == "close":
         return door(ctx, args[0])

@@ -21,6 +21,7 @@ from osg_control.libero.drive import GRIPPER_OPEN, JointTargetDriver
 from osg_control.libero.facts import holds, perceived_init
 from osg_control.libero.insert import doorway_grasps
 from osg_control.libero.legs import Context, Leg, LegRunner, Runner, hold, up
+from osg_control.libero.operators import PICKS, PLACES
 from osg_control.libero.perception import LiberoPercept
 from osg_control.libero.pick_place import holding_ok
 from osg_control.libero.plan import plan_task
@@ -105,7 +106,7 @@ class PlanExecutor:
         steps = [s.action.split() for s in result.steps or ()]
         self.queue = [(s[0], tuple(s[1:])) for s in steps]
         grasps = doorway_grasps(self.ctx, self.queue)  # chosen for where it goes
-        if not any(self._learned(op) for op in ("pick", "pick-out")):  # not in its data
+        if not any(self._learned(op) for op in PICKS):  # not in its data
             grasps |= neck_grasps(self.ctx, self.queue)
         self.ctx.grasps = grasps
         self.trace.append(f"{self.step} plan ({result.status}): {len(self.queue)} steps")
@@ -113,7 +114,7 @@ class PlanExecutor:
     def _effect_holds(self, percept: LiberoPercept) -> bool:
         assert self.current is not None
         operator, args = self.current
-        if operator in ("pick", "pick-out"):
+        if operator in PICKS:
             return holding_ok(self.ctx, percept, args[0], self.start_z)
         if operator in EFFECTS:
             predicate, arity = EFFECTS[operator]
@@ -195,12 +196,12 @@ class PlanExecutor:
         ok = self._effect_holds(percept)
         self.trace.append(f"{self.step} {operator} {' '.join(args)}: {'ok' if ok else 'FAILED'}")
         if ok:
-            if operator in ("pick", "pick-out"):
+            if operator in PICKS:
                 self.holding = args[0]
-            elif operator in ("place-on", "place-in"):
+            elif operator in PLACES:
                 self.holding = None
             return
-        if operator in ("pick", "pick-out"):  # the retry grasps otherwise
+        if operator in PICKS:  # the retry grasps otherwise
             self.ctx.failures[args[0]] = self.ctx.failures.get(args[0], 0) + 1
         self.current = None
         self.runner = LegRunner([hold(GRIPPER_OPEN, 8), up(0.10, GRIPPER_OPEN)], self.ctx)

@@ -15,6 +15,7 @@ from scipy.spatial.transform import Rotation
 
 from osg_control.control.description import RobotDescription
 from osg_control.libero.drive import JointTargetDriver
+from osg_control.libero.operators import PLACES
 from osg_control.libero.perception import LiberoPercept
 from osg_control.libero.problem import Atom, LiberoProblem
 from osg_control.libero.scene import Scene
@@ -39,7 +40,7 @@ def first_places(steps: list[Step]) -> list[tuple[str, str, str]]:
     order, as (operator, object, target): an object is grasped for where it goes next."""
     places: dict[str, tuple[str, str, str]] = {}
     for operator, args in steps:
-        if operator in ("place-in", "place-on") and args[0] not in places:
+        if operator in PLACES and args[0] not in places:
             places[args[0]] = (operator, args[0], args[1])
     return list(places.values())
 

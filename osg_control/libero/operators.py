@@ -119,13 +119,18 @@ def _pick(name: str, support: str, kind: str, relation: str, *pre: Lit) -> Schem
     )  # fmt: skip
 
 
+PICKS = ("pick", "pick-out")
+"""The operators that take an object into the hand (off a thing, out of a region)."""
+PLACES = ("place-on", "place-in")
+"""The operators that set the held object down (on a thing, into a region)."""
+
 SCHEMAS: tuple[Schema, ...] = (
     Schema("approach", (("?x", THING),), ((AT, HOME),), (_near("?x"),), ((AT, HOME),)),
     Schema("retreat", (("?x", THING),), (_near("?x"),), ((AT, HOME),), (_near("?x"),)),
-    _pick("pick", "?s", THING, "on"),
-    _pick("pick-out", "?r", REGION, "in", ("accessible", "?r")),
-    _place("place-on", "?t", THING, "on"),
-    _place("place-in", "?r", REGION, "in", ("accessible", "?r")),
+    _pick(PICKS[0], "?s", THING, "on"),
+    _pick(PICKS[1], "?r", REGION, "in", ("accessible", "?r")),
+    _place(PLACES[0], "?t", THING, "on"),
+    _place(PLACES[1], "?r", REGION, "in", ("accessible", "?r")),
     _door_op("open", "close", "open", access=True),
     _door_op("close", "open", "close", access=False),
     _hand_op("turn-on", "?f", FIXTURE, "turnoff", "turnon"),

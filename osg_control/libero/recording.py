@@ -31,11 +31,12 @@ from osg_control.libero.features import (
     observe,
 )
 from osg_control.libero.legs import HOVER, Context, Leg, LegRunner, Runner
+from osg_control.libero.operators import PICKS
 from osg_control.libero.perception import LiberoPercept
 from osg_control.libero.pick_place import LIFT, holding_ok
 from osg_control.libero.skill_data import Recorded
 
-OPERATORS: dict[str, tuple[str, ...]] = {"pick": ("pick", "pick-out")}
+OPERATORS: dict[str, tuple[str, ...]] = {"pick": PICKS}
 """A recordable skill -> the operators of ``osg-libero`` it runs (one network for both:
 taking an object off a thing or out of a region is the same motion)."""
 NOISE_STD = 0.005
