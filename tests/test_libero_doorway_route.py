@@ -2,7 +2,8 @@
 skipped without it): LIBERO-PRO's ``libero_10_swap`` puts the microwave between the mug
 and the microwave's own doorway; the mug then goes over the microwave's body, not through
 it. Where the way is clear (LIBERO-10) the approach is the straight one it was. A push
-whose hand arrives without the object moving on aims further in."""
+whose hand arrives without the object moving on aims further in. The object goes in
+across the middle of the opening the microwave's walls leave, not of its region's box."""
 
 from __future__ import annotations
 
@@ -21,6 +22,7 @@ from osg_control.libero.insert import (  # noqa: E402
     crosses,
     doorway,
     insert,
+    opening,
 )
 from osg_control.libero.legs import Context  # noqa: E402
 from osg_control.libero.perception import LiberoPerception  # noqa: E402
@@ -34,6 +36,42 @@ def test_crosses_tests_the_way_against_the_box() -> None:
     assert crosses(np.array([-1.0, 0.5]), np.array([2.0, 0.5]), low, high)
     assert not crosses(np.array([-1.0, 1.5]), np.array([2.0, 1.5]), low, high)
     assert not crosses(np.array([-1.0, 0.5]), np.array([-0.1, 0.5]), low, high)
+
+
+def test_opening_cuts_each_wall_off_the_side_it_reaches_in_least() -> None:
+    """A wall reaching 3 cm into the box's +x side and one 1 cm into its floor are cut off
+    those sides; a wall clear of the box leaves it as it is."""
+    low, high = np.array([0.0, 0.0, 0.0]), np.array([0.2, 0.1, 0.1])
+    side = (np.array([0.17, -0.05, -0.05]), np.array([0.3, 0.15, 0.15]))
+    floor = (np.array([-0.05, -0.05, -0.05]), np.array([0.25, 0.15, 0.01]))
+    clear = (np.array([0.3, 0.0, 0.0]), np.array([0.4, 0.1, 0.1]))
+    cut_low, cut_high = opening(low, high, [side, floor, clear])
+    assert np.allclose(cut_low, [0.0, 0.0, 0.01]) and np.allclose(cut_high, [0.17, 0.1, 0.1])
+    same_low, same_high = opening(low, high, [clear])
+    assert np.allclose(same_low, low) and np.allclose(same_high, high)
+
+
+@pytest.mark.parametrize("suite", ["libero_10", "libero_10_swap"])
+def test_the_doorway_is_centred_on_the_opening_between_the_walls(suite: str) -> None:
+    """The heating region's box reaches 5.6 cm into the wall beside the microwave's
+    doorway: across the doorway the white-and-yellow mug (10.6 cm, its handle out) goes in
+    at the middle of the opening the scene's walls leave, clearing the side walls by 4 cm
+    (on the region's centre it met that wall, ``libero_10_swap`` task 9 states 0-3)."""
+    scene, _, _ = _first(suite)
+    way = doorway(scene, REGION)
+    n, across = way.normal, np.cross([0.0, 0.0, 1.0], way.normal)
+    box = scene.regions[REGION]
+    front = float(n @ box.pos) + float(np.abs(box.mat @ box.size) @ np.abs(n))
+    centre, half = float(across @ way.centre), float(scene.extents["white_yellow_mug_1"][1][1])
+    assert abs(float(across @ box.pos) - centre) > 0.02  # the region's box is off-centre
+    sides = [
+        sorted((float(across @ lo), float(across @ hi)))
+        for lo, hi in scene.walls["microwave_1"]
+        if lo[2] < box.pos[2] < hi[2] and min(n @ lo, n @ hi) < front < max(n @ lo, n @ hi)
+    ]
+    assert len(sides) == 2  # the two sides of the doorway
+    gaps = [max(low - (centre + half), (centre - half) - high) for low, high in sides]
+    assert min(gaps) > 0.03
 
 
 def _first(suite: str):

@@ -116,8 +116,9 @@ class Scene:
         frames: movable object -> its upright frame in its body frame (``upright_axes``):
             LIBERO's assets are modelled with any axis up (a can lying on its side has
             its body z horizontal); objects' poses, extents and regions are read in it.
-        housings: a door fixture -> the world box (lower, upper) round its collision geoms
-            other than its leaf's [m]: the body a thing carried to its doorway passes over.
+        walls: a door fixture -> the world box (lower, upper) of each of its collision
+            geoms other than its leaf's [m] (its ``housings`` round them all; the opening
+            behind its door, ``insert.doorway``).
     """
 
     regions: dict[str, RegionBox]
@@ -130,7 +131,15 @@ class Scene:
     extents: dict[str, tuple[np.ndarray, np.ndarray]]
     parts: dict[str, list[tuple[np.ndarray, np.ndarray]]]
     frames: dict[str, np.ndarray]
-    housings: dict[str, tuple[np.ndarray, np.ndarray]] = field(default_factory=dict)
+    walls: dict[str, list[tuple[np.ndarray, np.ndarray]]] = field(default_factory=dict)
+
+    @property
+    def housings(self) -> dict[str, tuple[np.ndarray, np.ndarray]]:
+        """A door fixture -> the world box (lower, upper) round its ``walls``: the body a
+        thing carried to its doorway passes over."""
+        return {name: (np.min([lo for lo, _ in boxes], axis=0),
+                       np.max([hi for _, hi in boxes], axis=0))
+                for name, boxes in self.walls.items() if boxes}  # fmt: skip
 
 
 def upright_axes(rotation: np.ndarray) -> np.ndarray:
@@ -249,7 +258,7 @@ def read_scene(env: Any, problem: Any) -> Scene:
     joints: dict[str, Joint] = {}
     articulated: dict[str, tuple[str, ...]] = {}
     leaves: dict[str, np.ndarray] = {}
-    housings: dict[str, tuple[np.ndarray, np.ndarray]] = {}
+    walls: dict[str, list[tuple[np.ndarray, np.ndarray]]] = {}
     knobs: dict[str, np.ndarray] = {}
     grips: dict[str, np.ndarray] = {}
     for name in problem.fixtures:
@@ -271,9 +280,8 @@ def read_scene(env: Any, problem: Any) -> Scene:
             radial -= np.outer(radial @ mine[0].axis, mine[0].axis)
             leaves[name] = corners[int(np.argmax(np.linalg.norm(radial, axis=1)))]
             root = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_BODY, fixture.root_body)
-            body = _geom_corners(model, data, [b for b in _subtree(model, root) if b not in leaf])
-            if len(body):
-                housings[name] = (body.min(axis=0), body.max(axis=0))
+            body = _geom_boxes(model, data, [b for b in _subtree(model, root) if b not in leaf])
+            walls[name] = [(box.min(axis=0), box.max(axis=0)) for box in body]
     frames = {
         obj: upright_axes(data.xmat[inner.obj_body_id[obj]].reshape(3, 3))
         for obj in problem.objects
@@ -314,4 +322,4 @@ def read_scene(env: Any, problem: Any) -> Scene:
         if joint.kind == JOINT_SLIDE
     }
     return Scene(regions, joints, articulated, leaves, knobs, grips, handles, extents, parts,
-                 frames, housings)  # fmt: skip
+                 frames, walls)  # fmt: skip
