@@ -26,6 +26,12 @@ TURN_TOLERANCE = 0.1
 """A leg that names a rotation is reached only within this of it [rad]."""
 HOVER = 0.10
 """Height above a thing's grasp point the empty hand approaches [m]."""
+STALL_STEPS = 8
+"""Steps a transit leg may go without getting nearer its target (by ``PROGRESS`` or
+``TURN_PROGRESS``) before it counts as stalled and ends (``LegRunner``)."""
+PROGRESS, TURN_PROGRESS = 0.001, 0.01
+"""How much nearer its target position [m] or rotation [rad] than ever before a transit
+leg must get over ``STALL_STEPS`` steps."""
 GraspRule = Callable[[LiberoPercept], tuple[np.ndarray, np.ndarray]]
 """percept -> the TCP point and rotation an object is grasped at (``Context.grasps``)."""
 
@@ -57,7 +63,8 @@ class Leg:
     """One leg: move the TCP to a target with a gripper command until within
     ``tolerance`` (0: for all ``steps``), or until ``until`` holds, or ``steps`` run out;
     at the arm's full pace in free space (``transit``), else at the careful pace of a leg
-    near contact (``drive.JointTargetDriver.action``)."""
+    near contact (``drive.JointTargetDriver.action``). A transit leg also ends when it
+    stalls (``LegRunner``)."""
 
     target: Target
     gripper: float
@@ -108,12 +115,24 @@ class Context:
 
 
 class LegRunner:
-    """Runs legs in order; ``act`` returns the next action, or None when all are done."""
+    """Runs legs in order; ``act`` returns the next action, or None when all are done.
+
+    A transit leg also ends when it stalls: over its last ``STALL_STEPS`` percepts the TCP
+    got no nearer its target position by ``PROGRESS`` and the hand no nearer its target
+    rotation by ``TURN_PROGRESS`` than at any percept of the leg before (measured to the
+    target of now: an approach's target moves off once the hand has turned in place). Its
+    IK then got as near as it can, and waiting out its steps would leave the arm where it
+    is: a bowl 0.8 m out, beyond the top-down hand's reach by 5 mm (LIBERO-Spatial task 6),
+    where the arm stopped 9 mm short of its 8 mm tolerance, or rocked about its stretched
+    elbow 17 mm short, and waited out 90 steps (the episode its 220). A hand turning in
+    place does not stall."""
 
     def __init__(self, legs: list[Leg], context: Context) -> None:
         self.legs, self.context = legs, context
         self.index, self.steps = 0, 0
         self.start: LiberoPercept | None = None
+        self.poses: list[tuple[np.ndarray, np.ndarray]] = []
+        """The TCP's position and rotation at each percept of this leg."""
 
     def act(self, percept: LiberoPercept) -> np.ndarray | None:
         """The next JOINT_POSITION action, or None when the last leg is done."""
@@ -130,13 +149,16 @@ class LegRunner:
         while self.index < len(self.legs):
             leg = self.legs[self.index]
             if self.start is None:
-                self.start = percept
+                self.start, self.poses = percept, []
             pos, rot = leg.target(percept, self.start)
+            _, now = self.context.driver.tcp_pose(percept.joints)
+            self.poses.append((np.asarray(percept.tcp, dtype=float), now))
             near = leg.tolerance > 0 and np.linalg.norm(percept.tcp - pos) < leg.tolerance
             if near and rot is not None:  # a leg that turns the hand also waits for the turn
-                _, now = self.context.driver.tcp_pose(percept.joints)
                 near = Rotation.from_matrix(now.T @ rot).magnitude() < TURN_TOLERANCE
-            stop = leg.until is not None and leg.until(percept)
+            aim = self.context.rotation if rot is None else rot  # the rotation commanded
+            stalled = leg.transit and self._stalled(pos, aim)
+            stop = (leg.until is not None and leg.until(percept)) or stalled
             if not (near or stop) and self.steps < leg.steps:
                 self.steps += 1
                 if rot is not None:
@@ -144,6 +166,18 @@ class LegRunner:
                 return pos, self.context.rotation, leg.gripper
             self.index, self.steps, self.start = self.index + 1, 0, None
         return None
+
+    def _stalled(self, pos: np.ndarray, rot: np.ndarray) -> bool:
+        """Whether the TCP got no nearer ``pos`` (by ``PROGRESS``) and the hand no nearer
+        ``rot`` (by ``TURN_PROGRESS``) over this leg's last ``STALL_STEPS`` percepts than
+        at any percept of the leg before them."""
+        if len(self.poses) <= STALL_STEPS:
+            return False
+        tcps = np.array([tcp for tcp, _ in self.poses])
+        cosines = (np.einsum("kij,ij->k", np.array([r for _, r in self.poses]), rot) - 1) / 2
+        errors = np.c_[np.linalg.norm(tcps - pos, axis=1), np.arccos(np.clip(cosines, -1, 1))]
+        gained = errors[:-STALL_STEPS].min(axis=0) - errors[-STALL_STEPS:].min(axis=0)
+        return bool(gained[0] < PROGRESS and gained[1] < TURN_PROGRESS)
 
 
 def here(offset: tuple[float, float, float]) -> Target:
