@@ -1,8 +1,8 @@
 """The leg runner (``libero.legs.LegRunner``) on a fake percept stream: a transit leg that
 stalls short of its target ends (LIBERO-Spatial task 6's bowl, out of the top-down hand's
 reach: the arm stopped, or rocked about its stretched elbow), and one whose hand still
-turns in place does not, though its TCP stands still; a careful leg waits out its steps
-as before."""
+turns in place does not, though its TCP stands still, nor one whose target turns to
+another; a careful leg waits out its steps as before."""
 
 from __future__ import annotations
 
@@ -56,6 +56,18 @@ def test_a_transit_leg_that_rocks_short_ends() -> None:
 def test_a_transit_leg_that_turns_in_place_goes_on() -> None:
     turning = [(0.0, 0.02 * k) for k in range(STEPS + 5)]  # toward TURNED, 2 rad off
     assert _commands(_leg(True, TURNED), turning) == STEPS
+
+
+def test_a_transit_leg_whose_target_turns_is_watched_anew() -> None:
+    """The grasp's rotation flips to its twin after 10 steps (LIBERO-Spatial task 4 state
+    0): the hand, turned toward the first, is farther from the second than where it started,
+    yet it turns on toward it and the leg ends there, near."""
+    twins = [Rotation.from_rotvec([0.0, 0.0, a]).as_matrix() for a in (1.0, -1.01)]
+    step = iter(range(STEPS))
+    leg = Leg(lambda now, start: (TARGET, twins[next(step) >= 10]), GRIPPER_OPEN, STEPS,
+              0.008, transit=True)  # fmt: skip
+    hand = [(0.0, 0.02 * k) for k in range(11)] + [(0.0, 0.2 - 0.025 * k) for k in range(1, 60)]
+    assert _commands(leg, hand) == 55  # within 0.1 rad of the second
 
 
 def test_a_careful_leg_waits_out_its_steps() -> None:
