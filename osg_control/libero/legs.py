@@ -181,7 +181,7 @@ class LegRunner:
                 self.start, self.watch = percept, StallWatch()
             pos, rot = leg.target(percept, self.start)
             _, now = self.context.driver.tcp_pose(percept.joints)
-            near = leg.tolerance > 0 and np.linalg.norm(percept.tcp - pos) < leg.tolerance
+            near = leg.tolerance > 0 and bool(np.linalg.norm(percept.tcp - pos) < leg.tolerance)
             if near and rot is not None:  # a leg that turns the hand also waits for the turn
                 near = _angle(now, rot) < TURN_TOLERANCE
             aim = self.context.rotation if rot is None else rot  # the rotation commanded
