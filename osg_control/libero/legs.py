@@ -27,6 +27,13 @@ TURN_TOLERANCE = 0.1
 """A leg that names a rotation is reached only within this of it [rad]."""
 HOVER = 0.10
 """Height above a thing's grasp point the empty hand approaches [m]."""
+STALL_STEPS = 8
+"""Steps a transit leg may go without getting nearer its unchanged target (by ``PROGRESS``
+or ``TURN_PROGRESS``) before it counts as stalled and ends (``StallWatch``)."""
+PROGRESS, TURN_PROGRESS = 0.001, 0.01
+"""How much nearer its target position [m] or rotation [rad] than ever before a transit
+leg must get over ``STALL_STEPS`` steps; a target that moves more than this in a step is
+a new one."""
 GraspRule = Callable[[LiberoPercept], tuple[np.ndarray, np.ndarray]]
 """percept -> the TCP point and rotation an object is grasped at (``Context.grasps``)."""
 
@@ -58,7 +65,8 @@ class Leg:
     """One leg: move the TCP to a target with a gripper command until within
     ``tolerance`` (0: for all ``steps``), or until ``until`` holds, or ``steps`` run out;
     at the arm's full pace in free space (``transit``), else at the careful pace of a leg
-    near contact (``drive.JointTargetDriver.action``)."""
+    near contact (``drive.JointTargetDriver.action``). A transit leg also ends when it
+    stalls (``LegRunner``)."""
 
     target: Target
     gripper: float
@@ -110,13 +118,53 @@ class Context:
                    robot.gripper.max_opening, goal=problem.goal)  # fmt: skip
 
 
+class StallWatch:
+    """Whether a leg stalled: over its last ``STALL_STEPS`` percepts the TCP got no nearer
+    its target position by ``PROGRESS`` and the hand no nearer its target rotation by
+    ``TURN_PROGRESS`` than at any percept before them since the target last moved (a
+    target that moves starts the watch anew: the hand turning toward one of two grasps
+    alike, then toward the other, is not stalled; nor is a hand turning in place)."""
+
+    def __init__(self) -> None:
+        self.target: tuple[np.ndarray, np.ndarray] | None = None
+        self.errors: list[tuple[float, float]] = []
+
+    def stalled(self, pos: np.ndarray, rot: np.ndarray, tcp: np.ndarray, hand: np.ndarray) -> bool:
+        """Watch one more percept (the TCP at ``tcp``, the hand's rotation ``hand``) of a
+        leg aiming at ``pos`` and ``rot``; whether it has stalled."""
+        if self.target is not None and (
+            np.linalg.norm(pos - self.target[0]) > PROGRESS
+            or _angle(rot, self.target[1]) > TURN_PROGRESS
+        ):
+            self.errors = []
+        self.target = (np.asarray(pos, dtype=float), rot)
+        self.errors.append((float(np.linalg.norm(tcp - pos)), _angle(hand, rot)))
+        if len(self.errors) <= STALL_STEPS:
+            return False
+        errors = np.array(self.errors)
+        gained = errors[:-STALL_STEPS].min(axis=0) - errors[-STALL_STEPS:].min(axis=0)
+        return bool(gained[0] < PROGRESS and gained[1] < TURN_PROGRESS)
+
+
+def _angle(a: np.ndarray, b: np.ndarray) -> float:
+    """The angle between two rotations [rad]."""
+    return float(Rotation.from_matrix(a.T @ b).magnitude())
+
+
 class LegRunner:
-    """Runs legs in order; ``act`` returns the next action, or None when all are done."""
+    """Runs legs in order; ``act`` returns the next action, or None when all are done.
+
+    A transit leg also ends when it stalls (``StallWatch``): its IK then got as near as it
+    can, and waiting out its steps would leave the arm where it is. A bowl 0.8 m out lies
+    5 mm beyond the top-down hand's reach (LIBERO-Spatial task 6): the approach stopped
+    9 mm short of its 8 mm tolerance, or rocked about the stretched elbow 17 mm short, and
+    waited out its 90 steps (the episode its 220)."""
 
     def __init__(self, legs: list[Leg], context: Context) -> None:
         self.legs, self.context = legs, context
         self.index, self.steps = 0, 0
         self.start: LiberoPercept | None = None
+        self.watch = StallWatch()
 
     def act(self, percept: LiberoPercept) -> np.ndarray | None:
         """The next JOINT_POSITION action, or None when the last leg is done."""
@@ -133,13 +181,15 @@ class LegRunner:
         while self.index < len(self.legs):
             leg = self.legs[self.index]
             if self.start is None:
-                self.start = percept
+                self.start, self.watch = percept, StallWatch()
             pos, rot = leg.target(percept, self.start)
-            near = leg.tolerance > 0 and np.linalg.norm(percept.tcp - pos) < leg.tolerance
+            _, now = self.context.driver.tcp_pose(percept.joints)
+            near = leg.tolerance > 0 and bool(np.linalg.norm(percept.tcp - pos) < leg.tolerance)
             if near and rot is not None:  # a leg that turns the hand also waits for the turn
-                _, now = self.context.driver.tcp_pose(percept.joints)
-                near = Rotation.from_matrix(now.T @ rot).magnitude() < TURN_TOLERANCE
-            stop = leg.until is not None and leg.until(percept)
+                near = _angle(now, rot) < TURN_TOLERANCE
+            aim = self.context.rotation if rot is None else rot  # the rotation commanded
+            stalled = leg.transit and self.watch.stalled(pos, aim, percept.tcp, now)
+            stop = (leg.until is not None and leg.until(percept)) or stalled
             if not (near or stop) and self.steps < leg.steps:
                 self.steps += 1
                 if rot is not None:
