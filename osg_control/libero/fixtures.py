@@ -87,12 +87,13 @@ def drawer_front(ctx: Context, percept: LiberoPercept, region: str) -> np.ndarra
     return _handle(ctx, percept, joint, percept.joint(joint.name)) + out * PULL_STANDOFF
 
 
-def drawer_hand(ctx: Context, percept: LiberoPercept, region: str) -> np.ndarray:
+def drawer_hand(ctx: Context, region: str) -> np.ndarray:
     """The hand the empty hand approaches a drawer with: turned level for the pull
-    (``_level``) when the drawer is not sensed open (the open comes next: the quarter turn
-    in place took 31-40 of LIBERO-Goal task 3's 300 steps), else the start's (a close)."""
-    joint = ctx.scene.joints[ctx.scene.articulated[region][0]]
-    return ctx.base if joint.is_active(percept.joint(joint.name)) else _pull_hand(ctx, joint)
+    (``_level``) when the plan opens it next (``Context.opening``: turned in place, at the
+    careful pace, it took 31-40 of LIBERO-Goal task 3's 300 steps), else the start's."""
+    if region not in ctx.opening:
+        return ctx.base
+    return _pull_hand(ctx, ctx.scene.joints[ctx.scene.articulated[region][0]])
 
 
 def _pull_hand(ctx: Context, joint: Joint) -> np.ndarray:

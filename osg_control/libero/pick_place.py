@@ -86,7 +86,7 @@ def approach(ctx: Context, thing: str, holding: str | None) -> list[Leg]:
         region = ctx.scene.regions.get(thing)
         if holding is None and region is not None and region.joint is not None:
             hover = drawer_front(ctx, now, thing) + np.array([0.0, 0.0, HOVER])
-            return hover, drawer_hand(ctx, now, thing)  # in front of its handle
+            return hover, drawer_hand(ctx, thing)  # in front of its handle
         if holding is None:
             return point + np.array([0.0, 0.0, HOVER]), ctx.base
         offset = carried(now, holding)
