@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from osg_control.libero.facts import region_pose
 from osg_control.libero.legs import Context
 from osg_control.libero.perception import LiberoPercept
 
@@ -87,15 +88,43 @@ def hand_clearance(
     ``obj`` that rises above the hand's lower faces there (negative: they overlap). An
     object whose footprint holds the TCP (what ``obj`` stands in) is left out; inf when
     nothing is near."""
-    axis = np.asarray(along[:2], dtype=float) / np.linalg.norm(along[:2])
-    across = np.array([-axis[1], axis[0]])
-    least = np.inf
+    obstacles = []
     for other in percept.objects:
         box = footprint(ctx, percept, other)
         if other == obj or _overlap(box, np.array([tcp[:2], tcp[:2]]), 0.0):
             continue
         top = percept.position(other)[2] + ctx.scene.extents[other][1][2]
         corners = np.array([[box[i][0], box[j][1]] for i in (0, 1) for j in (0, 1)])
+        obstacles.append((corners, float(top)))
+    return _hand_gap(tcp, along, obstacles)
+
+
+def fixture_clearance(
+    ctx: Context, percept: LiberoPercept, tcp: np.ndarray, along: np.ndarray
+) -> float:
+    """``hand_clearance`` against the fixtures' regions (the scene's boxes, a drawer's at
+    its sensed travel: a cabinet's drawers and top) that rise above the hand's lower
+    faces: the fixtures' walls round them are not perceived otherwise."""
+    obstacles = []
+    for name, region in ctx.scene.regions.items():
+        if region.carrier is not None:
+            continue
+        pos, mat = region_pose(ctx.scene, percept, name)
+        signs = np.array([[x, y, z] for x in (-1, 1) for y in (-1, 1) for z in (-1, 1)])
+        corners = pos + (signs * region.size) @ mat.T
+        obstacles.append((corners[:, :2], float(corners[:, 2].max())))
+    return _hand_gap(tcp, along, obstacles)
+
+
+def _hand_gap(
+    tcp: np.ndarray, along: np.ndarray, obstacles: list[tuple[np.ndarray, float]]
+) -> float:
+    """The least horizontal gap between the open hand at ``tcp``, its fingers sliding
+    along ``along``, and the obstacles (xy corners, top) that rise above its lower faces."""
+    axis = np.asarray(along[:2], dtype=float) / np.linalg.norm(along[:2])
+    across = np.array([-axis[1], axis[0]])
+    least = np.inf
+    for corners, top in obstacles:
         for half_along, half_across, lift in HAND_BOXES:
             if top <= tcp[2] + lift:
                 continue

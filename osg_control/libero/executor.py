@@ -109,6 +109,10 @@ class PlanExecutor:
         if not any(self._learned(op) for op in PICKS):  # not in its data
             grasps |= neck_grasps(self.ctx, self.queue)
         self.ctx.grasps = grasps
+        self.ctx.opening = frozenset(  # the approach turns the hand for the pull
+            args[0] for (op, args), (then, on) in zip(self.queue, self.queue[1:], strict=False)
+            if op == "approach" and then == "open" and on[0] == args[0]
+        )  # fmt: skip
         self.trace.append(f"{self.step} plan ({result.status}): {len(self.queue)} steps")
 
     def _effect_holds(self, percept: LiberoPercept) -> bool:

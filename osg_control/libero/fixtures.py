@@ -43,6 +43,11 @@ PUSH_PITCH = np.radians(35.0)
 """How far the hand pushing a drawer shut is tilted toward the cabinet (``pitched``)."""
 DRAWER_MARGIN = 0.02
 """How far past LIBERO's open threshold a drawer is pulled [m]."""
+PINCH_REACH = 0.006
+"""How near the TCP goes in to a point this far behind a drawer's handle before pinching
+it [m]: it then stops at the handle's bar, not this far in front of it (there, with the
+sensed travel 4 mm short, the fingers closed 1 cm in front of the bar's centre and the
+pull left LIBERO-Goal's middle drawer shut, task 0 state 3)."""
 PULL_STANDOFF = 0.12
 """How far in front of a drawer's handle the hand hovers and turns level before it goes
 in [m]: the top-down hand, its long side along the drawer's travel, stays clear of the
@@ -82,6 +87,21 @@ def drawer_front(ctx: Context, percept: LiberoPercept, region: str) -> np.ndarra
     return _handle(ctx, percept, joint, percept.joint(joint.name)) + out * PULL_STANDOFF
 
 
+def drawer_hand(ctx: Context, region: str) -> np.ndarray:
+    """The hand the empty hand approaches a drawer with: turned level for the pull
+    (``_level``) when the plan opens it next (``Context.opening``: turned in place, at the
+    careful pace, it took 31-40 of LIBERO-Goal task 3's 300 steps), else the start's."""
+    if region not in ctx.opening:
+        return ctx.base
+    return _pull_hand(ctx, ctx.scene.joints[ctx.scene.articulated[region][0]])
+
+
+def _pull_hand(ctx: Context, joint: Joint) -> np.ndarray:
+    """The hand that pinches a drawer's handle: level, facing the drawer (``_level``)."""
+    out = joint.axis * joint.opening
+    return _level(fingers_along(ctx, out), out)
+
+
 def drawer(ctx: Context, region: str, opening: bool) -> list[Leg]:
     """Open: grasp the handle, pull past the open threshold. Close: push the handle's
     face with the closed hand to the closed stop."""
@@ -91,13 +111,14 @@ def drawer(ctx: Context, region: str, opening: bool) -> list[Leg]:
     sensed = lambda p: p.joint(joint.name)  # noqa: E731
     if opening:  # pinch the handle's bar top and bottom, the hand level, facing the drawer
         goal = joint.active + joint.opening * DRAWER_MARGIN
-        level = _level(fingers_along(ctx, out), out)
+        level = _pull_hand(ctx, joint)
         return [
             Leg(lambda now, s: (drawer_front(ctx, s, region) + [0, 0, HOVER], level),
-                GRIPPER_OPEN, 40, 0.02),
-            Leg(lambda now, s: (drawer_front(ctx, s, region), level), GRIPPER_OPEN, 40, 0.01),
-            Leg(lambda now, s: (_handle(ctx, s, joint, sensed(s)), level), GRIPPER_OPEN, 40,
-                0.006),
+                GRIPPER_OPEN, 40, 0.02, transit=True),
+            Leg(lambda now, s: (drawer_front(ctx, s, region), level), GRIPPER_OPEN, 40, 0.01,
+                transit=True),
+            Leg(lambda now, s: (_handle(ctx, s, joint, sensed(s)) - out * PINCH_REACH, level),
+                GRIPPER_OPEN, 40, PINCH_REACH),
             hold(GRIPPER_CLOSED, 12),
             Leg(lambda now, s: (_handle(ctx, now, joint, goal), level), GRIPPER_CLOSED, 60,
                 0.01, lambda p: joint.is_active(sensed(p) - joint.opening * DRAWER_MARGIN)),

@@ -13,7 +13,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.spatial.transform import Rotation
 
-from osg_control.libero.clearance import HAND_BOXES, hand_clearance
+from osg_control.libero.clearance import HAND_BOXES, fixture_clearance, hand_clearance
 from osg_control.libero.facts import holds
 from osg_control.libero.legs import Context
 from osg_control.libero.perception import LiberoPercept
@@ -27,9 +27,10 @@ away), a clockwise one up toward 2.90 (2.1 rad away): counter-clockwise has the 
 (At 15 deg both ways, the rim grasp of LIBERO-10 task 4's second mug, 105.4 deg
 counter-clockwise, was refused for the one 150 deg round from the first mug's, and the
 hand drifted 40 cm while it turned: states 14, 22, 32, 36.)"""
-RIM_GRASP = ("bowl", "mug")
+RIM_GRASP = ("bowl", "mug", "plate")
 """Object categories grasped at the rim (their origin is inside them, or they are wider
-than the open hand)."""
+than the open hand: a plate, 13.8 cm across, closed on at its centre every time,
+LIBERO-Goal task 5)."""
 RIM_INSET = 0.012
 """How far inside the rim's outer radius the TCP closes [m] (but in a drawer:
 ``_rim_inset``)."""
@@ -51,7 +52,11 @@ FINGER_HALF = 0.012
 GRIP_STEP = 0.005
 """The spacing of the slices ``grip`` tries [m]."""
 RIM_DEPTH = 0.02
-"""How far below a rim the fingertips close [m]."""
+"""How far below a rim the fingertips close [m]: at most down to ``RIM_FLOOR`` above the
+object's bottom (a plate's rim stands 1.9 cm)."""
+RIM_FLOOR = 0.005
+"""The least height of the open fingers' lower faces (``clearance.HAND_BOXES``) above
+the object's bottom at a rim grasp [m]: they stay off the table."""
 GRASP_CLEARANCE = 0.008
 """The least gap between the hand at a grasp and a neighbour's footprint [m]."""
 RETRY_SHIFT = 0.015
@@ -281,8 +286,12 @@ def _rim(ctx: Context, obj: str) -> bool:
 
 
 def grasp_point(ctx: Context, percept: LiberoPercept, obj: str) -> np.ndarray:
-    """Where the TCP closes on ``obj``: just above its origin, or on a bowl's or mug's rim
-    (on the side away from a handle: the side of the rim further from the box's centre);
+    """Where the TCP closes on ``obj``: just above its origin, or on a bowl's, mug's or
+    plate's rim (on the side away from a handle: the side of the rim further from the box's
+    centre; a rim too low for ``RIM_DEPTH``, a plate's, on the side where the open hand,
+    its palm then low, stands clearest of the objects and the fixtures' boxes, then the
+    nearer the arm's base: on the cabinet's side its long side reached under the
+    cabinet's front and stalled, LIBERO-Goal task 5);
     the plan's own grasp where it set one (``Context.grasps``)."""
     if obj in ctx.grasps:
         return ctx.grasps[obj](percept)[0]
@@ -296,5 +305,37 @@ def grasp_point(ctx: Context, percept: LiberoPercept, obj: str) -> np.ndarray:
     radius -= _rim_inset(ctx, percept, obj)
     centre = pos + rot @ ((low + high) / 2)
     rims = [pos + side * radius * axis for side in (1.0, -1.0)]
-    rim = max(rims, key=lambda p: float(np.linalg.norm((p - centre)[:2])))
-    return np.r_[rim[:2], pos[2] + high[2] - RIM_DEPTH]
+    height = max(pos[2] + high[2] - RIM_DEPTH, pos[2] + _rim_floor(ctx, obj))
+    if _low_rim(ctx, obj):  # the side the open hand stands clearest at, then the nearer
+        rims = [np.r_[r[:2], height] for r in rims]
+
+        def room(p: np.ndarray) -> tuple[float, float]:
+            gap = min(hand_clearance(ctx, percept, p, axis, obj),
+                      fixture_clearance(ctx, percept, p, axis))  # fmt: skip
+            return min(gap, GRASP_CLEARANCE), -float(np.linalg.norm((p - ctx.base_xy)[:2]))
+
+        rim = max(rims, key=room)
+    else:
+        rim = max(rims, key=lambda p: float(np.linalg.norm((p - centre)[:2])))
+    return np.r_[rim[:2], height]
+
+
+def carry_point(ctx: Context, percept: LiberoPercept, obj: str) -> np.ndarray:
+    """The point of ``obj`` a held object is carried above (``pick_place.approach``): its
+    grasp point, save for a low rim's (a plate's), where the held object goes over its
+    middle."""
+    if not _low_rim(ctx, obj):
+        return grasp_point(ctx, percept, obj)
+    pos, rot = percept.objects[obj]
+    return pos + rot @ chosen_grip(ctx, percept, obj).point
+
+
+def _rim_floor(ctx: Context, obj: str) -> float:
+    """The lowest a rim grasp's TCP goes above ``obj``'s origin: the open fingers' lower
+    faces (``clearance.HAND_BOXES``) ``RIM_FLOOR`` above its bottom."""
+    return float(ctx.scene.extents[obj][0][2]) + RIM_FLOOR - HAND_BOXES[1][2]
+
+
+def _low_rim(ctx: Context, obj: str) -> bool:
+    """Whether ``obj`` is grasped at a rim too low for ``RIM_DEPTH`` (a plate's)."""
+    return _rim(ctx, obj) and ctx.scene.extents[obj][1][2] - RIM_DEPTH < _rim_floor(ctx, obj)

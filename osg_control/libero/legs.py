@@ -85,8 +85,10 @@ class Context:
     between the open fingers (``open_span``, from the robot's gripper), the grasps
     chosen and failed so far, and those that replace the top-down one for objects the
     plan takes somewhere it does not fit (``grasps``: set by the plan executor from what
-    the plan does next, ``insert``), and the task's goal atoms (``goal``: a place leaves
-    room for what the goal still puts beside it)."""
+    the plan does next, ``insert``), the drawers the plan approaches to open next
+    (``opening``: the approach turns the hand for the pull, ``fixtures.drawer_hand``), and
+    the task's goal atoms (``goal``: a place leaves room for what the goal still puts
+    beside it)."""
 
     scene: Scene
     driver: JointTargetDriver
@@ -97,6 +99,7 @@ class Context:
     open_span: float
     grasps: dict[str, GraspRule] = field(default_factory=dict)
     goal: tuple[Atom, ...] = ()
+    opening: frozenset[str] = frozenset()
 
     def __post_init__(self) -> None:
         self.rotation = self.base

@@ -12,8 +12,8 @@ from scipy.spatial.transform import Rotation
 from osg_control.libero.clearance import HAND_BOXES, carried, footprint, transit_height
 from osg_control.libero.drive import GRIPPER_CLOSED, GRIPPER_OPEN
 from osg_control.libero.facts import held, holds, region_pose
-from osg_control.libero.fixtures import door_point, drawer_front
-from osg_control.libero.grasp import grasp_point, grasp_rotation
+from osg_control.libero.fixtures import door_point, drawer_front, drawer_hand
+from osg_control.libero.grasp import carry_point, grasp_point, grasp_rotation
 from osg_control.libero.legs import HOVER, Context, Leg, hold, up
 from osg_control.libero.perception import LiberoPercept
 
@@ -51,12 +51,13 @@ CLOSING_STEPS = 12
 """Steps a pick holds still closing the gripper before it lifts (the fingers' travel)."""
 
 
-def anchor(ctx: Context, percept: LiberoPercept, thing: str) -> np.ndarray:
-    """The point the hand approaches: an object's grasp point, a region's centre, a
-    drawer's handle, a knob, or a door's push point."""
+def anchor(ctx: Context, percept: LiberoPercept, thing: str, holding: bool = False) -> np.ndarray:
+    """The point the hand approaches: an object's grasp point (``holding``: the point a
+    held object is carried over, ``grasp.carry_point``), a region's centre, a drawer's
+    handle, a knob, or a door's push point."""
     scene = ctx.scene
     if thing in percept.objects:
-        return grasp_point(ctx, percept, thing)
+        return (carry_point if holding else grasp_point)(ctx, percept, thing)
     joints = [scene.joints[j] for j in scene.articulated.get(thing, ())]
     if thing in scene.knobs:
         return scene.knobs[thing]
@@ -77,14 +78,15 @@ def approach(ctx: Context, thing: str, holding: str | None) -> list[Leg]:
     (``clearance.transit_height``), going straight up first where it is below that."""
 
     def goal(now: LiberoPercept) -> tuple[np.ndarray, np.ndarray | None]:
-        point = anchor(ctx, now, thing)
+        point = anchor(ctx, now, thing, holding is not None)
         if holding is None and thing in now.objects:  # above the object's top
             top = now.position(thing)[2] + ctx.scene.extents[thing][1][2]
             hover = np.r_[point[:2], max(point[2] + HOVER, top + TOP_CLEARANCE)]
             return hover, grasp_rotation(ctx, now, thing)
         region = ctx.scene.regions.get(thing)
         if holding is None and region is not None and region.joint is not None:
-            point = drawer_front(ctx, now, thing)  # a drawer: in front of its handle
+            hover = drawer_front(ctx, now, thing) + np.array([0.0, 0.0, HOVER])
+            return hover, drawer_hand(ctx, thing)  # in front of its handle
         if holding is None:
             return point + np.array([0.0, 0.0, HOVER]), ctx.base
         offset = carried(now, holding)
