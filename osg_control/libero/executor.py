@@ -18,6 +18,7 @@ from osg_control.control.description import RobotDescription
 from osg_control.control.ik_backends import IKConfig
 from osg_control.libero.controllers import operator_legs
 from osg_control.libero.drive import GRIPPER_OPEN, JointTargetDriver
+from osg_control.libero.edge import edge_grasps
 from osg_control.libero.facts import holds, perceived_init
 from osg_control.libero.insert import doorway_grasps
 from osg_control.libero.legs import Context, Leg, LegRunner, Runner, hold, up
@@ -106,6 +107,7 @@ class PlanExecutor:
         self.queue = [(s[0], tuple(s[1:])) for s in steps]
         grasps = doorway_grasps(self.ctx, self.queue)  # chosen for where it goes
         if not any(self._learned(op) for op in ("pick", "pick-out")):  # not in its data
+            grasps = edge_grasps(self.ctx, self.queue) | grasps
             grasps |= neck_grasps(self.ctx, self.queue)
         self.ctx.grasps = grasps
         self.trace.append(f"{self.step} plan ({result.status}): {len(self.queue)} steps")
