@@ -87,8 +87,20 @@ def _after_retreat(steps: list[Step], place: int) -> int:
 
 def pinched(ctx: Context, obj: str) -> bool:
     """Whether ``obj`` is taken by the edge pinch: no grasp of ``grasp.grips`` closes round
-    it and it is not grasped at its rim."""
-    return not fits_hand(ctx, obj) and not rim_grasped(ctx, obj)
+    it, it is not grasped at its rim, and it stands taller than the open hand at the pinch
+    reaches below its top (``reach_below_top``: a plate, 0 / 5 pinched at LIBERO-Goal task 5
+    states 0-4, would put the outer finger on the table)."""
+    low, high = ctx.scene.extents[obj]
+    tall = high[2] - low[2] > reach_below_top()
+    return tall and not fits_hand(ctx, obj) and not rim_grasped(ctx, obj)
+
+
+def reach_below_top() -> float:
+    """How far below an object's top the open hand at its edge pinch reaches [m]: the TCP
+    ``EDGE_DEPTH / 2`` down, the outer finger's lower corner (``HAND_BOXES``) further down
+    the tilt."""
+    along, _, lift = HAND_BOXES[-1]
+    return float(EDGE_DEPTH / 2 + along * np.sin(EDGE_TILT) - lift * np.cos(EDGE_TILT))
 
 
 def edge_grasp(ctx: Context, obj: str) -> GraspRule:
