@@ -18,13 +18,14 @@ from osg_control.control.description import RobotDescription
 from osg_control.control.ik_backends import IKConfig
 from osg_control.libero.controllers import operator_legs
 from osg_control.libero.drive import GRIPPER_OPEN, JointTargetDriver
+from osg_control.libero.edge import edge_grasps, pinched_last
 from osg_control.libero.facts import holds, perceived_init
 from osg_control.libero.insert import doorway_grasps
 from osg_control.libero.legs import Context, Leg, LegRunner, Runner, hold, up
 from osg_control.libero.operators import PICKS, PLACES
 from osg_control.libero.perception import LiberoPercept
 from osg_control.libero.pick_place import holding_ok
-from osg_control.libero.plan import plan_task
+from osg_control.libero.plan import plan_holds, plan_task
 from osg_control.libero.problem import Atom, LiberoProblem
 from osg_control.libero.scene import Scene
 from osg_control.libero.tall import neck_grasps
@@ -107,6 +108,10 @@ class PlanExecutor:
         self.queue = [(s[0], tuple(s[1:])) for s in steps]
         grasps = doorway_grasps(self.ctx, self.queue)  # chosen for where it goes
         if not any(self._learned(op) for op in PICKS):  # not in its data
+            reordered = pinched_last(self.ctx, self.queue)
+            if reordered != self.queue and plan_holds(perceived, reordered):
+                self.queue = reordered
+            grasps = edge_grasps(self.ctx, self.queue) | grasps
             grasps |= neck_grasps(self.ctx, self.queue)
         self.ctx.grasps = grasps
         self.ctx.opening = frozenset(  # the approach turns the hand for the pull

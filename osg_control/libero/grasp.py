@@ -130,6 +130,14 @@ def grips(ctx: Context, obj: str) -> list[Grip]:
     return [g for _, _, g in sorted(candidates, key=lambda c: c[:2])]
 
 
+def fits_hand(ctx: Context, obj: str) -> bool:
+    """Whether some slice of ``obj`` fits between the open fingers (``GRIP_WIDTH``) along
+    either horizontal axis: a grasp of ``grips`` closes round it."""
+    low, high = ctx.scene.extents[obj]
+    return any(_fits(slab(ctx, obj, a, float(c)), a) for a in (0, 1)
+               for c in np.arange(low[1 - a], high[1 - a] + 1e-9, GRIP_STEP))  # fmt: skip
+
+
 def _span(boxes: list[tuple[np.ndarray, np.ndarray]], axis: int) -> tuple[float, float]:
     """The lowest and highest extent of ``boxes`` along ``axis``."""
     return min(b[0][axis] for b in boxes), max(b[1][axis] for b in boxes)
@@ -208,7 +216,7 @@ def grasp_rotation(ctx: Context, percept: LiberoPercept, obj: str) -> np.ndarray
     one (``Context.grasps``)."""
     if obj in ctx.grasps:
         return ctx.grasps[obj](percept)[1]
-    if _rim(ctx, obj):
+    if rim_grasped(ctx, obj):
         return _rim_rotation(ctx, percept, obj)
     g = chosen_grip(ctx, percept, obj)
     if g.axis is None:
@@ -281,7 +289,8 @@ def fingers_along(ctx: Context, direction: np.ndarray) -> np.ndarray:
     return max(turns, key=lambda r: float(np.trace(r.T @ ctx.rotation)))
 
 
-def _rim(ctx: Context, obj: str) -> bool:
+def rim_grasped(ctx: Context, obj: str) -> bool:
+    """Whether ``obj`` is grasped at its rim (``RIM_GRASP``)."""
     return any(word in ctx.categories.get(obj, "") for word in RIM_GRASP)
 
 
@@ -297,7 +306,7 @@ def grasp_point(ctx: Context, percept: LiberoPercept, obj: str) -> np.ndarray:
         return ctx.grasps[obj](percept)[0]
     pos, rot = percept.objects[obj]
     low, high = ctx.scene.extents[obj]
-    if not _rim(ctx, obj):
+    if not rim_grasped(ctx, obj):
         return pos + rot @ chosen_grip(ctx, percept, obj).point
     axis = grasp_rotation(ctx, percept, obj)[:, 1] * np.array([1.0, 1.0, 0.0])
     axis /= np.linalg.norm(axis)
@@ -338,4 +347,4 @@ def _rim_floor(ctx: Context, obj: str) -> float:
 
 def _low_rim(ctx: Context, obj: str) -> bool:
     """Whether ``obj`` is grasped at a rim too low for ``RIM_DEPTH`` (a plate's)."""
-    return _rim(ctx, obj) and ctx.scene.extents[obj][1][2] - RIM_DEPTH < _rim_floor(ctx, obj)
+    return rim_grasped(ctx, obj) and ctx.scene.extents[obj][1][2] - RIM_DEPTH < _rim_floor(ctx, obj)

@@ -11,6 +11,7 @@ from scipy.spatial.transform import Rotation
 
 from osg_control.libero.clearance import HAND_BOXES, carried, footprint, transit_height
 from osg_control.libero.drive import GRIPPER_CLOSED, GRIPPER_OPEN
+from osg_control.libero.edge import pinched
 from osg_control.libero.facts import held, holds, region_pose
 from osg_control.libero.fixtures import door_point, drawer_front, drawer_hand
 from osg_control.libero.grasp import carry_point, grasp_point, grasp_rotation
@@ -148,7 +149,9 @@ def _surface(
     ctx: Context, percept: LiberoPercept, target: str, inside: bool, held_obj: str
 ) -> np.ndarray:
     """The point the held object ``held_obj`` is set down over: an object's top centre, a
-    region's floor centre (``in``), or on a region's top its place in the row it shares
+    region's floor centre (``in``; its box's top for an object pinched at its edge,
+    ``edge``: the tilted hand reaches past its side and caught a basket's wall, the object
+    wedged in it), or on a region's top its place in the row it shares
     with what the goal still puts there (``_row_spot``), else a free spot (``_free_spot``)."""
     if target in percept.objects:
         pos, _ = percept.objects[target]
@@ -160,7 +163,8 @@ def _surface(
         spot = (_row_spot(ctx, percept, pos, held_obj, coming) if coming else
                 _free_spot(ctx, percept, pos, half[:2], held_obj))  # fmt: skip
         pos = np.r_[spot[:2], pos[2]]
-    return pos + np.array([0.0, 0.0, -half[2] if inside else half[2]])
+    floor = inside and not pinched(ctx, held_obj)
+    return pos + np.array([0.0, 0.0, -half[2] if floor else half[2]])
 
 
 def _still_to_come(ctx: Context, percept: LiberoPercept, target: str, held_obj: str) -> list[str]:

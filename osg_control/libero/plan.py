@@ -2,10 +2,12 @@
 
 from __future__ import annotations
 
+from osg_control.errors import PlanningError
 from osg_control.libero.operators import libero_domain
 from osg_control.libero.pddl_export import check_goals, to_pddl
 from osg_control.libero.problem import LiberoProblem
 from osg_control.planning.api import solve
+from osg_control.planning.grounding import ground
 from osg_control.planning.task import NO_LIMITS, PlanResult, SearchLimits
 
 
@@ -22,3 +24,14 @@ def plan_task(
     check_goals([problem])
     domain = libero_domain([problem])
     return solve(domain, to_pddl(problem, domain), planner, limits=limits)
+
+
+def plan_holds(problem: LiberoProblem, steps: list[tuple[str, tuple[str, ...]]]) -> bool:
+    """Whether ``steps`` (operator, arguments), applied in order from the task's init, are
+    each applicable and reach its goal (a plan the executor reordered)."""
+    domain = libero_domain([problem])
+    task = ground(domain, to_pddl(problem, domain))
+    try:
+        return task.is_goal(task.simulate(" ".join([op, *args]) for op, args in steps))
+    except PlanningError:
+        return False
