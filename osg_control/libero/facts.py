@@ -16,7 +16,7 @@ import numpy as np
 
 from osg_control.libero.perception import LiberoPercept
 from osg_control.libero.problem import Atom, LiberoProblem
-from osg_control.libero.scene import Scene
+from osg_control.libero.scene import HANDLE_DEPTH, Joint, Scene
 
 ON_RADIUS = 0.03
 """LIBERO's ``On`` on an object: the origins within 3 cm in xy."""
@@ -42,6 +42,32 @@ def region_pose(scene: Scene, percept: LiberoPercept, name: str) -> tuple[np.nda
         return box.pos, box.mat
     joint = scene.joints[box.joint]
     return box.pos + joint.axis * (percept.joint(joint.name) - joint.q0), box.mat
+
+
+def handle_at(scene: Scene, joint: Joint, q: float) -> np.ndarray:
+    """A drawer's handle (its centre) when its joint is at ``q``."""
+    return scene.handles[joint.name] + joint.axis * (q - joint.q0)
+
+
+def room(scene: Scene, percept: LiberoPercept, region: str) -> tuple[float, float]:
+    """The stretch of the drawer ``region`` open from above at its sensed travel, as
+    (back, front) along its pull: from the region's front edge back to the front of the
+    handles of the drawers above it (at their sensed travel) or of its own handle shut
+    (the cabinet's front), whichever stands further out (a handle's front taken
+    ``HANDLE_DEPTH`` before its centre), or to the region's back edge."""
+    box = scene.regions[region]
+    joint = scene.joints[str(box.joint)]
+    out = joint.axis * joint.opening
+    pos, mat = region_pose(scene, percept, region)
+    half = float(np.abs(mat @ box.size) @ np.abs(out))
+    own = scene.handles[joint.name][2]
+    above = [scene.joints[str(r.joint)] for r in scene.regions.values()
+             if r.parent == box.parent and r.joint is not None and r.joint != box.joint
+             and scene.handles[str(r.joint)][2] > own]  # fmt: skip
+    fronts = [handle_at(scene, joint, joint.shut) @ out]
+    fronts += [handle_at(scene, j, percept.joint(j.name)) @ out for j in above]
+    back = max(float(max(fronts)) + HANDLE_DEPTH, float(pos @ out) - half)
+    return back, float(pos @ out) + half
 
 
 def held(scene: Scene, percept: LiberoPercept, obj: str) -> bool:

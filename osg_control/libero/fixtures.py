@@ -10,6 +10,7 @@ import numpy as np
 from scipy.spatial.transform import Rotation
 
 from osg_control.libero.drive import GRIPPER_CLOSED, GRIPPER_OPEN
+from osg_control.libero.facts import handle_at
 from osg_control.libero.grasp import fingers_along
 from osg_control.libero.legs import HOVER, Context, Leg, here, hold, up
 from osg_control.libero.perception import LiberoPercept
@@ -74,17 +75,12 @@ def _level(rotation: np.ndarray, out: np.ndarray) -> np.ndarray:
     return max(tilts, key=lambda r: float(r[:, 2] @ -out))
 
 
-def _handle(ctx: Context, percept: LiberoPercept, joint: Joint, q: float) -> np.ndarray:
-    """A drawer's handle when its joint is at ``q``."""
-    return ctx.scene.handles[joint.name] + joint.axis * (q - joint.q0)
-
-
 def drawer_front(ctx: Context, percept: LiberoPercept, region: str) -> np.ndarray:
     """The point ``PULL_STANDOFF`` in front of a drawer's handle at its sensed travel: where
     the empty hand approaches a drawer (``pick_place.approach``, ``HOVER`` above it)."""
     joint = ctx.scene.joints[ctx.scene.articulated[region][0]]
     out = joint.axis * joint.opening
-    return _handle(ctx, percept, joint, percept.joint(joint.name)) + out * PULL_STANDOFF
+    return handle_at(ctx.scene, joint, percept.joint(joint.name)) + out * PULL_STANDOFF
 
 
 def drawer_hand(ctx: Context, region: str) -> np.ndarray:
@@ -117,22 +113,22 @@ def drawer(ctx: Context, region: str, opening: bool) -> list[Leg]:
                 GRIPPER_OPEN, 40, 0.02, transit=True),
             Leg(lambda now, s: (drawer_front(ctx, s, region), level), GRIPPER_OPEN, 40, 0.01,
                 transit=True),
-            Leg(lambda now, s: (_handle(ctx, s, joint, sensed(s)) - out * PINCH_REACH, level),
+            Leg(lambda now, s: (handle_at(ctx.scene, joint, sensed(s)) - out * PINCH_REACH, level),
                 GRIPPER_OPEN, 40, PINCH_REACH),
             hold(GRIPPER_CLOSED, 12),
-            Leg(lambda now, s: (_handle(ctx, now, joint, goal), level), GRIPPER_CLOSED, 60,
+            Leg(lambda now, s: (handle_at(ctx.scene, joint, goal), level), GRIPPER_CLOSED, 60,
                 0.01, lambda p: joint.is_active(sensed(p) - joint.opening * DRAWER_MARGIN)),
             hold(GRIPPER_OPEN, 8),
             Leg(here(tuple(out * PUSH_STANDOFF)), GRIPPER_OPEN, 20, 0.02),
         ]  # fmt: skip
     shut = joint.shut
     across = pitched(across, -out)
-    front = lambda now, q: _handle(ctx, now, joint, q) + out * PUSH_STANDOFF  # noqa: E731
+    front = lambda now, q: handle_at(ctx.scene, joint, q) + out * PUSH_STANDOFF  # noqa: E731
     return [
         Leg(lambda now, s: (front(now, sensed(s)) + [0, 0, HOVER], across), GRIPPER_CLOSED,
             40, 0.02),
         Leg(lambda now, s: (front(now, sensed(s)), across), GRIPPER_CLOSED, 30, 0.015),
-        Leg(lambda now, s: (_handle(ctx, now, joint, shut) - out * 0.03, across),
+        Leg(lambda now, s: (handle_at(ctx.scene, joint, shut) - out * 0.03, across),
             GRIPPER_CLOSED, 60, 0.035),
         Leg(here(tuple(out * PUSH_STANDOFF)), GRIPPER_CLOSED, 20, 0.02),
     ]  # fmt: skip

@@ -12,7 +12,7 @@ from scipy.spatial.transform import Rotation
 from osg_control.libero.clearance import HAND_BOXES, carried, footprint, transit_height
 from osg_control.libero.drive import GRIPPER_CLOSED, GRIPPER_OPEN
 from osg_control.libero.edge import pinched
-from osg_control.libero.facts import held, holds, region_pose
+from osg_control.libero.facts import held, holds, region_pose, room
 from osg_control.libero.fixtures import door_point, drawer_front, drawer_hand
 from osg_control.libero.grasp import carry_point, grasp_point, grasp_rotation
 from osg_control.libero.legs import HOVER, Context, Leg, hold, up
@@ -151,8 +151,10 @@ def _surface(
     """The point the held object ``held_obj`` is set down over: an object's top centre, a
     region's floor centre (``in``; its box's top for an object pinched at its edge,
     ``edge``: the tilted hand reaches past its side and caught a basket's wall, the object
-    wedged in it), or on a region's top its place in the row it shares
-    with what the goal still puts there (``_row_spot``), else a free spot (``_free_spot``)."""
+    wedged in it; in a drawer, the middle of its ``facts.room`` along its pull: the part
+    under the cabinet's front or the handles above is not reached from above), or on a
+    region's top its place in the row it shares with what the goal still puts there
+    (``_row_spot``), else a free spot (``_free_spot``)."""
     if target in percept.objects:
         pos, _ = percept.objects[target]
         return pos + np.array([0.0, 0.0, ctx.scene.extents[target][1][2]])
@@ -163,6 +165,10 @@ def _surface(
         spot = (_row_spot(ctx, percept, pos, held_obj, coming) if coming else
                 _free_spot(ctx, percept, pos, half[:2], held_obj))  # fmt: skip
         pos = np.r_[spot[:2], pos[2]]
+    elif ctx.scene.regions[target].joint is not None:
+        joint = ctx.scene.joints[str(ctx.scene.regions[target].joint)]
+        out = joint.axis * joint.opening
+        pos = pos + out * (sum(room(ctx.scene, percept, target)) / 2 - pos @ out)
     floor = inside and not pinched(ctx, held_obj)
     return pos + np.array([0.0, 0.0, -half[2] if floor else half[2]])
 
