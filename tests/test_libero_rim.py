@@ -6,6 +6,8 @@ outside it."""
 
 from __future__ import annotations
 
+from dataclasses import replace
+
 import numpy as np
 import pytest
 
@@ -15,7 +17,9 @@ from osg_control.libero.drive import JointTargetDriver  # noqa: E402
 from osg_control.libero.env import LiberoEnv  # noqa: E402
 from osg_control.libero.grasp import (  # noqa: E402
     FINGER_HALF,
+    REDECIDE,
     RIM_INSET,
+    _in_drawer,
     grasp_point,
     grasp_rotation,
     turned_from_start,
@@ -101,3 +105,29 @@ def test_a_bowl_on_the_table_keeps_the_rim_inset() -> None:
     """LIBERO-Goal task 3's bowl (on the table, bound for a drawer) keeps ``RIM_INSET``."""
     ctx, percept = _context("libero_goal", 3)
     assert _inset(ctx, percept) == pytest.approx(RIM_INSET, abs=1e-6)
+
+
+def _drawer_shut_by(ctx: Context, percept: LiberoPercept, shift: float) -> LiberoPercept:
+    """``percept`` with the reading of the drawer the bowl is in moved ``shift`` toward
+    shut (the drawer's region then leaves the bowl)."""
+    fixtures = dict(percept.fixtures)
+    for region in ctx.scene.regions.values():
+        if region.joint is not None and region.name.endswith("top_region"):
+            joint = ctx.scene.joints[str(region.joint)]
+            reading = fixtures[joint.name]
+            fixtures[joint.name] = replace(reading, value=reading.value - shift * joint.opening)
+    return replace(percept, fixtures=fixtures)
+
+
+def test_a_bowl_seen_in_a_drawer_stays_in_it_until_it_moves() -> None:
+    """LIBERO-Spatial task 4: once perceived in the drawer, a reading that puts it out (the
+    sensor's noise near the region's edge) does not flip the grasp's rule back; the bowl
+    moved ``REDECIDE`` or more is decided again."""
+    ctx, percept = _context("libero_spatial", 4, settle=10)
+    out = _drawer_shut_by(ctx, percept, 0.2)
+    assert not _in_drawer(ctx, out, BOWL)  # the shifted reading alone: out of the drawer
+    assert _in_drawer(ctx, percept, BOWL)
+    assert _in_drawer(ctx, out, BOWL)  # seen in it, not moved since
+    pos, rot = out.objects[BOWL]
+    moved = replace(out, objects={**out.objects, BOWL: (pos + [0.0, 2 * REDECIDE, 0.0], rot)})
+    assert not _in_drawer(ctx, moved, BOWL)

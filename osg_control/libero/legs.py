@@ -108,6 +108,9 @@ class Context:
         otherwise: ``grasp.chosen_grip``)."""
         self.grips: dict[str, Any] = {}
         """The grasp chosen per object, with the attempt and where it was (``grasp``)."""
+        self.drawered: dict[str, tuple[np.ndarray, bool]] = {}
+        """Per object, where it was when last seen to move and whether it has been
+        perceived in a drawer since (``grasp``)."""
 
     @classmethod
     def at_start(
