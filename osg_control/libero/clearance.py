@@ -116,6 +116,18 @@ def fixture_clearance(
     return _hand_gap(tcp, along, obstacles)
 
 
+def box_clearance(
+    tcp: np.ndarray, along: np.ndarray, boxes: list[tuple[np.ndarray, np.ndarray]]
+) -> float:
+    """``hand_clearance`` against world boxes (lower, upper corners) that rise above the
+    hand's lower faces."""
+    obstacles = []
+    for low, high in boxes:
+        corners = np.array([[low[0], low[1]], [low[0], high[1]], [high[0], low[1]], high[:2]])
+        obstacles.append((corners, float(high[2])))
+    return _hand_gap(tcp, along, obstacles)
+
+
 def _hand_gap(
     tcp: np.ndarray, along: np.ndarray, obstacles: list[tuple[np.ndarray, float]]
 ) -> float:

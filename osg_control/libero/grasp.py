@@ -16,6 +16,7 @@ from scipy.spatial.transform import Rotation
 from osg_control.libero.clearance import HAND_BOXES, fixture_clearance, hand_clearance
 from osg_control.libero.facts import holds
 from osg_control.libero.legs import Context
+from osg_control.libero.overhang import lean
 from osg_control.libero.perception import LiberoPercept
 from osg_control.libero.problem import Atom
 
@@ -228,7 +229,8 @@ def _rim_rotation(ctx: Context, percept: LiberoPercept, obj: str) -> np.ndarray:
     """A rim grasp's hand: its long side across the reach (the fingers along it) when
     ``obj`` is perceived in a drawer or the goal puts it into one (the hand then fits under
     the cabinet's top: turned the other way it stalled 3 cm above a bowl in the top drawer,
-    LIBERO-Spatial task 4, 0 / 50), else
+    LIBERO-Spatial task 4, 0 / 50; leaning away from a drawer over it, ``overhang.lean``),
+    else
     whichever of that and the fingers across the reach turns the hand less from the start:
     turning a bowl's grasp a quarter turn in place took the approach's 90 steps, and the
     pick repeated it (LIBERO-Goal tasks 1, 4, 8, the bowl, out of their 300 steps)."""
@@ -237,7 +239,7 @@ def _rim_rotation(ctx: Context, percept: LiberoPercept, obj: str) -> np.ndarray:
     into = any(a.predicate == "in" and a.args[0] == obj and a.args[1] in _drawers(ctx)
                for a in ctx.goal)  # fmt: skip
     if into or _in_drawer(ctx, percept, obj):
-        return along
+        return lean(ctx, percept, obj, along)
     across = fingers_along(ctx, np.array([-reach[1], reach[0], 0.0]))
     return min((along, across), key=lambda r: abs(turned_from_start(ctx, r)))
 

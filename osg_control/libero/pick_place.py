@@ -16,6 +16,7 @@ from osg_control.libero.facts import held, holds, region_pose, room
 from osg_control.libero.fixtures import door_point, drawer_front, drawer_hand
 from osg_control.libero.grasp import carry_point, grasp_point, grasp_rotation
 from osg_control.libero.legs import HOVER, Context, Leg, hold, up
+from osg_control.libero.overhang import lean_hover, leaning, slide
 from osg_control.libero.perception import LiberoPercept
 
 TURN_FIRST = 0.4
@@ -76,14 +77,18 @@ def approach(ctx: Context, thing: str, holding: str | None) -> list[Leg]:
     to pass ``HELD_CLEARANCE`` above the target's anchor, and then straight up to that
     height first: on the way a bottle hung from its neck caught on the wine rack). On the
     way the hand (and what it holds) keeps clear above the objects it passes
-    (``clearance.transit_height``), going straight up first where it is below that."""
+    (``clearance.transit_height``), going straight up first where it is below that. A
+    hand leaning under a drawer hovers back along its own axis (``overhang.lean_hover``)."""
 
     def goal(now: LiberoPercept) -> tuple[np.ndarray, np.ndarray | None]:
         point = anchor(ctx, now, thing, holding is not None)
         if holding is None and thing in now.objects:  # above the object's top
             top = now.position(thing)[2] + ctx.scene.extents[thing][1][2]
             hover = np.r_[point[:2], max(point[2] + HOVER, top + TOP_CLEARANCE)]
-            return hover, grasp_rotation(ctx, now, thing)
+            rot = grasp_rotation(ctx, now, thing)
+            if thing not in ctx.grasps and leaning(rot):  # along the leaning hand
+                hover = lean_hover(point, float(hover[2]), rot)
+            return hover, rot
         region = ctx.scene.regions.get(thing)
         if holding is None and region is not None and region.joint is not None:
             hover = drawer_front(ctx, now, thing) + np.array([0.0, 0.0, HOVER])
@@ -132,7 +137,8 @@ def retreat(ctx: Context, holding: str | None) -> list[Leg]:
 def pick(ctx: Context, obj: str) -> list[Leg]:
     """Over the grasp point first (``approach``'s hover: nothing to do when the approach
     got there; an approach that ran out of steps made the descent sweep sideways into the
-    object), then down to it, close, lift ``LIFT``."""
+    object), then down to it, close, slide out from under the drawers over it
+    (``overhang.slide``), lift ``LIFT``."""
     return approach(ctx, obj, None) + [
         Leg(
             lambda now, start: (grasp_point(ctx, now, obj), grasp_rotation(ctx, now, obj)),
@@ -141,6 +147,7 @@ def pick(ctx: Context, obj: str) -> list[Leg]:
             DESCENT_TOLERANCE,
         ),
         hold(GRIPPER_CLOSED, CLOSING_STEPS),
+        slide(ctx, obj),
         up(LIFT, GRIPPER_CLOSED),
     ]
 
