@@ -1,7 +1,8 @@
 """A bowl on the table under a drawer pulled out over it (the ``libero`` extra, skipped
 without it; LIBERO-Goal task 3 state 0, the top drawer sensed open): its rim grasp leans
 the hand away from the drawer, and the grasped bowl slides out from under it across the
-fingers before the lift; with the drawer shut, neither (the hand comes straight down)."""
+fingers before the lift; with the drawer shut, neither (the hand comes straight down); a
+bowl beside the open drawer, not under it, is not slid."""
 
 from __future__ import annotations
 
@@ -17,7 +18,12 @@ from osg_control.libero.drive import JointTargetDriver  # noqa: E402
 from osg_control.libero.env import LiberoEnv  # noqa: E402
 from osg_control.libero.grasp import grasp_rotation  # noqa: E402
 from osg_control.libero.legs import Context  # noqa: E402
-from osg_control.libero.overhang import SLIDE_MARGIN, overhangs, slide  # noqa: E402
+from osg_control.libero.overhang import (  # noqa: E402
+    SLIDE_MARGIN,
+    UNDER_MARGIN,
+    overhangs,
+    slide,
+)
 from osg_control.libero.perception import LiberoPercept, LiberoPerception  # noqa: E402
 from osg_control.libero.robot import mounted_panda  # noqa: E402
 
@@ -64,3 +70,31 @@ def test_a_shut_drawer_changes_nothing() -> None:
     assert grasp_rotation(ctx, percept, BOWL)[2, 2] == pytest.approx(-1.0, abs=0.02)
     tcp, _ = slide(ctx, BOWL).target(percept, percept)
     assert np.array_equal(tcp, percept.tcp)
+
+
+def _beside(ctx: Context, percept: LiberoPercept, gap: float) -> LiberoPercept:
+    """``percept`` with the bowl moved straight out from under the drawer over it until its
+    footprint is ``gap`` clear of the drawer's box, seen from above."""
+    low, high = max(overhangs(ctx, percept, BOWL), key=lambda box: float(box[0][2]))
+    box = footprint(ctx, percept, BOWL)
+    away = percept.position(BOWL)[:2] - (low + high)[:2] / 2
+    axis = int(np.argmax(np.abs(away)))
+    side = np.sign(away[axis])
+    edge = high[axis] if side > 0 else low[axis]
+    near = box[0][axis] if side > 0 else box[1][axis]
+    shift = np.zeros(3)
+    shift[axis] = side * (gap - side * (near - edge))
+    pos, rot = percept.objects[BOWL]
+    return dataclasses.replace(percept, objects={**percept.objects, BOWL: (pos + shift, rot)})
+
+
+@pytest.mark.parametrize("gap, slides", [(UNDER_MARGIN / 2, True), (2 * UNDER_MARGIN, False)])
+def test_only_a_bowl_under_a_drawer_is_slid(gap: float, slides: bool) -> None:
+    """A bowl within ``UNDER_MARGIN`` of the open drawer's footprint is slid out; one
+    farther beside it (LIBERO-Spatial task 6's, 2.3-3.5 cm from the cabinet's drawers) is
+    lifted where it stands."""
+    ctx, percept = _scene(-0.16)
+    ctx.rotation = grasp_rotation(ctx, percept, BOWL)
+    moved = _beside(ctx, percept, gap)
+    tcp, _ = slide(ctx, BOWL).target(moved, moved)
+    assert np.array_equal(tcp, moved.tcp) is not slides

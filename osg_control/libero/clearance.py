@@ -36,7 +36,7 @@ def footprint(ctx: Context, percept: LiberoPercept, obj: str) -> np.ndarray:
     return np.array([world.min(axis=0), world.max(axis=0)])
 
 
-def _overlap(a: np.ndarray, b: np.ndarray, margin: float) -> bool:
+def overlap(a: np.ndarray, b: np.ndarray, margin: float) -> bool:
     """Whether two xy boxes (lower, upper) come within ``margin`` of each other."""
     return bool(np.all(a[0] < b[1] + margin) and np.all(b[0] < a[1] + margin))
 
@@ -72,8 +72,8 @@ def transit_height(
         if obj == held:
             continue
         box = footprint(ctx, percept, obj)
-        at_goal = _overlap(box, np.array([goal_xy, goal_xy]), 0.0)
-        if at_goal or not _overlap(box, here, HAND_MARGIN):
+        at_goal = overlap(box, np.array([goal_xy, goal_xy]), 0.0)
+        if at_goal or not overlap(box, here, HAND_MARGIN):
             continue
         top = percept.position(obj)[2] + ctx.scene.extents[obj][1][2]
         floor = max(floor, top + TRANSIT_CLEARANCE + max(drop, 0.0))
@@ -91,7 +91,7 @@ def hand_clearance(
     obstacles = []
     for other in percept.objects:
         box = footprint(ctx, percept, other)
-        if other == obj or _overlap(box, np.array([tcp[:2], tcp[:2]]), 0.0):
+        if other == obj or overlap(box, np.array([tcp[:2], tcp[:2]]), 0.0):
             continue
         top = percept.position(other)[2] + ctx.scene.extents[other][1][2]
         corners = np.array([[box[i][0], box[j][1]] for i in (0, 1) for j in (0, 1)])
