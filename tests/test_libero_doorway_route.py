@@ -14,8 +14,8 @@ import pytest
 
 pytest.importorskip("libero.libero", reason="needs the libero extra: pip install -e .[libero]")
 
-from osg_control.libero.drive import JointTargetDriver  # noqa: E402
-from osg_control.libero.env import LiberoEnv  # noqa: E402
+from libero_start import episode_start  # noqa: E402
+
 from osg_control.libero.insert import (  # noqa: E402
     PUSH_DEEPEST,
     approach,
@@ -24,9 +24,6 @@ from osg_control.libero.insert import (  # noqa: E402
     insert,
     opening,
 )
-from osg_control.libero.legs import Context  # noqa: E402
-from osg_control.libero.perception import LiberoPerception  # noqa: E402
-from osg_control.libero.robot import mounted_panda  # noqa: E402
 
 REGION = "microwave_1_heating_region"
 
@@ -75,15 +72,8 @@ def test_the_doorway_is_centred_on_the_opening_between_the_walls(suite: str) -> 
 
 
 def _first(suite: str):
-    env = LiberoEnv(suite, 9)
-    try:
-        obs = env.reset(0)
-        scene, percept = LiberoPerception(env).reset(obs, 0)
-        robot = mounted_panda(env.sim)
-    finally:
-        env.close()
-    ctx = Context.at_start(scene, JointTargetDriver(robot), robot, percept, env.problem)
-    return scene, percept, ctx
+    start = episode_start(suite, 9)
+    return start.ctx.scene, start.percept, start.ctx
 
 
 def test_a_push_that_arrives_aims_further_in() -> None:

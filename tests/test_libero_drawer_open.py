@@ -11,13 +11,11 @@ import pytest
 
 pytest.importorskip("libero.libero", reason="needs the libero extra: pip install -e .[libero]")
 
+from libero_start import episode_start, started  # noqa: E402
+
 from osg_control.libero.controllers import operator_legs  # noqa: E402
-from osg_control.libero.drive import JointTargetDriver  # noqa: E402
-from osg_control.libero.env import LiberoEnv  # noqa: E402
 from osg_control.libero.executor import PlanExecutor  # noqa: E402
 from osg_control.libero.legs import Context  # noqa: E402
-from osg_control.libero.perception import LiberoPerception  # noqa: E402
-from osg_control.libero.robot import mounted_panda  # noqa: E402
 
 REGION = "white_cabinet_1_bottom_region"
 
@@ -28,16 +26,10 @@ def test_a_drawer_opened_next_is_approached_with_the_hand_the_open_takes() -> No
     plan), with the open's level hand, and the open's legs in free space (the turn, the
     way down in front of the handle) run at the transit pace. The plan executor marks the
     drawers it approaches to open next."""
-    env = LiberoEnv("libero_10", 3)
-    try:
-        obs = env.reset(0)
-        scene, percept = LiberoPerception(env).reset(obs, 0)
-        robot = mounted_panda(env.sim)
-        ctx = Context.at_start(scene, JointTargetDriver(robot), robot, percept, env.problem)
-        executor = PlanExecutor()
-        executor.start(env.problem, robot, scene, percept)
-    finally:
-        env.close()
+    start = episode_start("libero_10", 3)
+    ctx, percept = start.ctx, start.percept
+    executor = PlanExecutor()
+    executor.start(start.problem, start.robot, ctx.scene, percept)
 
     def approached(c: Context) -> np.ndarray:  # the approach's last leg's rotation
         return operator_legs(c, "approach", (REGION,), None)[-1].target(percept, percept)[1]
@@ -54,12 +46,5 @@ def test_a_drawer_opened_next_is_approached_with_the_hand_the_open_takes() -> No
 def test_the_executor_marks_the_drawer_it_opens_next() -> None:
     """LIBERO-Goal task 0 (open the middle drawer), state 0: its plan approaches the
     middle drawer to open it."""
-    env = LiberoEnv("libero_goal", 0)
-    try:
-        obs = env.reset(0)
-        scene, percept = LiberoPerception(env).reset(obs, 0)
-        executor = PlanExecutor()
-        executor.start(env.problem, mounted_panda(env.sim), scene, percept)
-    finally:
-        env.close()
+    executor, _ = started("libero_goal", 0)
     assert executor.ctx.opening == frozenset({"wooden_cabinet_1_middle_region"})

@@ -10,13 +10,10 @@ import pytest
 
 pytest.importorskip("libero.libero", reason="needs the libero extra: pip install -e .[libero]")
 
-from osg_control.libero.drive import JointTargetDriver  # noqa: E402
-from osg_control.libero.env import LiberoEnv  # noqa: E402
+from libero_start import episode_start  # noqa: E402
+
 from osg_control.libero.facts import region_pose  # noqa: E402
-from osg_control.libero.legs import Context  # noqa: E402
-from osg_control.libero.perception import LiberoPerception  # noqa: E402
 from osg_control.libero.pick_place import place  # noqa: E402
-from osg_control.libero.robot import mounted_panda  # noqa: E402
 
 DRAWER = "white_cabinet_1_bottom_region"
 BOWL = "akita_black_bowl_1"
@@ -27,14 +24,8 @@ def test_the_bowl_goes_in_front_of_the_handles_above() -> None:
     region's centre (its far side then clears the handle above: its front, 1.7 cm before
     its centre, stands 2.7 cm further out than the far side at the centre), and its near
     side reaches at most 5 mm over the drawer's front edge (it lacks 6 mm of room)."""
-    env = LiberoEnv("libero_10", 3)
-    try:
-        obs = env.reset(13)
-        scene, percept = LiberoPerception(env).reset(obs, 13)
-        robot = mounted_panda(env.sim)
-        ctx = Context.at_start(scene, JointTargetDriver(robot), robot, percept, env.problem)
-    finally:
-        env.close()
+    start = episode_start("libero_10", 3, 13)
+    ctx, percept, scene = start.ctx, start.percept, start.ctx.scene
     joint = scene.joints[str(scene.regions[DRAWER].joint)]
     out = joint.axis * joint.opening  # the drawer's pull, out of the cabinet
     tcp, _ = place(ctx, BOWL, DRAWER, True)[1].target(percept, percept)

@@ -12,31 +12,17 @@ import pytest
 
 pytest.importorskip("libero.libero", reason="needs the libero extra: pip install -e .[libero]")
 
+from libero_start import started  # noqa: E402
+
 from osg_control import cli  # noqa: E402
 from osg_control.libero.edge import EDGE_DEPTH, EDGE_TILT, pinched, pinched_last  # noqa: E402
-from osg_control.libero.env import LiberoEnv  # noqa: E402
 from osg_control.libero.executor import PlanExecutor  # noqa: E402
 from osg_control.libero.facts import region_pose  # noqa: E402
-from osg_control.libero.perception import LiberoPercept, LiberoPerception  # noqa: E402
 from osg_control.libero.pick_place import _surface  # noqa: E402
 from osg_control.libero.plan import plan_holds  # noqa: E402
-from osg_control.libero.robot import mounted_panda  # noqa: E402
 
 CAN = "bigger_alphabet_soup_1"
 BASKET = "red_basket_1_contain_region"
-
-
-def _started(suite: str, task: int) -> tuple[PlanExecutor, LiberoPercept]:
-    """The plan executor started on ``suite``'s ``task``, initial state 0, and its percept."""
-    env = LiberoEnv(suite, task)
-    try:
-        obs = env.reset(0)
-        scene, percept = LiberoPerception(env).reset(obs, 0)
-        policy = PlanExecutor()
-        policy.start(env.problem, mounted_panda(env.sim), scene, percept)
-    finally:
-        env.close()
-    return policy, percept
 
 
 def _picked(policy: PlanExecutor) -> list[str]:
@@ -49,7 +35,7 @@ def test_the_wide_can_is_pinched_across_its_top_edge() -> None:
     tilted ``EDGE_TILT``, its palm out and up, the TCP inside the can's footprint
     ``EDGE_DEPTH / 2`` below its top, the fingers closing in the vertical plane through the
     can's axis."""
-    policy, percept = _started("libero_10_object", 7)
+    policy, percept = started("libero_10_object", 7)
     ctx = policy.ctx
     assert set(ctx.grasps) == {CAN}
     assert [o for o in _picked(policy) if pinched(ctx, o)] == [CAN]
@@ -68,7 +54,7 @@ def test_the_wide_can_is_pinched_across_its_top_edge() -> None:
 def test_a_pinched_object_is_released_above_the_region() -> None:
     """Into the basket, the can is set down over the region's box (the tilted hand reaches
     past its side), the tomato sauce on its floor as before."""
-    policy, percept = _started("libero_10_object", 0)
+    policy, percept = started("libero_10_object", 0)
     ctx = policy.ctx
     pos, mat = region_pose(ctx.scene, percept, BASKET)
     half = np.abs(mat @ ctx.scene.regions[BASKET].size)
@@ -82,7 +68,7 @@ def test_the_pinched_object_goes_into_the_region_last() -> None:
     cream cheese first (the cheese on the can's top stood outside the basket's region), the
     hand going home between, and still reaches the goal; a plan with no pinched object is
     left as it is."""
-    policy, _ = _started("libero_10_object", 7)
+    policy, _ = started("libero_10_object", 7)
     queue = policy.queue
     assert _picked(policy) == ["red_cream_cheese_1", CAN]
     assert queue[5] == ("retreat", (BASKET,)) and queue[6] == ("approach", (CAN,))
@@ -99,7 +85,7 @@ def test_the_pinched_object_goes_into_the_region_last() -> None:
 def test_objects_a_grasp_closes_round_are_not_pinched(suite: str, task: int) -> None:
     """LIBERO-10's soup can and LIBERO-Object's objects keep their top-down grasps, and so
     does LIBERO-Goal's plate (wider than the hand, too low for the pinch)."""
-    policy, _ = _started(suite, task)
+    policy, _ = started(suite, task)
     assert _picked(policy) and not [o for o in _picked(policy) if pinched(policy.ctx, o)]
     assert not policy.ctx.grasps
 

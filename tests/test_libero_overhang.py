@@ -13,9 +13,9 @@ import pytest
 
 pytest.importorskip("libero.libero", reason="needs the libero extra: pip install -e .[libero]")
 
+from libero_start import episode_start  # noqa: E402
+
 from osg_control.libero.clearance import footprint  # noqa: E402
-from osg_control.libero.drive import JointTargetDriver  # noqa: E402
-from osg_control.libero.env import LiberoEnv  # noqa: E402
 from osg_control.libero.grasp import grasp_rotation  # noqa: E402
 from osg_control.libero.legs import Context  # noqa: E402
 from osg_control.libero.overhang import (  # noqa: E402
@@ -24,22 +24,15 @@ from osg_control.libero.overhang import (  # noqa: E402
     overhangs,
     slide,
 )
-from osg_control.libero.perception import LiberoPercept, LiberoPerception  # noqa: E402
-from osg_control.libero.robot import mounted_panda  # noqa: E402
+from osg_control.libero.perception import LiberoPercept  # noqa: E402
 
 BOWL = "akita_black_bowl_1"
 JOINT = "wooden_cabinet_1_top_level"
 
 
 def _scene(travel: float) -> tuple[Context, LiberoPercept]:
-    env = LiberoEnv("libero_goal", 3)
-    try:
-        obs = env.reset(0)
-        scene, percept = LiberoPerception(env).reset(obs, 0)
-        robot = mounted_panda(env.sim)
-        ctx = Context.at_start(scene, JointTargetDriver(robot), robot, percept, env.problem)
-    finally:
-        env.close()
+    start = episode_start("libero_goal", 3)
+    ctx, percept = start.ctx, start.percept
     fixtures = dict(percept.fixtures)
     fixtures[JOINT] = dataclasses.replace(fixtures[JOINT], value=travel)
     return ctx, dataclasses.replace(percept, fixtures=fixtures)

@@ -10,9 +10,9 @@ import pytest
 
 pytest.importorskip("libero.libero", reason="needs the libero extra: pip install -e .[libero]")
 
+from libero_start import episode_start  # noqa: E402
+
 from osg_control.libero.clearance import HAND_BOXES, fixture_clearance  # noqa: E402
-from osg_control.libero.drive import JointTargetDriver  # noqa: E402
-from osg_control.libero.env import LiberoEnv  # noqa: E402
 from osg_control.libero.grasp import (  # noqa: E402
     GRASP_CLEARANCE,
     RIM_FLOOR,
@@ -20,10 +20,7 @@ from osg_control.libero.grasp import (  # noqa: E402
     grasp_point,
     grasp_rotation,
 )
-from osg_control.libero.legs import Context  # noqa: E402
-from osg_control.libero.perception import LiberoPerception  # noqa: E402
 from osg_control.libero.pick_place import anchor  # noqa: E402
-from osg_control.libero.robot import mounted_panda  # noqa: E402
 
 PLATE = "plate_1"
 
@@ -34,14 +31,8 @@ def test_a_plate_is_grasped_at_its_rim_nearer_the_arm() -> None:
     on the fingers' axis where the open hand stands clear of the cabinet's boxes (on the
     other it reaches under the cabinet's front), the fingertips ``RIM_FLOOR`` above the
     plate's bottom; carrying something, the hand still makes for its middle."""
-    env = LiberoEnv("libero_goal", 5)
-    try:
-        obs = env.reset(0)
-        scene, percept = LiberoPerception(env).reset(obs, 0)
-        robot = mounted_panda(env.sim)
-        ctx = Context.at_start(scene, JointTargetDriver(robot), robot, percept, env.problem)
-    finally:
-        env.close()
+    start = episode_start("libero_goal", 5)
+    ctx, percept, scene = start.ctx, start.percept, start.ctx.scene
     pos = percept.position(PLATE)
     low, high = scene.extents[PLATE]
     radius = float(min(np.abs(low[:2]).min(), np.abs(high[:2]).min())) - RIM_INSET

@@ -13,8 +13,8 @@ import pytest
 
 pytest.importorskip("libero.libero", reason="needs the libero extra: pip install -e .[libero]")
 
-from osg_control.libero.drive import JointTargetDriver  # noqa: E402
-from osg_control.libero.env import LiberoEnv  # noqa: E402
+from libero_start import episode_start  # noqa: E402
+
 from osg_control.libero.grasp import (  # noqa: E402
     FINGER_HALF,
     REDECIDE,
@@ -25,8 +25,7 @@ from osg_control.libero.grasp import (  # noqa: E402
     turned_from_start,
 )
 from osg_control.libero.legs import Context  # noqa: E402
-from osg_control.libero.perception import LiberoPercept, LiberoPerception  # noqa: E402
-from osg_control.libero.robot import mounted_panda  # noqa: E402
+from osg_control.libero.perception import LiberoPercept  # noqa: E402
 
 BOWL = "akita_black_bowl_1"
 
@@ -34,18 +33,8 @@ BOWL = "akita_black_bowl_1"
 def _context(suite: str, task: int, settle: int = 0) -> tuple[Context, LiberoPercept]:
     """The episode context of ``task``'s initial state 0 and its percept after ``settle``
     steps holding still (the objects come to rest)."""
-    env = LiberoEnv(suite, task)
-    try:
-        obs = env.reset(0)
-        perception = LiberoPerception(env)
-        scene, percept = perception.reset(obs, 0)
-        for _ in range(settle):
-            percept = perception.percept(env.step(np.r_[np.zeros(7), -1.0]))
-        robot = mounted_panda(env.sim)
-        ctx = Context.at_start(scene, JointTargetDriver(robot), robot, percept, env.problem)
-    finally:
-        env.close()
-    return ctx, percept
+    start = episode_start(suite, task, settle=settle)
+    return start.ctx, start.percept
 
 
 def _fingers_along_reach(ctx: Context, percept: LiberoPercept, rotation: np.ndarray) -> float:

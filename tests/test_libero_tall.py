@@ -13,32 +13,16 @@ import pytest
 
 pytest.importorskip("libero.libero", reason="needs the libero extra: pip install -e .[libero]")
 
+from libero_start import started  # noqa: E402
+
 from osg_control import cli  # noqa: E402
 from osg_control.libero.clearance import HAND_BOXES  # noqa: E402
-from osg_control.libero.env import LiberoEnv  # noqa: E402
 from osg_control.libero.executor import PlanExecutor  # noqa: E402
-from osg_control.libero.perception import LiberoPercept, LiberoPerception  # noqa: E402
 from osg_control.libero.pick_place import CARRY_CEILING, HELD_CLEARANCE, approach  # noqa: E402
-from osg_control.libero.robot import mounted_panda  # noqa: E402
 from osg_control.libero.tall import PALM_GAP, neck_grasps  # noqa: E402
 
 BOTTLE = "wine_bottle_1"
 RACK = "wine_rack_1_top_region"
-
-
-def _started(
-    task: int, executor: type[PlanExecutor] = PlanExecutor
-) -> tuple[PlanExecutor, LiberoPercept]:
-    """``executor`` started on LIBERO-Goal ``task``, initial state 0, and its percept."""
-    env = LiberoEnv("libero_goal", task)
-    try:
-        obs = env.reset(0)
-        scene, percept = LiberoPerception(env).reset(obs, 0)
-        policy = executor()
-        policy.start(env.problem, mounted_panda(env.sim), scene, percept)
-    finally:
-        env.close()
-    return policy, percept
 
 
 @pytest.mark.parametrize("task", [2, 9])
@@ -46,7 +30,7 @@ def test_the_bottle_is_grasped_with_the_palm_over_its_top(task: int) -> None:
     """Tasks 2 (the cabinet's top) and 9 (the rack): the plan's grasp of the bottle (set
     before the pick) closes top-down with the palm ``PALM_GAP`` over its top; a place into
     a region, or of an object whose top the palm clears, sets none."""
-    policy, percept = _started(task)
+    policy, percept = started("libero_goal", task)
     ctx = policy.ctx
     assert set(ctx.grasps) == {BOTTLE}
     point, rotation = ctx.grasps[BOTTLE](percept)
@@ -67,7 +51,7 @@ class _LearnedPick(PlanExecutor):
 def test_a_learned_pick_keeps_the_grasp_it_was_recorded_on() -> None:
     """The learned pick was recorded before the neck grasp: it is not given it (task 9
     states 0-2, 0 / 3 with it)."""
-    policy, _ = _started(9, _LearnedPick)
+    policy, _ = started("libero_goal", 9, _LearnedPick)
     assert not policy.ctx.grasps
 
 
@@ -76,7 +60,7 @@ def test_the_carry_keeps_the_held_bottom_clear_of_the_target() -> None:
     ``HELD_CLEARANCE`` above the rack's anchor, above the carry ceiling (under it the
     bottle's bottom hit the rack and it tipped out of the hand), and the hand rises to
     that height before it moves (on the way to the cabinet it caught on the rack)."""
-    policy, percept = _started(9)
+    policy, percept = started("libero_goal", 9)
     ctx = policy.ctx
     pos, rot = percept.objects[BOTTLE]
     hung = replace(percept, tcp=pos + rot @ np.array([0.0, 0.0, 0.127]))  # at the neck
