@@ -245,6 +245,7 @@ def _rim_rotation(ctx: Context, percept: LiberoPercept, obj: str) -> np.ndarray:
 
 
 def _drawers(ctx: Context) -> set[str]:
+    """The scene's drawer regions (a region on a joint)."""
     return {r for r, box in ctx.scene.regions.items() if box.joint is not None}
 
 
