@@ -99,9 +99,9 @@ def out_from_under(
     shift = np.zeros(3)
     for low, high in overhangs(ctx, percept, obj):
         box = footprint(ctx, percept, obj) + shift[:2]
-        lo, hi = low[:2] - SLIDE_MARGIN, high[:2] + SLIDE_MARGIN
-        if not (np.all(box[0] < hi) and np.all(lo < box[1])):
+        if not overlap(box, np.array([low[:2], high[:2]]), SLIDE_MARGIN):
             continue
+        lo, hi = low[:2] - SLIDE_MARGIN, high[:2] + SLIDE_MARGIN
         moves = []
         for sense in (1.0, -1.0):
             d = sense * across[:2]
