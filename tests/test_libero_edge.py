@@ -18,6 +18,7 @@ from osg_control import cli  # noqa: E402
 from osg_control.libero.edge import EDGE_DEPTH, EDGE_TILT, pinched, pinched_last  # noqa: E402
 from osg_control.libero.executor import PlanExecutor  # noqa: E402
 from osg_control.libero.facts import region_pose  # noqa: E402
+from osg_control.libero.operators import PICKS  # noqa: E402
 from osg_control.libero.pick_place import _surface  # noqa: E402
 from osg_control.libero.plan import plan_holds  # noqa: E402
 
@@ -27,7 +28,7 @@ BASKET = "red_basket_1_contain_region"
 
 def _picked(policy: PlanExecutor) -> list[str]:
     """The objects the plan picks."""
-    return [args[0] for op, args in policy.queue if op in ("pick", "pick-out")]
+    return [args[0] for op, args in policy.queue if op in PICKS]
 
 
 def test_the_wide_can_is_pinched_across_its_top_edge() -> None:

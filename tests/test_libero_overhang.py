@@ -73,10 +73,10 @@ def _beside(ctx: Context, percept: LiberoPercept, gap: float) -> LiberoPercept:
     away = percept.position(BOWL)[:2] - (low + high)[:2] / 2
     axis = int(np.argmax(np.abs(away)))
     side = np.sign(away[axis])
-    edge = high[axis] if side > 0 else low[axis]
-    near = box[0][axis] if side > 0 else box[1][axis]
+    edge = high[axis] if side > 0 else low[axis]  # the drawer's side the bowl leaves by
+    near = box[0][axis] if side > 0 else box[1][axis]  # the bowl's side facing it
     shift = np.zeros(3)
-    shift[axis] = side * (gap - side * (near - edge))
+    shift[axis] = edge - near + side * gap
     pos, rot = percept.objects[BOWL]
     return dataclasses.replace(percept, objects={**percept.objects, BOWL: (pos + shift, rot)})
 
