@@ -10,7 +10,9 @@ closed stop, covers: the doorway's plane and its outward normal) and the percept
   (``doorway_grasps``, which the plan executor sets from its plan): top-down on the slice of
   the object furthest out toward the doorway that fits the hand (``outer_grip``: a mug's
   handle), so that the hand stays outside while the object goes in;
-- ``approach`` carries it to in front of the doorway, at the height it goes in at
+- ``approach`` first turns the hand about the vertical until that slice faces out through
+  the doorway (``carry_turn``: a mug's only slice that fits, its handle, may face away
+  from it), then carries it to in front of the doorway, at the height it goes in at
   (``INSERT_LIFT`` above the region's floor);
 - ``insert`` takes it in until the hand reaches the doorway (``ENTRY``), sets it down, lets
   go and backs out until the hand stands ``PUSH_STANDOFF`` outside the object's outer side,
@@ -39,7 +41,16 @@ from osg_control.libero.grasp import (
     slab,
     turned_from_start,
 )
-from osg_control.libero.legs import Context, GraspRule, Leg, Step, Target, first_places, here, hold
+from osg_control.libero.legs import (
+    Context,
+    GraspRule,
+    Leg,
+    Step,
+    Target,
+    first_places,
+    here,
+    hold,
+)
 from osg_control.libero.perception import LiberoPercept
 from osg_control.libero.pick_place import DROP
 from osg_control.libero.scene import Scene
@@ -232,10 +243,34 @@ def reaching_in(ctx: Context, rotation: np.ndarray, way: Doorway) -> np.ndarray:
     return turned if inward else rotation
 
 
+def carry_turn(
+    ctx: Context, rotation: np.ndarray, facing: np.ndarray, way: Doorway
+) -> float | None:
+    """The angle from the start's (``grasp.turned_from_start``) that a top-down hand at
+    ``rotation``, holding an object on its side ``facing`` (horizontal, from the object's
+    origin toward the grasped slice), turns to about the vertical so that the slice faces
+    out through the doorway (its normal); None where that turn leaves the wrist's window
+    (``grasp.in_turn_window``)."""
+    cross = facing[0] * way.normal[1] - facing[1] * way.normal[0]
+    turn = float(np.arctan2(cross, facing[:2] @ way.normal[:2]))
+    now = turned_from_start(ctx, rotation)
+    for end in (now + turn, now + turn - np.sign(turn) * 2 * np.pi):
+        if in_turn_window(end):
+            return end
+    return None
+
+
+def _yawed(angle: float) -> np.ndarray:
+    """The rotation ``angle`` about the vertical."""
+    return Rotation.from_rotvec([0.0, 0.0, angle]).as_matrix()
+
+
 def doorway_grasp(ctx: Context, obj: str, way: Doorway) -> GraspRule:
     """The grasp for taking ``obj`` through ``way``: top-down on ``outer_grip``'s slice,
     chosen at the rule's first use and then kept (a slice chosen anew each step jumped
-    elsewhere when the descending fingers tilted the object)."""
+    elsewhere when the descending fingers tilted the object); of the two hands alike,
+    ``reaching_in``'s unless only the other can turn the slice out through the doorway
+    (``carry_turn``)."""
     chosen: list[tuple[np.ndarray, int]] = []
 
     def rule(percept: LiberoPercept) -> tuple[np.ndarray, np.ndarray]:
@@ -243,7 +278,15 @@ def doorway_grasp(ctx: Context, obj: str, way: Doorway) -> GraspRule:
         if not chosen:
             chosen.append(outer_grip(ctx, obj, rot.T @ way.normal))
         point, axis = chosen[0]
-        return pos + rot @ point, reaching_in(ctx, fingers_along(ctx, rot[:, axis]), way)
+        hand = reaching_in(ctx, fingers_along(ctx, rot[:, axis]), way)
+        other = hand @ np.diag([-1.0, -1.0, 1.0])
+        facing = rot @ point
+        if (
+            carry_turn(ctx, hand, facing, way) is None
+            and carry_turn(ctx, other, facing, way) is not None
+        ):
+            hand = other
+        return pos + rot @ point, hand
 
     return rule
 
@@ -273,9 +316,30 @@ def crosses(start: np.ndarray, end: np.ndarray, low: np.ndarray, high: np.ndarra
     return bool(np.any(np.all((points > low[:2]) & (points < high[:2]), axis=1)))
 
 
+def turn_out(ctx: Context, way: Doorway, holding: str) -> Leg:
+    """Turn the hand in place about the vertical until the grasped slice of ``holding``
+    (where the TCP is from its origin) faces out through the doorway (``carry_turn``, decided
+    once; no turn where it leaves the wrist's window): at most a quarter turn ahead at a time,
+    so that a half turn goes the way the window allows."""
+    end: list[float | None] = []
+
+    def target(now: LiberoPercept, start: LiberoPercept) -> tuple[np.ndarray, np.ndarray]:
+        if not end:
+            end.append(carry_turn(ctx, ctx.rotation, carried(start, holding), way))
+        if end[0] is None:
+            return start.tcp, ctx.rotation
+        yaw = turned_from_start(ctx, ctx.driver.tcp_pose(now.joints)[1])
+        return start.tcp, _yawed(
+            yaw + float(np.clip(end[0] - yaw, -np.pi / 2, np.pi / 2))
+        ) @ ctx.base
+
+    return Leg(target, GRIPPER_CLOSED, 90, 0.03, transit=True)
+
+
 def approach(ctx: Context, region: str, holding: str) -> list[Leg]:
-    """Carry ``holding`` to in front of the doorway into ``region``: its inner side
-    ``OUTSIDE`` out of the plane, its bottom ``INSERT_LIFT`` above the region's floor.
+    """Turn ``holding``'s grasped slice out toward the doorway into ``region``
+    (``turn_out``), and carry it to in front of the doorway: its inner side ``OUTSIDE``
+    out of the plane, its bottom ``INSERT_LIFT`` above the region's floor.
     Where its straight way there passes through the door fixture's body
     (``Scene.housings``: the object starts behind or beside it), it goes up until its
     bottom is ``TRANSIT_CLEARANCE`` above the body, over to above the doorway's front (at
@@ -293,7 +357,7 @@ def approach(ctx: Context, region: str, holding: str) -> list[Leg]:
     legs = [Leg(target, GRIPPER_CLOSED, 90, 0.015)]
     housing = ctx.scene.housings.get(ctx.scene.regions[region].parent)
     if housing is None:
-        return legs
+        return [turn_out(ctx, way, holding), *legs]
     route: list[float] = []  # the TCP height that carries the object over the body, or none
 
     def over(now: LiberoPercept) -> float | None:
@@ -317,7 +381,8 @@ def approach(ctx: Context, region: str, holding: str) -> list[Leg]:
     def routed(now: LiberoPercept) -> bool:
         return over(now) is None
 
-    return [Leg(rise, GRIPPER_CLOSED, 40, 0.015, until=routed, transit=True),
+    return [turn_out(ctx, way, holding),
+            Leg(rise, GRIPPER_CLOSED, 40, 0.015, until=routed, transit=True),
             Leg(across, GRIPPER_CLOSED, 90, 0.02, until=routed, transit=True),
             *legs]  # fmt: skip
 
@@ -350,7 +415,7 @@ def insert(ctx: Context, obj: str, region: str) -> list[Leg]:
 
         def target(now: LiberoPercept, start: LiberoPercept) -> tuple[np.ndarray, np.ndarray]:
             if not push_turn:
-                level = reaching_in(ctx, fingers_along(ctx, across), way)
+                level = fingers_along(ctx, across)
                 push_turn.append(pitched(level, -n, PUSH_PITCH))
             origin = now.position(obj)
             side = float(n @ origin) + reach(ctx, now, obj, n) + standoff
