@@ -13,8 +13,6 @@ from osg_control.control.ik_backends import IKConfig  # noqa: E402
 from osg_control.control.robot_model import check_models  # noqa: E402
 from osg_control.libero.drive import (  # noqa: E402
     CAREFUL_DELTA,
-    GRIPPER_CLOSED,
-    GRIPPER_OPEN,
     JOINTS_OBS,
     TURN_STEP,
     JointTargetDriver,
@@ -98,34 +96,6 @@ def test_driver_paces_transit_and_careful_legs() -> None:
     assert np.linalg.norm(moved - pos) < 0.002
     angle = np.arccos(np.clip((np.trace(rot.T @ now) - 1.0) / 2.0, -1.0, 1.0))
     assert TURN_STEP * 0.9 < angle <= TURN_STEP + 1e-6
-
-
-def _sideways_swing(driver: JointTargetDriver, q: np.ndarray, move: np.ndarray, gripper: float):
-    """The largest distance [m] of the TCP from the straight line to ``pos + move`` over a
-    careful leg of 150 steps (joints integrated kinematically), and the error at its end."""
-    start, rot = driver.tcp_pose(q)
-    goal = start + move
-    line = move / np.linalg.norm(move)
-    swing = 0.0
-    for _ in range(150):
-        q = q + driver.action(q, goal, rot, gripper)[:7] * JOINT_DELTA_LIMIT
-        offset = driver.tcp_pose(q)[0] - start
-        swing = max(swing, float(np.linalg.norm(offset - line * (offset @ line))))
-    return swing, float(np.linalg.norm(driver.tcp_pose(q)[0] - goal))
-
-
-@pytest.mark.parametrize("move", [(0.0, 0.0, -0.3), (0.1, 0.05, -0.3), (0.0, 0.2, -0.35)])
-def test_careful_open_leg_keeps_its_line(move: tuple[float, float, float]) -> None:
-    """A careful leg with the gripper open is told ``CAREFUL_REACH`` ahead, so the capped
-    joints keep the motion's direction: its sideways swing is under half of a push's (told
-    the whole error, it presses with it), and both arrive."""
-    robot = libero_panda()
-    driver = JointTargetDriver(robot)
-    q = np.array(robot.home_q)
-    open_swing, open_error = _sideways_swing(driver, q, np.array(move), GRIPPER_OPEN)
-    push_swing, push_error = _sideways_swing(driver, q, np.array(move), GRIPPER_CLOSED)
-    assert open_swing < 0.5 * push_swing
-    assert open_error < 0.001 and push_error < 0.001
 
 
 def test_reach_tool_reports_its_figures() -> None:

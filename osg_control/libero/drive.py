@@ -40,12 +40,6 @@ the descent, LIBERO-10 task 4 state 1)."""
 TURN_STEP = 0.15
 """How far ahead of the hand's rotation the IK is told to turn in one step on a transit
 leg [rad]."""
-CAREFUL_REACH = 0.02
-"""How far ahead of the TCP the IK is told to go in one step on a careful leg with the
-gripper open [m]: told the whole error with its joints at ``CAREFUL_DELTA``, the QP bought
-the step with the motion's direction, and a descent onto LIBERO-Object's soup can swung
-15-17 mm sideways and pushed the can aside (docs/libero.md). A push (gripper closed) is
-still told the whole error: it presses with it."""
 
 
 class PacedLimit(VelocityLimit):
@@ -90,37 +84,27 @@ class JointTargetDriver:
         frame) from the perceived joints (``robot0_joint_pos``), with the gripper command:
         on a leg in free space (``transit``) at the arm's full pace, the IK told at most a
         step's reach and turn ahead (``REACH_STEP``, ``TURN_STEP``); else joint deltas of at
-        most ``CAREFUL_DELTA``, the IK told at most ``CAREFUL_REACH`` ahead with the gripper
-        open and the whole error with it closed (a push presses with it)."""
+        most ``CAREFUL_DELTA``, the IK told the whole error (a push presses with it)."""
         q = np.asarray(joints, dtype=float)
         self._limit.pace = 1.0 if transit else self._careful
         if transit:
-            target_pos, target_rot = self._ahead(q, target_pos, target_rot, REACH_STEP, TURN_STEP)
-        elif gripper == GRIPPER_OPEN:
-            target_pos, target_rot = self._ahead(q, target_pos, target_rot, CAREFUL_REACH)
+            target_pos, target_rot = self._ahead(q, target_pos, target_rot)
         delta = self.ik.step(q, target_pos, target_rot) - q
         return np.r_[np.clip(delta / JOINT_DELTA_LIMIT, -1.0, 1.0), gripper]
 
     def _ahead(
-        self,
-        q: np.ndarray,
-        target_pos: np.ndarray,
-        target_rot: np.ndarray,
-        reach_step: float,
-        turn_step: float | None = None,
+        self, q: np.ndarray, target_pos: np.ndarray, target_rot: np.ndarray
     ) -> tuple[np.ndarray, np.ndarray]:
-        """The target cut to ``reach_step`` [m] and ``turn_step`` [rad] (None: uncut) ahead
-        of the TCP."""
+        """The target cut to ``REACH_STEP`` and ``TURN_STEP`` ahead of the TCP."""
         here, now = self.ik.tcp_pose(q)
-        if turn_step is not None:
-            turn = Rotation.from_matrix(now.T @ target_rot).as_rotvec()
-            angle = float(np.linalg.norm(turn))
-            if angle > turn_step:
-                target_rot = now @ Rotation.from_rotvec(turn * turn_step / angle).as_matrix()
+        turn = Rotation.from_matrix(now.T @ target_rot).as_rotvec()
+        angle = float(np.linalg.norm(turn))
+        if angle > TURN_STEP:
+            target_rot = now @ Rotation.from_rotvec(turn * TURN_STEP / angle).as_matrix()
         reach = np.asarray(target_pos, dtype=float) - here
         distance = float(np.linalg.norm(reach))
-        if distance > reach_step:
-            target_pos = here + reach * reach_step / distance
+        if distance > REACH_STEP:
+            target_pos = here + reach * REACH_STEP / distance
         return target_pos, target_rot
 
     def tcp_pose(self, joints: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
