@@ -95,6 +95,9 @@ PATH_STEP = 0.01
 """Spacing of the points a carried object's way is tested at against a body [m]."""
 PUSH_BITE = 0.02
 """How far inside the object's outer side the push aims, the target moving with it [m]."""
+HALF_TURN = np.diag([-1.0, -1.0, 1.0])
+"""A hand's rotation times this: the same hand turned half a turn about its approach axis
+(the fingers alike)."""
 
 
 @dataclass(frozen=True)
@@ -237,7 +240,7 @@ def reaching_in(ctx: Context, rotation: np.ndarray, way: Doorway) -> np.ndarray:
     fingers alike), the one whose x axis points more into the doorway, where the wrist's
     window (``grasp.TURN_WINDOW``) allows: with the other the arm wound its wrist and
     stalled short of the doorway (LIBERO-10 task 9, state 4)."""
-    turned = rotation @ np.diag([-1.0, -1.0, 1.0])
+    turned = rotation @ HALF_TURN
     allowed = in_turn_window(turned_from_start(ctx, turned))
     inward = allowed and turned[:, 0] @ way.normal < rotation[:, 0] @ way.normal
     return turned if inward else rotation
@@ -279,7 +282,7 @@ def doorway_grasp(ctx: Context, obj: str, way: Doorway) -> GraspRule:
             chosen.append(outer_grip(ctx, obj, rot.T @ way.normal))
         point, axis = chosen[0]
         hand = reaching_in(ctx, fingers_along(ctx, rot[:, axis]), way)
-        other = hand @ np.diag([-1.0, -1.0, 1.0])
+        other = hand @ HALF_TURN
         facing = rot @ point
         if (
             carry_turn(ctx, hand, facing, way) is None
@@ -304,8 +307,8 @@ def doorway_grasps(ctx: Context, steps: list[Step]) -> dict[str, GraspRule]:
 
 def _upright(percept: LiberoPercept, obj: str) -> np.ndarray:
     """``obj``'s perceived rotation less any tilt: its yaw about the vertical."""
-    x = percept.objects[obj][1][:, 0] * np.array([1.0, 1.0, 0.0])
-    return Rotation.from_rotvec([0.0, 0.0, np.arctan2(x[1], x[0])]).as_matrix()
+    x = percept.objects[obj][1][:, 0]
+    return _yawed(float(np.arctan2(x[1], x[0])))
 
 
 def crosses(start: np.ndarray, end: np.ndarray, low: np.ndarray, high: np.ndarray) -> bool:
