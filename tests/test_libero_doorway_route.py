@@ -103,7 +103,7 @@ def test_the_mug_goes_over_the_microwave_only_where_it_is_in_the_way(
     centre = scene.regions[REGION].pos
     assert np.all(low < centre) and np.all(centre < high)  # the body round its heating region
     mug = "white_yellow_mug_1"
-    _turn, rise, over, front = approach(ctx, REGION, mug)
+    _turn, rise, over, *_ = approach(ctx, REGION, mug)
     assert rise.until is not None and rise.until(percept) is (not routed)
     if routed:
         target, _ = rise.target(percept, percept)

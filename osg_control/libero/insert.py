@@ -29,7 +29,13 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.spatial.transform import Rotation
 
-from osg_control.libero.clearance import TRANSIT_CLEARANCE, carried, footprint, hang
+from osg_control.libero.clearance import (
+    TRANSIT_CLEARANCE,
+    carried,
+    footprint,
+    hang,
+    transit_height,
+)
 from osg_control.libero.drive import GRIPPER_CLOSED, GRIPPER_OPEN
 from osg_control.libero.fixtures import pitched
 from osg_control.libero.grasp import (
@@ -342,7 +348,12 @@ def turn_out(ctx: Context, way: Doorway, holding: str) -> Leg:
 def approach(ctx: Context, region: str, holding: str) -> list[Leg]:
     """Turn ``holding``'s grasped slice out toward the doorway into ``region``
     (``turn_out``), and carry it to in front of the doorway: its inner side ``OUTSIDE``
-    out of the plane, its bottom ``INSERT_LIFT`` above the region's floor.
+    out of the plane, its bottom ``INSERT_LIFT`` above the region's floor; first across to
+    the doorway's line, then in along it, its bottom kept ``TRANSIT_CLEARANCE`` over what
+    it passes (``clearance.transit_height``), then down. (Carried diagonally, the hand met
+    a door open less than 90 deg near its leaf's tip and swung it toward shut; straight in
+    at its entry height, the object ran into another standing in front of the doorway:
+    LIBERO-PRO ``_task`` task 9.)
     Where its straight way there passes through the door fixture's body
     (``Scene.housings``: the object starts behind or beside it), it goes up until its
     bottom is ``TRANSIT_CLEARANCE`` above the body, over to above the doorway's front (at
@@ -357,7 +368,22 @@ def approach(ctx: Context, region: str, holding: str) -> list[Leg]:
     def target(now: LiberoPercept, start: LiberoPercept) -> tuple[np.ndarray, None]:
         return front(now) + carried(now, holding), None
 
-    legs = [Leg(target, GRIPPER_CLOSED, 90, 0.015)]
+    sideways = np.cross([0.0, 0.0, 1.0], way.normal)
+
+    def line_up(now: LiberoPercept, start: LiberoPercept) -> tuple[np.ndarray, None]:
+        offset = float(sideways @ (target(now, start)[0] - start.tcp))
+        return start.tcp + sideways * offset, None
+
+    def over_in(now: LiberoPercept, start: LiberoPercept) -> tuple[np.ndarray, None]:
+        point = target(now, start)[0]
+        floor = transit_height(ctx, now, point[:2], holding)
+        return np.r_[point[:2], max(point[2], floor)], None
+
+    legs = [
+        Leg(line_up, GRIPPER_CLOSED, 60, 0.01),
+        Leg(over_in, GRIPPER_CLOSED, 90, 0.015),
+        Leg(target, GRIPPER_CLOSED, 40, 0.015),
+    ]
     housing = ctx.scene.housings.get(ctx.scene.regions[region].parent)
     if housing is None:
         return [turn_out(ctx, way, holding), *legs]
