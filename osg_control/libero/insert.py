@@ -128,6 +128,12 @@ class Doorway:
     centre: np.ndarray
     floor: float
 
+    @property
+    def across(self) -> np.ndarray:
+        """The horizontal unit vector across the doorway (its normal turned a quarter turn
+        counter-clockwise, seen from above)."""
+        return np.cross([0.0, 0.0, 1.0], self.normal)
+
 
 def doorway(scene: Scene, region: str) -> Doorway | None:
     """The doorway into ``region`` when a hinged door (``Scene.leaves``) closes its
@@ -200,7 +206,7 @@ def _origin_at(
 ) -> np.ndarray:
     """The origin that puts ``obj`` at ``depth`` along the normal, its extent centred
     across the doorway on the region's centre, its bottom ``lift`` above the floor."""
-    across = np.cross([0.0, 0.0, 1.0], way.normal)
+    across = way.across
     offset = (reach(ctx, percept, obj, across) - reach(ctx, percept, obj, -across)) / 2
     lateral = float(across @ way.centre) - offset
     bottom = ctx.scene.extents[obj][0][2]
@@ -295,7 +301,7 @@ def doorway_grasp(ctx: Context, obj: str, way: Doorway) -> GraspRule:
             and carry_turn(ctx, other, facing, way) is not None
         ):
             hand = other
-        return pos + rot @ point, hand
+        return pos + facing, hand
 
     return rule
 
@@ -368,11 +374,9 @@ def approach(ctx: Context, region: str, holding: str) -> list[Leg]:
     def target(now: LiberoPercept, start: LiberoPercept) -> tuple[np.ndarray, None]:
         return front(now) + carried(now, holding), None
 
-    sideways = np.cross([0.0, 0.0, 1.0], way.normal)
-
     def line_up(now: LiberoPercept, start: LiberoPercept) -> tuple[np.ndarray, None]:
-        offset = float(sideways @ (target(now, start)[0] - start.tcp))
-        return start.tcp + sideways * offset, None
+        offset = float(way.across @ (target(now, start)[0] - start.tcp))
+        return start.tcp + way.across * offset, None
 
     def over_in(now: LiberoPercept, start: LiberoPercept) -> tuple[np.ndarray, None]:
         point = target(now, start)[0]
@@ -425,7 +429,7 @@ def insert(ctx: Context, obj: str, region: str) -> list[Leg]:
     way = doorway(ctx.scene, region)
     assert way is not None
     n = way.normal
-    across = np.cross([0.0, 0.0, 1.0], n)
+    across = way.across
 
     def entry(now: LiberoPercept, start: LiberoPercept) -> tuple[np.ndarray, None]:
         hand = carried(now, obj)
