@@ -13,7 +13,7 @@ pytest.importorskip("libero.libero", reason="needs the libero extra: pip install
 from libero_start import episode_start  # noqa: E402
 
 from osg_control.libero.facts import region_pose  # noqa: E402
-from osg_control.libero.pick_place import place  # noqa: E402
+from osg_control.libero.spots import surface  # noqa: E402
 
 DRAWER = "white_cabinet_1_bottom_region"
 BOWL = "akita_black_bowl_1"
@@ -28,8 +28,7 @@ def test_the_bowl_goes_in_front_of_the_handles_above() -> None:
     ctx, percept, scene = start.ctx, start.percept, start.ctx.scene
     joint = scene.joints[str(scene.regions[DRAWER].joint)]
     out = joint.axis * joint.opening  # the drawer's pull, out of the cabinet
-    tcp, _ = place(ctx, BOWL, DRAWER, True)[1].target(percept, percept)
-    spot = float((tcp - (percept.tcp - percept.position(BOWL))) @ out)
+    spot = float(surface(ctx, percept, DRAWER, True, BOWL) @ out)
     half = float(np.max(scene.extents[BOWL][1][:2] - scene.extents[BOWL][0][:2])) / 2
     pos, mat = region_pose(scene, percept, DRAWER)
     centre = float(pos @ out)

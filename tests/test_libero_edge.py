@@ -19,8 +19,8 @@ from osg_control.libero.edge import EDGE_DEPTH, EDGE_TILT, pinched, pinched_last
 from osg_control.libero.executor import PlanExecutor  # noqa: E402
 from osg_control.libero.facts import region_pose  # noqa: E402
 from osg_control.libero.operators import PICKS  # noqa: E402
-from osg_control.libero.pick_place import _surface  # noqa: E402
 from osg_control.libero.plan import plan_holds  # noqa: E402
+from osg_control.libero.spots import surface  # noqa: E402
 
 CAN = "bigger_alphabet_soup_1"
 BASKET = "red_basket_1_contain_region"
@@ -59,8 +59,8 @@ def test_a_pinched_object_is_released_above_the_region() -> None:
     ctx = policy.ctx
     pos, mat = region_pose(ctx.scene, percept, BASKET)
     half = np.abs(mat @ ctx.scene.regions[BASKET].size)
-    assert _surface(ctx, percept, BASKET, True, CAN)[2] == pytest.approx(pos[2] + half[2])
-    sauce = _surface(ctx, percept, BASKET, True, "yellow_tomato_sauce_1")
+    assert surface(ctx, percept, BASKET, True, CAN)[2] == pytest.approx(pos[2] + half[2])
+    sauce = surface(ctx, percept, BASKET, True, "yellow_tomato_sauce_1")
     assert sauce[2] == pytest.approx(pos[2] - half[2])
 
 

@@ -17,8 +17,8 @@ from osg_control.libero.env import LiberoEnv  # noqa: E402
 from osg_control.libero.facts import region_pose  # noqa: E402
 from osg_control.libero.legs import Context  # noqa: E402
 from osg_control.libero.perception import LiberoPercept, LiberoPerception  # noqa: E402
-from osg_control.libero.pick_place import _knob_sweeps, place  # noqa: E402
 from osg_control.libero.robot import mounted_panda  # noqa: E402
+from osg_control.libero.spots import _knob_sweeps, surface  # noqa: E402
 
 STOVE = "flat_stove_1_cook_region"
 POT = "moka_pot_1"
@@ -41,9 +41,9 @@ def _scene(suite: str, task: int) -> tuple[LiberoPercept, Context, Context]:
 
 
 def _set_down(ctx: Context, percept: LiberoPercept) -> np.ndarray:
-    """Where ``place`` sets the pot down on the stove (its origin's xy)."""
-    tcp, _ = place(ctx, POT, STOVE, False)[1].target(percept, percept)
-    return (tcp - (percept.tcp - percept.position(POT)))[:2]
+    """Where the pot is set down on the stove (its origin's xy; ``spots.surface``, the first
+    choice, which the arm reaches here)."""
+    return surface(ctx, percept, STOVE, False, POT)[:2]
 
 
 def _knob_gap(ctx: Context, percept: LiberoPercept, spot: np.ndarray) -> float:

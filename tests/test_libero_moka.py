@@ -20,8 +20,8 @@ from osg_control.libero.facts import region_pose  # noqa: E402
 from osg_control.libero.grasp import TOP_GAP, grip, slab  # noqa: E402
 from osg_control.libero.legs import Context  # noqa: E402
 from osg_control.libero.perception import LiberoPercept, LiberoPerception  # noqa: E402
-from osg_control.libero.pick_place import CLEARANCE, place  # noqa: E402
 from osg_control.libero.robot import mounted_panda  # noqa: E402
+from osg_control.libero.spots import CLEARANCE, surface  # noqa: E402
 
 STOVE = "flat_stove_1_cook_region"
 POTS = ("moka_pot_1", "moka_pot_2")
@@ -55,10 +55,9 @@ def test_a_moka_pot_is_grasped_by_its_lid_knob(kitchen) -> None:
 
 
 def _set_down(ctx: Context, percept: LiberoPercept, pot: str) -> np.ndarray:
-    """Where ``place`` sets ``pot`` down on the stove: its origin, from the lowering leg's
-    TCP target less the carried offset."""
-    tcp, _ = place(ctx, pot, STOVE, False)[1].target(percept, percept)
-    return tcp - (percept.tcp - percept.position(pot))
+    """Where ``place`` sets ``pot`` down on the stove: its origin's xy (``spots.surface``:
+    the arm reaches the whole stove here)."""
+    return surface(ctx, percept, STOVE, False, pot)[:2]
 
 
 def _moved(percept: LiberoPercept, obj: str, position: np.ndarray) -> LiberoPercept:
@@ -73,9 +72,9 @@ def test_the_first_pot_leaves_the_second_room(kitchen) -> None:
     centre, mat = region_pose(ctx.scene, percept, STOVE)
     half = np.abs(mat @ ctx.scene.regions[STOVE].size)[:2]
     first = _set_down(ctx, percept, POTS[0])
-    moved = _moved(percept, POTS[0], first)
+    moved = _moved(percept, POTS[0], np.r_[first, percept.position(POTS[0])[2]])
     second = _set_down(ctx, moved, POTS[1])
-    both = _moved(moved, POTS[1], second)
+    both = _moved(moved, POTS[1], np.r_[second, percept.position(POTS[1])[2]])
     a, b = (footprint(ctx, both, pot) for pot in POTS)
     assert float(np.max(np.maximum(a[0] - b[1], b[0] - a[1]))) >= CLEARANCE - 1e-6
     for spot in (first, second):

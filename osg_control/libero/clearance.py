@@ -12,7 +12,7 @@ from __future__ import annotations
 import numpy as np
 
 from osg_control.libero.facts import region_pose
-from osg_control.libero.legs import Context
+from osg_control.libero.legs import Context, yawed
 from osg_control.libero.perception import LiberoPercept
 
 HAND_MARGIN = 0.06
@@ -25,10 +25,13 @@ and the open fingers, each (half-length along the fingers' sliding axis, half-wi
 across it, height of its lower face above the TCP) [m]."""
 
 
-def footprint(ctx: Context, percept: LiberoPercept, obj: str) -> np.ndarray:
+def footprint(ctx: Context, percept: LiberoPercept, obj: str, turn: float = 0.0) -> np.ndarray:
     """An object's perceived footprint: the world xy box (lower, upper) round its
-    collision geometry (a moka pot's handle included)."""
+    collision geometry (a moka pot's handle included), turned ``turn`` [rad] about the
+    vertical through its origin first."""
     pos, rot = percept.objects[obj]
+    if turn:
+        rot = yawed(turn) @ rot
     low, high = ctx.scene.extents[obj]
     corners = np.array([[x, y, z] for x in (low[0], high[0]) for y in (low[1], high[1])
                         for z in (low[2], high[2])])  # fmt: skip

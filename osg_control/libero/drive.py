@@ -107,6 +107,18 @@ class JointTargetDriver:
             target_pos = here + reach * REACH_STEP / distance
         return target_pos, target_rot
 
+    def settle(
+        self, joints: np.ndarray, target_pos: np.ndarray, target_rot: np.ndarray, steps: int
+    ) -> tuple[np.ndarray, np.ndarray]:
+        """The TCP pose the IK ends at, iterated ``steps`` times from ``joints`` toward the
+        target at the arm's full pace with nothing in the way: as near as the arm gets to
+        it from there (no controller, no contacts)."""
+        self._limit.pace = 1.0
+        q = np.asarray(joints, dtype=float)
+        for _ in range(steps):
+            q = self.ik.step(q, target_pos, target_rot)
+        return self.ik.tcp_pose(q)
+
     def tcp_pose(self, joints: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """The TCP pose (position, rotation) of the perceived joints, by forward kinematics."""
         return self.ik.tcp_pose(np.asarray(joints, dtype=float))

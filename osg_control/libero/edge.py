@@ -26,7 +26,7 @@ from osg_control.libero.grasp import (
     fits_hand,
     rim_grasped,
 )
-from osg_control.libero.legs import Context, GraspRule, Step
+from osg_control.libero.legs import Context, GraspRule, Step, yawed
 from osg_control.libero.operators import PICKS
 from osg_control.libero.perception import LiberoPercept
 
@@ -139,7 +139,7 @@ def _pose(
                                   np.r_[lo[0], hi[1], 0.0], np.r_[hi[0], lo[1], 0.0])])  # fmt: skip
     centre = (corners.min(axis=0) + corners.max(axis=0)) / 2
     out = (ctx.base_xy - centre) * np.array([1.0, 1.0, 0.0])
-    out = Rotation.from_rotvec([0.0, 0.0, yaw]).as_matrix() @ (out / np.linalg.norm(out))
+    out = yawed(yaw) @ (out / np.linalg.norm(out))
     radius = float(np.max((corners - centre) @ out))
     top = pos[2] + ctx.scene.extents[obj][1][2]
     edge = np.r_[centre[:2], top] + radius * out

@@ -20,11 +20,10 @@ record exactly what was commanded.
 from __future__ import annotations
 
 import numpy as np
-from scipy.spatial.transform import Rotation
 
 from osg_control.libero.drive import GRIPPER_CLOSED, GRIPPER_OPEN
 from osg_control.libero.grasp import grasp_point, grasp_rotation
-from osg_control.libero.legs import Context
+from osg_control.libero.legs import Context, yawed
 from osg_control.libero.perception import LiberoPercept
 
 OBS_FIELDS = (
@@ -113,6 +112,6 @@ def command(
     action = np.clip(action, -ACTION_SCALE, ACTION_SCALE)
     _, hand = ctx.driver.tcp_pose(percept.joints)
     yaw = _yaw(ctx, hand) + action[3]
-    rotation = Rotation.from_rotvec([0.0, 0.0, yaw]).as_matrix() @ ctx.base
+    rotation = yawed(yaw) @ ctx.base
     gripper = GRIPPER_CLOSED if action[4] > 0 else GRIPPER_OPEN
     return percept.tcp + action[:3], rotation, gripper

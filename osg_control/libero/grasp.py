@@ -15,7 +15,7 @@ from scipy.spatial.transform import Rotation
 
 from osg_control.libero.clearance import HAND_BOXES, fixture_clearance, hand_clearance
 from osg_control.libero.facts import holds
-from osg_control.libero.legs import Context
+from osg_control.libero.legs import Context, yawed
 from osg_control.libero.overhang import lean
 from osg_control.libero.perception import LiberoPercept
 from osg_control.libero.problem import Atom
@@ -73,7 +73,7 @@ TOP_GAP = 0.003
 
 
 def _yaw(rotation: np.ndarray, angle: float) -> np.ndarray:
-    return Rotation.from_rotvec([0.0, 0.0, angle]).as_matrix() @ rotation
+    return yawed(angle) @ rotation
 
 
 @dataclass(frozen=True)

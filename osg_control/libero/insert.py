@@ -56,10 +56,11 @@ from osg_control.libero.legs import (
     first_places,
     here,
     hold,
+    yawed,
 )
 from osg_control.libero.perception import LiberoPercept
-from osg_control.libero.pick_place import DROP
 from osg_control.libero.scene import Scene
+from osg_control.libero.spots import DROP
 
 PUSH_PITCH = np.radians(45.0)
 """How far the hand pushing an object in tilts its approach toward the inside [rad]: its
@@ -275,11 +276,6 @@ def carry_turn(
     return None
 
 
-def _yawed(angle: float) -> np.ndarray:
-    """The rotation ``angle`` about the vertical."""
-    return Rotation.from_rotvec([0.0, 0.0, angle]).as_matrix()
-
-
 def doorway_grasp(ctx: Context, obj: str, way: Doorway) -> GraspRule:
     """The grasp for taking ``obj`` through ``way``: top-down on ``outer_grip``'s slice,
     chosen at the rule's first use and then kept (a slice chosen anew each step jumped
@@ -320,7 +316,7 @@ def doorway_grasps(ctx: Context, steps: list[Step]) -> dict[str, GraspRule]:
 def _upright(percept: LiberoPercept, obj: str) -> np.ndarray:
     """``obj``'s perceived rotation less any tilt: its yaw about the vertical."""
     x = percept.objects[obj][1][:, 0]
-    return _yawed(float(np.arctan2(x[1], x[0])))
+    return yawed(float(np.arctan2(x[1], x[0])))
 
 
 def crosses(start: np.ndarray, end: np.ndarray, low: np.ndarray, high: np.ndarray) -> bool:
@@ -344,7 +340,7 @@ def turn_out(ctx: Context, way: Doorway, holding: str) -> Leg:
         if end[0] is None:
             return start.tcp, ctx.rotation
         yaw = turned_from_start(ctx, ctx.driver.tcp_pose(now.joints)[1])
-        return start.tcp, _yawed(
+        return start.tcp, yawed(
             yaw + float(np.clip(end[0] - yaw, -np.pi / 2, np.pi / 2))
         ) @ ctx.base
 

@@ -152,6 +152,11 @@ class StallWatch:
         return bool(gained[0] < PROGRESS and gained[1] < TURN_PROGRESS)
 
 
+def yawed(angle: float) -> np.ndarray:
+    """The rotation by ``angle`` [rad] about the vertical."""
+    return Rotation.from_rotvec([0.0, 0.0, angle]).as_matrix()
+
+
 def _angle(a: np.ndarray, b: np.ndarray) -> float:
     """The angle between two rotations [rad]."""
     return float(Rotation.from_matrix(a.T @ b).magnitude())
