@@ -83,7 +83,8 @@ def test_both_pots_stand_on_the_far_stove(capsys) -> None:
     """Swapped kitchen, state 1, within its 520 steps: both pots on the stove (one turned
     a quarter turn beside the other) and the stove on; no operator failed."""
     argv = ["--domain", "libero", "evaluate", "benchmark", "--suite", "libero_10_swap",
-            "--task", "8", "--init-states", "1:2", "--policy", "scripted-plan", "--json"]  # fmt: skip
+            "--task", "8", "--init-states", "1:2", "--policy", "scripted-plan",
+            "--json"]  # fmt: skip
     assert cli.main(argv) == 0
     (episode,) = json.loads(capsys.readouterr().out)["episode_log"]
     assert episode["success"], episode["trace"]

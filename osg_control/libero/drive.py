@@ -42,6 +42,14 @@ TURN_STEP = 0.15
 leg [rad]."""
 
 
+REACH_CHECK_STEPS = 150
+"""IK steps a reach check iterates from the present joints (``JointTargetDriver.reaches``;
+the hand crosses the table in a few dozen at the arm's full pace)."""
+REACH_TOLERANCE = 0.01
+"""How near the IK must bring the TCP for a point to count as reached [m] (a place's
+descent ends this near)."""
+
+
 class PacedLimit(VelocityLimit):
     """``|dq| <= pace v_max dt``: the joint speed limits scaled by ``pace`` in (0, 1], set
     before each solve."""
@@ -118,6 +126,17 @@ class JointTargetDriver:
         for _ in range(steps):
             q = self.ik.step(q, target_pos, target_rot)
         return self.ik.tcp_pose(q)
+
+    def reaches(
+        self, joints: np.ndarray, target_pos: np.ndarray, target_rot: np.ndarray,
+        turn_tolerance: float,
+    ) -> bool:  # fmt: skip
+        """Whether the IK, iterated ``REACH_CHECK_STEPS`` times from ``joints``
+        (``settle``), ends within ``REACH_TOLERANCE`` and ``turn_tolerance`` [rad] of the
+        target: whether the arm gets there from here."""
+        pos, rot = self.settle(joints, target_pos, target_rot, REACH_CHECK_STEPS)
+        turn = Rotation.from_matrix(rot.T @ np.asarray(target_rot)).magnitude()
+        return bool(np.linalg.norm(pos - target_pos) <= REACH_TOLERANCE and turn <= turn_tolerance)
 
     def tcp_pose(self, joints: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """The TCP pose (position, rotation) of the perceived joints, by forward kinematics."""

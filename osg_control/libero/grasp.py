@@ -15,7 +15,7 @@ from scipy.spatial.transform import Rotation
 
 from osg_control.libero.clearance import HAND_BOXES, fixture_clearance, hand_clearance
 from osg_control.libero.facts import holds
-from osg_control.libero.legs import Context, yawed
+from osg_control.libero.legs import TURN_TOLERANCE, Context, yawed
 from osg_control.libero.overhang import lean
 from osg_control.libero.perception import LiberoPercept
 from osg_control.libero.problem import Atom
@@ -233,7 +233,9 @@ def _rim_rotation(ctx: Context, percept: LiberoPercept, obj: str) -> np.ndarray:
     else
     whichever of that and the fingers across the reach turns the hand less from the start:
     turning a bowl's grasp a quarter turn in place took the approach's 90 steps, and the
-    pick repeated it (LIBERO-Goal tasks 1, 4, 8, the bowl, out of their 300 steps)."""
+    pick repeated it (LIBERO-Goal tasks 1, 4, 8, the bowl, out of their 300 steps); the
+    other where only its rims are in the arm's reach (``_reached``: a bowl 0.8 m out,
+    LIBERO-Spatial task 6, whose rims across the reach lie 1-1.5 cm beyond it)."""
     reach = percept.position(obj) - ctx.base_xy
     along = fingers_along(ctx, reach)
     into = any(a.predicate == "in" and a.args[0] == obj and a.args[1] in _drawers(ctx)
@@ -241,7 +243,10 @@ def _rim_rotation(ctx: Context, percept: LiberoPercept, obj: str) -> np.ndarray:
     if into or _in_drawer(ctx, percept, obj):
         return lean(ctx, percept, obj, along)
     across = fingers_along(ctx, np.array([-reach[1], reach[0], 0.0]))
-    return min((along, across), key=lambda r: abs(turned_from_start(ctx, r)))
+    first, other = sorted((along, across), key=lambda r: abs(turned_from_start(ctx, r)))
+    reached = [any(_reached(ctx, percept, obj, p, r) for p in _rims(ctx, percept, obj, r))
+               for r in (first, other)]  # fmt: skip
+    return other if reached == [False, True] else first
 
 
 def _drawers(ctx: Context) -> set[str]:
@@ -309,36 +314,62 @@ def rim_grasped(ctx: Context, obj: str) -> bool:
 def grasp_point(ctx: Context, percept: LiberoPercept, obj: str) -> np.ndarray:
     """Where the TCP closes on ``obj``: just above its origin, or on a bowl's, mug's or
     plate's rim (on the side away from a handle: the side of the rim further from the box's
-    centre; a rim too low for ``RIM_DEPTH``, a plate's, on the side where the open hand,
-    its palm then low, stands clearest of the objects and the fixtures' boxes, then the
-    nearer the arm's base: on the cabinet's side its long side reached under the
-    cabinet's front and stalled, LIBERO-Goal task 5);
-    the plan's own grasp where it set one (``Context.grasps``)."""
+    centre, unless only the other is in the arm's reach, ``_reached``; a rim too low for
+    ``RIM_DEPTH``, a plate's, on the side where the open hand, its palm then low, stands
+    clearest of the objects and the fixtures' boxes, then the nearer the arm's base: on the
+    cabinet's side its long side reached under the cabinet's front and stalled, LIBERO-Goal
+    task 5); the plan's own grasp where it set one (``Context.grasps``)."""
     if obj in ctx.grasps:
         return ctx.grasps[obj](percept)[0]
     pos, rot = percept.objects[obj]
     low, high = ctx.scene.extents[obj]
     if not rim_grasped(ctx, obj):
         return pos + rot @ chosen_grip(ctx, percept, obj).point
-    axis = grasp_rotation(ctx, percept, obj)[:, 1] * np.array([1.0, 1.0, 0.0])
+    rotation = grasp_rotation(ctx, percept, obj)
+    axis = rotation[:, 1] * np.array([1.0, 1.0, 0.0])
     axis /= np.linalg.norm(axis)
-    radius = float(min(np.abs(low[:2]).min(), np.abs(high[:2]).min()))
-    radius -= _rim_inset(ctx, percept, obj)
     centre = pos + rot @ ((low + high) / 2)
-    rims = [pos + side * radius * axis for side in (1.0, -1.0)]
-    height = max(pos[2] + high[2] - RIM_DEPTH, pos[2] + _rim_floor(ctx, obj))
+    rims = _rims(ctx, percept, obj, rotation)
     if _low_rim(ctx, obj):  # the side the open hand stands clearest at, then the nearer
-        rims = [np.r_[r[:2], height] for r in rims]
 
         def room(p: np.ndarray) -> tuple[float, float]:
             gap = min(hand_clearance(ctx, percept, p, axis, obj),
                       fixture_clearance(ctx, percept, p, axis))  # fmt: skip
             return min(gap, GRASP_CLEARANCE), -float(np.linalg.norm((p - ctx.base_xy)[:2]))
 
-        rim = max(rims, key=room)
-    else:
-        rim = max(rims, key=lambda p: float(np.linalg.norm((p - centre)[:2])))
-    return np.r_[rim[:2], height]
+        return max(rims, key=room)
+    return max(rims, key=lambda p: (_reached(ctx, percept, obj, p, rotation),
+                                    float(np.linalg.norm((p - centre)[:2]))))  # fmt: skip
+
+
+def _rims(ctx: Context, percept: LiberoPercept, obj: str, rotation: np.ndarray) -> list[np.ndarray]:
+    """The two points a rim grasp with ``rotation`` closes at: either side of ``obj``'s
+    origin along the fingers, ``_rim_inset`` in from its radius, ``RIM_DEPTH`` below its
+    top (at least ``_rim_floor`` above its origin)."""
+    pos, _ = percept.objects[obj]
+    low, high = ctx.scene.extents[obj]
+    axis = rotation[:, 1] * np.array([1.0, 1.0, 0.0])
+    axis /= np.linalg.norm(axis)
+    radius = float(min(np.abs(low[:2]).min(), np.abs(high[:2]).min()))
+    radius -= _rim_inset(ctx, percept, obj)
+    height = max(pos[2] + high[2] - RIM_DEPTH, pos[2] + _rim_floor(ctx, obj))
+    return [np.r_[(pos + side * radius * axis)[:2], height] for side in (1.0, -1.0)]
+
+
+def _reached(
+    ctx: Context, percept: LiberoPercept, obj: str, point: np.ndarray, rotation: np.ndarray
+) -> bool:
+    """Whether the arm reaches the grasp of ``obj`` at ``point`` with ``rotation`` from
+    the perceived joints (``drive.JointTargetDriver.reaches``): checked once per attempt
+    and grasp, again when ``obj`` has moved ``REDECIDE`` (the arm moves on meanwhile)."""
+    tries, pos = ctx.failures.get(obj, 0), percept.position(obj)
+    memo = ctx.reach_checks.get(obj)
+    if memo is None or memo[0] != tries or np.linalg.norm(memo[1] - pos) >= REDECIDE:
+        memo = ctx.reach_checks[obj] = (tries, pos.copy(), {})
+    key = tuple(round(float(v), 3) for v in np.r_[point - pos, rotation.ravel()])
+    if key not in memo[2]:
+        memo[2][key] = ctx.driver.reaches(percept.joints, point, rotation, TURN_TOLERANCE)
+    return memo[2][key]
 
 
 def carry_point(ctx: Context, percept: LiberoPercept, obj: str) -> np.ndarray:

@@ -9,9 +9,9 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.spatial.transform import Rotation
 
 from osg_control.libero.clearance import HAND_BOXES, carried, footprint
+from osg_control.libero.drive import REACH_CHECK_STEPS
 from osg_control.libero.edge import pinched
 from osg_control.libero.facts import holds, region_pose, room
 from osg_control.libero.legs import TURN_TOLERANCE, Context, yawed
@@ -23,12 +23,6 @@ CLEARANCE = 0.02
 """The gap between footprints a place on a region's top keeps where it can [m]."""
 EDGE_MARGIN = 0.01
 """How far inside a region's footprint an object is set down at most [m]."""
-REACH_TOLERANCE = 0.01
-"""How near the IK must bring the hand to a set-down point for it to count as reached [m]
-(a place's descent ends this near)."""
-REACH_ITERATIONS = 150
-"""IK steps a reach check iterates from the present joints (the hand crosses a region in
-a few dozen at the arm's full pace)."""
 TURNS = (0.0, np.pi / 2, -np.pi / 2)
 """The turns about the vertical a set-down out of reach may give the held object [rad]."""
 
@@ -173,7 +167,7 @@ def set_down(
     hand = yawed(turn) @ ctx.rotation
     goal = _hand_at(ctx, percept, held_obj, spot, turn)
     goal[2] = max(goal[2], percept.tcp[2])
-    over = ctx.driver.settle(percept.joints, goal, hand, REACH_ITERATIONS)[0]
+    over = ctx.driver.settle(percept.joints, goal, hand, REACH_CHECK_STEPS)[0]
     return SetDown(spot, hand if turn else None, ctx.rotation if turn else None, over)
 
 
@@ -191,12 +185,10 @@ def reaches(
 ) -> bool:
     """Whether the IK, iterated from the perceived joints, brings the hand holding
     ``held_obj`` (turned by ``turn``) to set it down over ``point``: within
-    ``REACH_TOLERANCE`` and ``TURN_TOLERANCE`` of the hand's pose there."""
+    ``drive.REACH_TOLERANCE`` and ``TURN_TOLERANCE`` of the hand's pose there."""
     rotation = yawed(turn) @ ctx.rotation
     hand = _hand_at(ctx, percept, held_obj, point, turn)
-    pos, rot = ctx.driver.settle(percept.joints, hand, rotation, REACH_ITERATIONS)
-    angle = Rotation.from_matrix(rot.T @ rotation).magnitude()
-    return bool(np.linalg.norm(pos - hand) <= REACH_TOLERANCE and angle <= TURN_TOLERANCE)
+    return ctx.driver.reaches(percept.joints, hand, rotation, TURN_TOLERANCE)
 
 
 def _spot_in_reach(
