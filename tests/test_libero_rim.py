@@ -20,11 +20,13 @@ from osg_control.libero.grasp import (  # noqa: E402
     REDECIDE,
     RIM_INSET,
     _in_drawer,
+    _rims,
+    fingers_along,
     grasp_point,
     grasp_rotation,
     turned_from_start,
 )
-from osg_control.libero.legs import Context  # noqa: E402
+from osg_control.libero.legs import TURN_TOLERANCE, Context  # noqa: E402
 from osg_control.libero.perception import LiberoPercept  # noqa: E402
 
 BOWL = "akita_black_bowl_1"
@@ -120,3 +122,22 @@ def test_a_bowl_seen_in_a_drawer_stays_in_it_until_it_moves() -> None:
     pos, rot = out.objects[BOWL]
     moved = replace(out, objects={**out.objects, BOWL: (pos + [0.0, 2 * REDECIDE, 0.0], rot)})
     assert not _in_drawer(ctx, moved, BOWL)
+
+
+def test_a_bowl_whose_rims_across_are_out_of_reach_is_grasped_along_the_reach() -> None:
+    """LIBERO-Spatial task 6, state 12: the bowl 0.8 m out; across the reach (the least
+    turn) neither rim is within the arm's reach (the IK from the start's joints: the
+    descent stalled short), so the fingers close along the reach, on the rim nearer the
+    arm's base, which the arm reaches."""
+    start = episode_start("libero_spatial", 6, 12)
+    ctx, percept = start.ctx, start.percept
+    reach = percept.position(BOWL) - ctx.base_xy
+    across = fingers_along(ctx, np.array([-reach[1], reach[0], 0.0]))
+    for rim in _rims(ctx, percept, BOWL, across):
+        assert not ctx.driver.reaches(percept.joints, rim, across, TURN_TOLERANCE)
+    rotation = grasp_rotation(ctx, percept, BOWL)
+    assert _fingers_along_reach(ctx, percept, rotation) > 0.9
+    point = grasp_point(ctx, percept, BOWL)
+    base = ctx.base_xy[:2]
+    assert np.linalg.norm(point[:2] - base) < np.linalg.norm(percept.position(BOWL)[:2] - base)
+    assert ctx.driver.reaches(percept.joints, point, rotation, TURN_TOLERANCE)
