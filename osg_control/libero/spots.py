@@ -113,11 +113,18 @@ def _free_spot(
     if clearance(centre[:2]) >= CLEARANCE:
         return centre
     others += _knob_sweeps(ctx, percept)
+    best = max(
+        _grid(centre, half), key=lambda s: (clearance(s), -float(np.linalg.norm(s - centre[:2])))
+    )
+    return np.r_[best, centre[2]]
+
+
+def _grid(centre: np.ndarray, half: np.ndarray) -> list[np.ndarray]:
+    """The spots a region's top is searched over: 9 x 9 points of its footprint (centred on
+    ``centre``, half-sizes ``half``) less ``EDGE_MARGIN`` (xy)."""
     reach = np.maximum(half - EDGE_MARGIN, 0.0)
     grid = np.linspace(-1.0, 1.0, 9)
-    spots = [centre[:2] + reach * (a, b) for a in grid for b in grid]
-    best = max(spots, key=lambda s: (clearance(s), -float(np.linalg.norm(s - centre[:2]))))
-    return np.r_[best, centre[2]]
+    return [centre[:2] + reach * (a, b) for a in grid for b in grid]
 
 
 def _knob_sweeps(ctx: Context, percept: LiberoPercept) -> list[np.ndarray]:
@@ -202,9 +209,7 @@ def _spot_in_reach(
     to ``CLEARANCE``), that leaves each of ``coming`` a reachable spot ``CLEARANCE`` clear
     of it and of the others, the nearest ``first`` among equals; None where the arm
     reaches none."""
-    grid = np.linspace(-1.0, 1.0, 9)
-    margin = np.maximum(half - EDGE_MARGIN, 0.0)
-    spots = [np.r_[centre[:2] + margin * (a, b), first[2]] for a in grid for b in grid]
+    spots = [np.r_[xy, first[2]] for xy in _grid(centre, half)]
     standing = {o: footprint(ctx, percept, o) for o in percept.objects if o != held_obj}
     sweeps = _knob_sweeps(ctx, percept)
     others = [*standing.values(), *sweeps]
