@@ -17,10 +17,13 @@ pytest.importorskip("libero.libero", reason="needs the libero extra: pip install
 from libero_start import episode_start  # noqa: E402
 
 from osg_control.libero.insert import (  # noqa: E402
+    INSERT_LIFT,
     PUSH_DEEPEST,
+    ROOF_CLEARANCE,
     approach,
     crosses,
     doorway,
+    entry_lift,
     insert,
     opening,
 )
@@ -110,3 +113,24 @@ def test_the_mug_goes_over_the_microwave_only_where_it_is_in_the_way(
         top = high[2] + 0.05  # TRANSIT_CLEARANCE over the body's top
         carried_bottom = target[2] - percept.tcp[2] + percept.position(mug)[2]
         assert carried_bottom + scene.extents[mug][0][2] == pytest.approx(top, abs=1e-9)
+
+
+def test_a_mug_too_tall_for_the_usual_lift_goes_in_lower() -> None:
+    """LIBERO-PRO ``_object`` task 9's red mug (13.3 cm) goes in with its top
+    ``ROOF_CLEARANCE`` under the opening's top, its bottom still over the opening's floor
+    (carried ``INSERT_LIFT`` up, it met the roof's front edge); LIBERO-10's porcelain mug
+    goes in ``INSERT_LIFT`` up, as before."""
+    start = episode_start("libero_10_object", 9)
+    way = doorway(start.ctx.scene, REGION)
+    assert way is not None
+    mug = "red_coffee_mug_1"
+    low, high = start.ctx.scene.extents[mug]
+    lift = entry_lift(start.ctx, mug, way)
+    assert lift < INSERT_LIFT
+    assert way.floor + lift + float(high[2] - low[2]) == pytest.approx(way.roof - ROOF_CLEARANCE)
+    floor_top = max(float(w[1][2]) for w in start.ctx.scene.walls["microwave_1"] if w[1][2] < 1.0)
+    assert way.floor + lift > floor_top
+    ten = episode_start("libero_10", 9)
+    ten_way = doorway(ten.ctx.scene, REGION)
+    assert ten_way is not None
+    assert entry_lift(ten.ctx, "porcelain_mug_1", ten_way) == INSERT_LIFT

@@ -13,7 +13,8 @@ closed stop, covers: the doorway's plane and its outward normal) and the percept
 - ``approach`` first turns the hand about the vertical until that slice faces out through
   the doorway (``carry_turn``: a mug's only slice that fits, its handle, may face away
   from it), then carries it to in front of the doorway, at the height it goes in at
-  (``INSERT_LIFT`` above the region's floor);
+  (``entry_lift``: ``INSERT_LIFT`` above the region's floor, lower for an object that would
+  then meet the roof);
 - ``insert`` takes it in until the hand reaches the doorway (``ENTRY``), sets it down, lets
   go and backs out until the hand stands ``PUSH_STANDOFF`` outside the object's outer side,
   then pushes it with the closed hand, pitched ``PUSH_PITCH`` so that the palm stays
@@ -74,6 +75,8 @@ WALL_CLEARANCE = 0.01
 """How far off the region's back the object's inner side stays at least [m]."""
 INSERT_LIFT = 0.03
 """Height of the object's bottom above the region's floor while it goes in [m]."""
+ROOF_CLEARANCE = 0.005
+"""The least gap between the object's top and the opening's top while it goes in [m]."""
 OUTSIDE = 0.03
 """How far outside the doorway's plane the object waits before it goes in [m]."""
 ENTRY = 0.04
@@ -120,6 +123,8 @@ class Doorway:
         centre: the region's centre, across the doorway in the middle of the opening its
             fixture's walls leave there (``opening``).
         floor: the region's floor height [m].
+        roof: the height of the top of the opening its fixture's walls leave (``opening``)
+            [m].
     """
 
     region: str
@@ -128,6 +133,7 @@ class Doorway:
     back: float
     centre: np.ndarray
     floor: float
+    roof: float
 
     @property
     def across(self) -> np.ndarray:
@@ -159,7 +165,7 @@ def doorway(scene: Scene, region: str) -> Doorway | None:
     across = np.cross([0.0, 0.0, 1.0], normal)
     centre = box.pos + across * float(across @ ((low + high) / 2 - box.pos))
     return Doorway(region, normal, float(normal @ joint.anchor), float(normal @ box.pos - half),
-                   centre, floor)  # fmt: skip
+                   centre, floor, float(high[2]))  # fmt: skip
 
 
 def opening(
@@ -200,6 +206,15 @@ def goal_depth(way: Doorway, outer: float, inner: float) -> float:
     side (``inner`` in from it) would then come closer than ``WALL_CLEARANCE`` to the back
     (the back wins: nothing is pushed through a wall)."""
     return max(way.plane - outer - DOOR_CLEARANCE, way.back + inner + WALL_CLEARANCE)
+
+
+def entry_lift(ctx: Context, obj: str, way: Doorway) -> float:
+    """How high above the region's floor ``obj``'s bottom goes in through ``way``:
+    ``INSERT_LIFT``, or lower where its top, upright, would then come closer than
+    ``ROOF_CLEARANCE`` to the opening's top (LIBERO-PRO ``_object`` task 9's red mug, 13.3
+    cm tall, in a 14.4 cm opening, met the roof's front edge and stalled outside)."""
+    low, high = ctx.scene.extents[obj]
+    return min(INSERT_LIFT, way.roof - ROOF_CLEARANCE - float(high[2] - low[2]) - way.floor)
 
 
 def _origin_at(
@@ -350,7 +365,7 @@ def turn_out(ctx: Context, way: Doorway, holding: str) -> Leg:
 def approach(ctx: Context, region: str, holding: str) -> list[Leg]:
     """Turn ``holding``'s grasped slice out toward the doorway into ``region``
     (``turn_out``), and carry it to in front of the doorway: its inner side ``OUTSIDE``
-    out of the plane, its bottom ``INSERT_LIFT`` above the region's floor; first across to
+    out of the plane, its bottom ``entry_lift`` above the region's floor; first across to
     the doorway's line, then in along it, its bottom kept ``TRANSIT_CLEARANCE`` over what
     it passes (``clearance.transit_height``), then down. (Carried diagonally, the hand met
     a door open less than 90 deg near its leaf's tip and swung it toward shut; straight in
@@ -365,7 +380,7 @@ def approach(ctx: Context, region: str, holding: str) -> list[Leg]:
 
     def front(now: LiberoPercept) -> np.ndarray:
         depth = way.plane + reach(ctx, now, holding, -way.normal) + OUTSIDE
-        return _origin_at(ctx, now, holding, way, depth, INSERT_LIFT)
+        return _origin_at(ctx, now, holding, way, depth, entry_lift(ctx, holding, way))
 
     def target(now: LiberoPercept, start: LiberoPercept) -> tuple[np.ndarray, None]:
         return front(now) + carried(now, holding), None
@@ -430,7 +445,7 @@ def insert(ctx: Context, obj: str, region: str) -> list[Leg]:
     def entry(now: LiberoPercept, start: LiberoPercept) -> tuple[np.ndarray, None]:
         hand = carried(now, obj)
         depth = way.plane + ENTRY - float(n @ hand)
-        return _origin_at(ctx, now, obj, way, depth, INSERT_LIFT) + hand, None
+        return _origin_at(ctx, now, obj, way, depth, entry_lift(ctx, obj, way)) + hand, None
 
     def down(now: LiberoPercept, start: LiberoPercept) -> tuple[np.ndarray, None]:
         grip_z = outer_grip(ctx, obj, _upright(now, obj).T @ n)[0][2]
