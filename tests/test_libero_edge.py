@@ -93,13 +93,16 @@ def test_objects_a_grasp_closes_round_are_not_pinched(suite: str, task: int) -> 
 
 @pytest.mark.slow
 def test_the_cheese_and_the_can_reach_the_basket(capsys: pytest.CaptureFixture[str]) -> None:
-    """``libero_10_object`` task 7, initial state 1: the cream cheese into the basket, then
-    the can, picked at its edge; the episode is won (top-down, every pick of the can closed
-    on nothing above it)."""
+    """``libero_10_object`` task 7, initial state 0: the cream cheese into the basket, then
+    the can, picked at its edge at the first try; the episode is won (top-down, every pick
+    of the can closed on nothing above it; at the first edge 8 mm clear of the neighbours,
+    not the clearest, the fingers slid the can along the table and closed on nothing:
+    states 0-9 1 / 10, this one lost)."""
     argv = ["--domain", "libero", "evaluate", "benchmark", "--suite", "libero_10_object",
-            "--task", "7", "--init-states", "1:2", "--policy", "scripted-plan",
+            "--task", "7", "--init-states", "0:1", "--policy", "scripted-plan",
             "--json"]  # fmt: skip
     assert cli.main(argv) == 0
     episode = json.loads(capsys.readouterr().out)["episode_log"][0]
-    assert any(f"pick {CAN} " in line and line.endswith(": ok") for line in episode["trace"])
+    picks = [line for line in episode["trace"] if f"pick {CAN} " in line]
+    assert picks and picks[0].endswith(": ok"), episode["trace"]
     assert episode["success"], episode["trace"]
