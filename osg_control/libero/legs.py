@@ -108,8 +108,7 @@ class Context:
         otherwise: ``grasp.chosen_grip``)."""
         self.grips: dict[str, Any] = {}
         """The grasp chosen per object, with the attempt and where it was (``grasp``)."""
-        self.reach_checks: dict[str, tuple[int, np.ndarray, dict[tuple[float, ...], bool]]]
-        self.reach_checks = {}
+        self.reach_checks: dict[str, tuple[int, np.ndarray, dict[tuple[float, ...], bool]]] = {}
         """Per object, the attempt and where it was when its grasps' reach was checked, and
         the checks (``grasp``)."""
         self.drawered: dict[str, tuple[np.ndarray, bool]] = {}
