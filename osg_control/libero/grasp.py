@@ -244,9 +244,13 @@ def _rim_rotation(ctx: Context, percept: LiberoPercept, obj: str) -> np.ndarray:
         return lean(ctx, percept, obj, along)
     across = fingers_along(ctx, np.array([-reach[1], reach[0], 0.0]))
     first, other = sorted((along, across), key=lambda r: abs(turned_from_start(ctx, r)))
-    reached = [any(_reached(ctx, percept, obj, p, r) for p in _rims(ctx, percept, obj, r))
-               for r in (first, other)]  # fmt: skip
-    return other if reached == [False, True] else first
+
+    def reached(rotation: np.ndarray) -> bool:
+        return any(
+            _reached(ctx, percept, obj, p, rotation) for p in _rims(ctx, percept, obj, rotation)
+        )
+
+    return other if not reached(first) and reached(other) else first
 
 
 def _drawers(ctx: Context) -> set[str]:
