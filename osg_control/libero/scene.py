@@ -28,6 +28,16 @@ KNOB_DEPTH = 0.015
 
 
 @dataclass(frozen=True)
+class Solid:
+    """A collision geom's bounding box in the world: its ``centre`` [m], ``rotation`` (its
+    axes as columns) and ``half`` sizes along them [m]."""
+
+    centre: np.ndarray
+    rotation: np.ndarray
+    half: np.ndarray
+
+
+@dataclass(frozen=True)
 class RegionBox:
     """One region of the task file as LIBERO's predicates test it.
 
@@ -119,6 +129,11 @@ class Scene:
         walls: a door fixture -> the world box (lower, upper) of each of its collision
             geoms other than its leaf's [m] (its ``housings`` round them all; the opening
             behind its door, ``insert.doorway``).
+        shapes: movable object -> each of its collision geoms' bounding box as a ``Solid``
+            in its upright frame (what it rests on a fixture with, ``rest``).
+        solids: a fixture without joints (a caddy, a table) -> each of its collision geoms'
+            bounding box as (centre [m], rotation, half-sizes [m]) in the world (what an
+            object set down in one of its compartments rests on, ``rest``).
     """
 
     regions: dict[str, RegionBox]
@@ -132,6 +147,8 @@ class Scene:
     parts: dict[str, list[tuple[np.ndarray, np.ndarray]]]
     frames: dict[str, np.ndarray]
     walls: dict[str, list[tuple[np.ndarray, np.ndarray]]] = field(default_factory=dict)
+    solids: dict[str, list[Solid]] = field(default_factory=dict)
+    shapes: dict[str, list[Solid]] = field(default_factory=dict)
 
     @property
     def housings(self) -> dict[str, tuple[np.ndarray, np.ndarray]]:
@@ -164,18 +181,31 @@ def _subtree(model: Any, root: int) -> list[int]:
     return bodies
 
 
+def _collision_geoms(model: Any, bodies: list[int]) -> list[int]:
+    """The geoms of ``bodies`` that collide."""
+    return [geom for geom in range(model.ngeom) if model.geom_bodyid[geom] in bodies
+            and (model.geom_contype[geom] or model.geom_conaffinity[geom])]  # fmt: skip
+
+
 def _geom_boxes(model: Any, data: Any, bodies: list[int]) -> list[np.ndarray]:
     """World corners (8 x 3) of each collision geom's bounding box of ``bodies``."""
     boxes = []
     signs = np.array([[x, y, z] for x in (-1, 1) for y in (-1, 1) for z in (-1, 1)])
-    for geom in range(model.ngeom):
-        collides = model.geom_contype[geom] or model.geom_conaffinity[geom]
-        if model.geom_bodyid[geom] not in bodies or not collides:
-            continue
+    for geom in _collision_geoms(model, bodies):
         centre, half = model.geom_aabb[geom][:3], model.geom_aabb[geom][3:]
         local = centre + signs * half
         boxes.append(data.geom_xpos[geom] + local @ data.geom_xmat[geom].reshape(3, 3).T)
     return boxes
+
+
+def _geom_solids(model: Any, data: Any, bodies: list[int]) -> list[Solid]:
+    """Each collision geom's bounding box of ``bodies`` as a world ``Solid``."""
+    solids = []
+    for geom in _collision_geoms(model, bodies):
+        rotation = data.geom_xmat[geom].reshape(3, 3).copy()
+        centre = data.geom_xpos[geom] + rotation @ model.geom_aabb[geom][:3]
+        solids.append(Solid(centre, rotation, model.geom_aabb[geom][3:].copy()))
+    return solids
 
 
 def _geom_corners(model: Any, data: Any, bodies: list[int]) -> np.ndarray:
@@ -261,11 +291,15 @@ def read_scene(env: Any, problem: Any) -> Scene:
     walls: dict[str, list[tuple[np.ndarray, np.ndarray]]] = {}
     knobs: dict[str, np.ndarray] = {}
     grips: dict[str, np.ndarray] = {}
+    solids: dict[str, list[Solid]] = {}
     for name in problem.fixtures:
         fixture = inner.get_object(name)
         found = [_joint(model, data, j, fixture) for j in getattr(fixture, "joints", None) or ()]
         mine = [j for j in found if j is not None]
         joints.update({j.name: j for j in mine})
+        if not mine and fixture is not None:
+            root = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_BODY, fixture.root_body)
+            solids[name] = _geom_solids(model, data, _subtree(model, root))
         if not mine:
             continue
         moving = model.jnt_bodyid[mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_JOINT, mine[0].name)]
@@ -306,12 +340,16 @@ def read_scene(env: Any, problem: Any) -> Scene:
             slides[0] if slides else None,
         )  # fmt: skip
     parts: dict[str, list[tuple[np.ndarray, np.ndarray]]] = {}
+    shapes: dict[str, list[Solid]] = {}
     for obj in problem.objects:
         body = inner.obj_body_id[obj]
         rot = data.xmat[body].reshape(3, 3) @ frames[obj]  # the upright frame
-        boxes = _geom_boxes(model, data, _subtree(model, body))
+        tree = _subtree(model, body)
+        boxes = _geom_boxes(model, data, tree)
         local = [(box - data.xpos[body]) @ rot for box in boxes]
         parts[obj] = [(box.min(axis=0), box.max(axis=0)) for box in local]
+        shapes[obj] = [Solid(rot.T @ (solid.centre - data.xpos[body]), rot.T @ solid.rotation,
+                             solid.half) for solid in _geom_solids(model, data, tree)]  # fmt: skip
     extents = {
         obj: (np.min([lo for lo, _ in boxes], axis=0), np.max([hi for _, hi in boxes], axis=0))
         for obj, boxes in parts.items()
@@ -322,4 +360,4 @@ def read_scene(env: Any, problem: Any) -> Scene:
         if joint.kind == JOINT_SLIDE
     }
     return Scene(regions, joints, articulated, leaves, knobs, grips, handles, extents, parts,
-                 frames, walls)  # fmt: skip
+                 frames, walls, solids, shapes)  # fmt: skip

@@ -16,6 +16,7 @@ from osg_control.libero.edge import pinched
 from osg_control.libero.facts import holds, region_pose, room
 from osg_control.libero.legs import TURN_TOLERANCE, Context, yawed
 from osg_control.libero.perception import LiberoPercept
+from osg_control.libero.rest import lowest_rest, too_wide
 
 DROP = 0.02
 """Height of the held object's bottom above the surface when released [m]."""
@@ -40,6 +41,10 @@ def surface(
     if target in percept.objects:
         pos, _ = percept.objects[target]
         return pos + np.array([0.0, 0.0, ctx.scene.extents[target][1][2]])
+    if inside and not pinched(ctx, held_obj) and too_wide(ctx, percept, held_obj, target):
+        resting = lowest_rest(ctx, percept, held_obj, target)
+        if resting is not None:
+            return resting
     pos, mat = region_pose(ctx.scene, percept, target)
     half = np.abs(mat @ ctx.scene.regions[target].size)
     if not inside:

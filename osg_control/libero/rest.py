@@ -1,0 +1,105 @@
+"""Where an object too wide for a fixture's compartment is set down: the spot of the
+region where it comes to rest lowest on the fixture's collision geometry, its origin still
+inside the region's box (LIBERO's ``In`` reads the origin). LIBERO-PRO's ``libero_10_task``
+task 5 puts a 9.4 cm mug in the caddy's 5.5 cm back compartment: set down over the
+region's floor it caught the taller back wall and fell off; resting on the low middle wall,
+clear of the back one, its origin lies in the box.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from osg_control.libero.clearance import footprint
+from osg_control.libero.facts import region_pose
+from osg_control.libero.legs import Context, yawed
+from osg_control.libero.perception import LiberoPercept
+from osg_control.libero.scene import Solid
+
+SPOTS = 15
+"""The region's footprint is searched over ``SPOTS`` x ``SPOTS`` origins."""
+INSET = 0.003
+"""How far inside the region's footprint the searched origins keep [m]."""
+HEADROOM = 0.01
+"""How far below the region's box top a resting origin must lie [m]."""
+LATTICE = 5
+"""Points along each edge of a collision box that its rest is computed at."""
+LEVEL = 0.002
+"""Rests within this of the lowest count as equally low [m]."""
+
+
+def too_wide(ctx: Context, percept: LiberoPercept, held_obj: str, target: str) -> bool:
+    """Whether ``held_obj``'s footprint, as carried, is wider than the fixture region
+    ``target``'s along either horizontal axis."""
+    box = ctx.scene.regions[target]
+    if box.carrier is not None or box.joint is not None or box.parent not in ctx.scene.solids:
+        return False
+    _, mat = region_pose(ctx.scene, percept, target)
+    width = 2.0 * np.abs(mat @ box.size)[:2]
+    own = footprint(ctx, percept, held_obj)
+    return bool(np.any(own[1] - own[0] > width))
+
+
+def lowest_rest(
+    ctx: Context, percept: LiberoPercept, held_obj: str, target: str
+) -> np.ndarray | None:
+    """The point ``held_obj`` is set down over in the fixture region ``target`` (its origin's
+    xy; its bottom's height at rest): of the origins in the region's footprint
+    (``INSET``) whose rest on the fixture (``rest_heights``) leaves the origin
+    ``HEADROOM`` under the box's top, the lowest (within ``LEVEL``), the nearest the middle
+    of those; None where none does."""
+    pos, mat = region_pose(ctx.scene, percept, target)
+    half = np.abs(mat @ ctx.scene.regions[target].size)
+    grid = np.linspace(-1.0, 1.0, SPOTS)
+    reach = np.maximum(half[:2] - INSET, 0.0)
+    spots = np.array([pos[:2] + reach * (a, b) for a in grid for b in grid])
+    solids = ctx.scene.solids[ctx.scene.regions[target].parent]
+    rests = rest_heights(ctx, percept, held_obj, spots, solids)
+    rests = np.maximum(rests, pos[2] - half[2])  # nothing below: its floor
+    fits = rests <= pos[2] + half[2] - HEADROOM
+    if not np.any(fits):
+        return None
+    low = fits & (rests <= np.min(rests[fits]) + LEVEL)
+    middle = spots[low].mean(axis=0)
+    best = int(np.argmin(np.where(low, np.linalg.norm(spots - middle, axis=1), np.inf)))
+    bottom = float(ctx.scene.extents[held_obj][0][2])
+    return np.r_[spots[best], rests[best] + bottom]
+
+
+def rest_heights(
+    ctx: Context, percept: LiberoPercept, held_obj: str, spots: np.ndarray, solids: list[Solid]
+) -> np.ndarray:
+    """The height [m] of ``held_obj``'s origin lowered upright, at its perceived yaw, over
+    each xy of ``spots`` onto ``solids`` until one of its collision boxes (``Scene.shapes``,
+    sampled at ``LATTICE`` points along each edge) touches one; -inf where none is under
+    it."""
+    _, rot = percept.objects[held_obj]
+    turn = yawed(float(np.arctan2(rot[1, 0], rot[0, 0])))
+    steps = np.linspace(-1.0, 1.0, LATTICE)
+    lattice = np.array([(a, b, c) for a in steps for b in steps for c in steps])
+    local = np.concatenate([shape.centre + (lattice * shape.half) @ shape.rotation.T
+                            for shape in ctx.scene.shapes[held_obj]]) @ turn.T  # fmt: skip
+    xy = spots[:, None, :] + local[None, :, :2]
+    tops = _tops(xy.reshape(-1, 2), solids).reshape(xy.shape[:2])
+    return np.max(tops - local[None, :, 2], axis=1)
+
+
+def _tops(xy: np.ndarray, solids: list[Solid]) -> np.ndarray:
+    """For each point of ``xy`` (N x 2), the highest z where the vertical line through it
+    leaves one of ``solids`` (-inf: it meets none)."""
+    best = np.full(len(xy), -np.inf)
+    for solid in solids:
+        offset = np.c_[xy, np.zeros(len(xy))] - solid.centre
+        a = offset @ solid.rotation  # the line's point at z = 0, in the solid's axes
+        b = solid.rotation[2]  # its direction (world up) in those axes
+        lower, upper = np.full(len(xy), -np.inf), np.full(len(xy), np.inf)
+        for i in range(3):
+            if abs(b[i]) < 1e-9:
+                outside = np.abs(a[:, i]) > solid.half[i]
+                lower[outside], upper[outside] = np.inf, -np.inf
+                continue
+            ends = np.sort(np.c_[(-solid.half[i] - a[:, i]) / b[i],
+                                 (solid.half[i] - a[:, i]) / b[i]], axis=1)  # fmt: skip
+            lower, upper = np.maximum(lower, ends[:, 0]), np.minimum(upper, ends[:, 1])
+        best = np.where(lower <= upper, np.maximum(best, upper), best)
+    return best
