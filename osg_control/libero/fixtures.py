@@ -126,7 +126,7 @@ def drawer(ctx: Context, region: str, opening: bool) -> list[Leg]:
     front = lambda now, q: handle_at(ctx.scene, joint, q) + out * PUSH_STANDOFF  # noqa: E731
     return [
         Leg(lambda now, s: (front(now, sensed(s)) + [0, 0, HOVER], across), GRIPPER_CLOSED,
-            40, 0.02),
+            40, 0.02, transit=True),
         Leg(lambda now, s: (front(now, sensed(s)), across), GRIPPER_CLOSED, 30, 0.015),
         Leg(lambda now, s: (handle_at(ctx.scene, joint, shut) - out * 0.03, across),
             GRIPPER_CLOSED, 60, 0.035),

@@ -14,6 +14,7 @@ from osg_control.libero.drive import GRIPPER_CLOSED, GRIPPER_OPEN
 from osg_control.libero.facts import held, region_pose
 from osg_control.libero.fixtures import door_point, drawer_front, drawer_hand
 from osg_control.libero.grasp import carry_point, grasp_point, grasp_rotation
+from osg_control.libero.lay import lies_down, push_over
 from osg_control.libero.legs import HOVER, Context, Leg, hold, up
 from osg_control.libero.overhang import lean_hover, leaning, slide
 from osg_control.libero.perception import LiberoPercept
@@ -179,9 +180,10 @@ def place(ctx: Context, obj: str, target: str, inside: bool) -> list[Leg]:
         point, _ = down(now, start)  # at the carrying height first: nothing swept
         return np.r_[point[:2], max(point[2], start.tcp[2])], None
 
+    laid = push_over(ctx, obj, target) if inside and lies_down(ctx, obj, target) else []
     return [Leg(turn, GRIPPER_CLOSED, 40, 0.01, transit=True),
             Leg(over, GRIPPER_CLOSED, 30, 0.01), Leg(down, GRIPPER_CLOSED, 40, 0.01),
-            hold(GRIPPER_OPEN, 10), up(0.08, GRIPPER_OPEN),
+            hold(GRIPPER_OPEN, 10), up(0.08, GRIPPER_OPEN), *laid,
             Leg(turn_back, GRIPPER_OPEN, 40, 0.01, transit=True)]  # fmt: skip
 
 

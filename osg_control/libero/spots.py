@@ -14,6 +14,7 @@ from osg_control.libero.clearance import HAND_BOXES, carried, footprint
 from osg_control.libero.drive import REACH_CHECK_STEPS
 from osg_control.libero.edge import pinched
 from osg_control.libero.facts import holds, region_pose, room
+from osg_control.libero.lay import lies_down, stand_offset
 from osg_control.libero.legs import TURN_TOLERANCE, Context, yawed
 from osg_control.libero.perception import LiberoPercept
 from osg_control.libero.rest import lowest_rest, too_wide
@@ -56,6 +57,8 @@ def surface(
         joint = ctx.scene.joints[str(ctx.scene.regions[target].joint)]
         out = joint.axis * joint.opening
         pos = pos + out * (sum(room(ctx.scene, percept, target)) / 2 - pos @ out)
+        if lies_down(ctx, held_obj, target):
+            pos = pos + stand_offset(ctx, held_obj, target)
     floor = inside and not pinched(ctx, held_obj)
     return pos + np.array([0.0, 0.0, -half[2] if floor else half[2]])
 

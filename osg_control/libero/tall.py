@@ -21,6 +21,7 @@ import numpy as np
 
 from osg_control.libero.clearance import HAND_BOXES
 from osg_control.libero.grasp import GRIP_WIDTH, grip
+from osg_control.libero.lay import lies_down
 from osg_control.libero.legs import Context, GraspRule, Step, first_places
 from osg_control.libero.perception import LiberoPercept
 
@@ -58,11 +59,13 @@ def neck_grasp(ctx: Context, obj: str, height: float) -> GraspRule:
 
 def neck_grasps(ctx: Context, steps: list[Step]) -> dict[str, GraspRule]:
     """The grasps a plan's ``steps`` need: for each object whose next place is on a
-    region's top and whose top the palm would land on, ``neck_grasp``."""
+    region's top, or into a drawer it is laid down in (``lay``), and whose top the palm
+    would land on, ``neck_grasp``."""
     grasps: dict[str, GraspRule] = {}
     for operator, obj, target in first_places(steps):
         on_region = operator == "place-on" and target in ctx.scene.regions
-        height = neck_height(ctx, obj) if on_region else None
+        laid = operator == "place-in" and lies_down(ctx, obj, target)
+        height = neck_height(ctx, obj) if on_region or laid else None
         if height is not None:
             grasps[obj] = neck_grasp(ctx, obj, height)
     return grasps
