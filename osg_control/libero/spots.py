@@ -14,7 +14,8 @@ from osg_control.libero.clearance import HAND_BOXES, carried, footprint
 from osg_control.libero.drive import REACH_CHECK_STEPS
 from osg_control.libero.edge import pinched
 from osg_control.libero.facts import holds, region_pose, room
-from osg_control.libero.lay import lies_down, stand_offset
+from osg_control.libero.grasp import fingers_along
+from osg_control.libero.lay import across, lay, lies_down
 from osg_control.libero.legs import TURN_TOLERANCE, Context, yawed
 from osg_control.libero.perception import LiberoPercept
 from osg_control.libero.rest import lowest_rest, too_wide
@@ -58,7 +59,7 @@ def surface(
         out = joint.axis * joint.opening
         pos = pos + out * (sum(room(ctx.scene, percept, target)) / 2 - pos @ out)
         if lies_down(ctx, held_obj, target):
-            pos = pos + stand_offset(ctx, held_obj, target)
+            pos = lay(ctx, percept, held_obj, target).stand
     floor = inside and not pinched(ctx, held_obj)
     return pos + np.array([0.0, 0.0, -half[2] if floor else half[2]])
 
@@ -161,15 +162,19 @@ class SetDown:
 def set_down(
     ctx: Context, percept: LiberoPercept, target: str, inside: bool, held_obj: str
 ) -> SetDown:
-    """Where ``held_obj`` is set down: over ``surface``'s point, unless that is a region's
-    top beyond the arm's reach (``reaches``); then at the best spot the arm reaches
-    (``_spot_in_reach``), the object turned a quarter turn where that makes room, the hand
-    coming over it at the carrying height as near as it gets (the reach shrinks with
-    height: there it stopped 2 cm short and waited out its steps). LIBERO-PRO's swapped
-    kitchen (``libero_10_swap`` task 8) puts the stove's cook region 0.87 m out: the
-    top-down hand reaches its near 3 cm, where two moka pots stand side by side only with
-    one turned."""
+    """Where ``held_obj`` is set down: over ``surface``'s point, the hand turned with its
+    fingers across the drawer's pull for an object laid down in it (``lay``: along it,
+    the 21 cm palm met the cabinet's front above the drawer and held the object up);
+    unless that is a region's top beyond the arm's reach (``reaches``); then at the best
+    spot the arm reaches (``_spot_in_reach``), the object turned a quarter turn where that
+    makes room, the hand coming over it at the carrying height as near as it gets (the
+    reach shrinks with height: there it stopped 2 cm short and waited out its steps).
+    LIBERO-PRO's swapped kitchen (``libero_10_swap`` task 8) puts the stove's cook region
+    0.87 m out: the top-down hand reaches its near 3 cm, where two moka pots stand side by
+    side only with one turned."""
     point = surface(ctx, percept, target, inside, held_obj)
+    if inside and lies_down(ctx, held_obj, target):  # the palm kept off the cabinet's front
+        return SetDown(point, fingers_along(ctx, across(ctx, target)), ctx.rotation)
     if inside or target in percept.objects or reaches(ctx, percept, held_obj, point, 0.0):
         return SetDown(point)
     pos, mat = region_pose(ctx.scene, percept, target)
