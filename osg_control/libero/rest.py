@@ -10,7 +10,6 @@ from __future__ import annotations
 
 import numpy as np
 
-from osg_control.libero.clearance import footprint
 from osg_control.libero.facts import region_pose
 from osg_control.libero.legs import Context, yawed
 from osg_control.libero.perception import LiberoPercept
@@ -22,22 +21,34 @@ INSET = 0.003
 """How far inside the region's footprint the searched origins keep [m]."""
 HEADROOM = 0.01
 """How far below the region's box top a resting origin must lie [m]."""
-LATTICE = 5
-"""Points along each edge of a collision box that its rest is computed at."""
+SPACING = 0.004
+"""The largest gap between the points of a collision box its rest is computed at [m]
+(the caddy's walls are 7-8 mm thick: 5 points along the book's 11 cm straddled them)."""
 LEVEL = 0.002
 """Rests within this of the lowest count as equally low [m]."""
 
 
 def too_wide(ctx: Context, percept: LiberoPercept, held_obj: str, target: str) -> bool:
-    """Whether ``held_obj``'s footprint, as carried, is wider than the fixture region
-    ``target``'s along either horizontal axis."""
+    """Whether ``held_obj``, at its perceived pose, is wider than the fixture region
+    ``target`` along either of the region's horizontal axes (its collision boxes' extent
+    projected on them: a thin book turned 45 deg to the world has a wide world footprint
+    and still fits a compartment it is turned along)."""
     box = ctx.scene.regions[target]
     if box.carrier is not None or box.joint is not None or box.parent not in ctx.scene.solids:
         return False
     _, mat = region_pose(ctx.scene, percept, target)
-    width = 2.0 * np.abs(mat @ box.size)[:2]
-    own = footprint(ctx, percept, held_obj)
-    return bool(np.any(own[1] - own[0] > width))
+    _, rot = percept.objects[held_obj]
+    low, high = ctx.scene.extents[held_obj]
+    corners = np.array([[x, y, z] for x in (low[0], high[0]) for y in (low[1], high[1])
+                        for z in (low[2], high[2])]) @ rot.T  # fmt: skip
+    for axis in range(3):
+        direction = mat[:, axis]
+        if abs(direction[2]) > 0.5:  # the region's vertical axis
+            continue
+        spread = corners @ direction
+        if float(spread.max() - spread.min()) > 2.0 * float(box.size[axis]):
+            return True
+    return False
 
 
 def lowest_rest(
@@ -71,17 +82,20 @@ def rest_heights(
 ) -> np.ndarray:
     """The height [m] of ``held_obj``'s origin lowered upright, at its perceived yaw, over
     each xy of ``spots`` onto ``solids`` until one of its collision boxes (``Scene.shapes``,
-    sampled at ``LATTICE`` points along each edge) touches one; -inf where none is under
-    it."""
+    sampled ``SPACING`` apart, ``_lattice``) touches one; -inf where none is under it."""
     _, rot = percept.objects[held_obj]
     turn = yawed(float(np.arctan2(rot[1, 0], rot[0, 0])))
-    steps = np.linspace(-1.0, 1.0, LATTICE)
-    lattice = np.array([(a, b, c) for a in steps for b in steps for c in steps])
-    local = np.concatenate([shape.centre + (lattice * shape.half) @ shape.rotation.T
-                            for shape in ctx.scene.shapes[held_obj]]) @ turn.T  # fmt: skip
+    local = np.concatenate([_lattice(shape) for shape in ctx.scene.shapes[held_obj]]) @ turn.T
     xy = spots[:, None, :] + local[None, :, :2]
     tops = _tops(xy.reshape(-1, 2), solids).reshape(xy.shape[:2])
     return np.max(tops - local[None, :, 2], axis=1)
+
+
+def _lattice(shape: Solid) -> np.ndarray:
+    """Points through ``shape``'s box, at most ``SPACING`` apart along each of its axes."""
+    steps = [np.linspace(-h, h, max(2, int(np.ceil(2.0 * h / SPACING)) + 1)) for h in shape.half]
+    grid = np.stack(np.meshgrid(*steps, indexing="ij"), axis=-1).reshape(-1, 3)
+    return shape.centre + grid @ shape.rotation.T
 
 
 def _tops(xy: np.ndarray, solids: list[Solid]) -> np.ndarray:
