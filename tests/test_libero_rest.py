@@ -65,12 +65,22 @@ def test_the_wide_mug_rests_inside_the_back_compartments_box() -> None:
     assert np.array_equal(surface(ctx, percept, BACK, True, MUG), point)
 
 
-def test_a_narrow_object_or_a_drawer_keeps_the_floor() -> None:
-    """LIBERO-10 task 3's bowl into the bottom drawer (a region sliding with its drawer)
-    is not searched: the rule is for a fixture's fixed compartments."""
+def test_a_drawer_or_an_object_that_rests_nowhere_inside_keeps_the_floor() -> None:
+    """LIBERO-10 task 3's bowl into the bottom drawer (a region sliding with its drawer) is
+    not searched: the rule is for a fixture's fixed compartments. LIBERO-10 task 5's book,
+    standing across the back compartment (11 cm), rests inside the box nowhere (sampled at
+    5 points its 11 cm straddled the 8 mm walls and it was sent to the floor): ``surface``
+    keeps the floor's centre."""
     start = episode_start("libero_10", 3, 0)
     assert not too_wide(start.ctx, start.percept, "akita_black_bowl_1",
                         "white_cabinet_1_bottom_region")  # fmt: skip
+    book = episode_start("libero_10", 5, 7)
+    ctx, percept = book.ctx, book.percept
+    assert too_wide(ctx, percept, "black_book_1", BACK)
+    assert lowest_rest(ctx, percept, "black_book_1", BACK) is None
+    centre, mat = region_pose(ctx.scene, percept, BACK)
+    floor = centre - np.array([0.0, 0.0, float(np.abs(mat @ ctx.scene.regions[BACK].size)[2])])
+    assert np.allclose(surface(ctx, percept, BACK, True, "black_book_1"), floor)
 
 
 @pytest.mark.slow

@@ -85,9 +85,12 @@ def rest_heights(
     sampled ``SPACING`` apart, ``_lattice``) touches one; -inf where none is under it."""
     _, rot = percept.objects[held_obj]
     turn = yawed(float(np.arctan2(rot[1, 0], rot[0, 0])))
-    local = np.concatenate([_lattice(shape) for shape in ctx.scene.shapes[held_obj]]) @ turn.T
+    local = _underside(np.concatenate([_lattice(shape) for shape in ctx.scene.shapes[held_obj]]))
+    local = local @ turn.T
     xy = spots[:, None, :] + local[None, :, :2]
-    tops = _tops(xy.reshape(-1, 2), solids).reshape(xy.shape[:2])
+    low, high = xy.reshape(-1, 2).min(axis=0), xy.reshape(-1, 2).max(axis=0)
+    near = [solid for solid in solids if _overlaps(solid, low, high)]
+    tops = _tops(xy.reshape(-1, 2), near).reshape(xy.shape[:2])
     return np.max(tops - local[None, :, 2], axis=1)
 
 
@@ -96,6 +99,25 @@ def _lattice(shape: Solid) -> np.ndarray:
     steps = [np.linspace(-h, h, max(2, int(np.ceil(2.0 * h / SPACING)) + 1)) for h in shape.half]
     grid = np.stack(np.meshgrid(*steps, indexing="ij"), axis=-1).reshape(-1, 3)
     return shape.centre + grid @ shape.rotation.T
+
+
+def _overlaps(solid: Solid, low: np.ndarray, high: np.ndarray) -> bool:
+    """Whether ``solid``'s xy bounds meet the xy box (``low``, ``high``)."""
+    reach = np.abs(solid.rotation[:2]) @ solid.half
+    centre = solid.centre[:2]
+    return bool(np.all(centre - reach <= high) and np.all(centre + reach >= low))
+
+
+def _underside(points: np.ndarray) -> np.ndarray:
+    """The lowest of ``points`` in each vertical column ``SPACING`` / 2 wide (the kept points
+    stand at most ``SPACING`` apart): lowered onto what is under it, a column touches first
+    with its lowest point."""
+    cells = np.round(points[:, :2] / (SPACING / 2.0)).astype(np.int64)
+    order = np.lexsort((points[:, 2], cells[:, 1], cells[:, 0]))
+    cells, points = cells[order], points[order]
+    first = np.ones(len(points), dtype=bool)
+    first[1:] = np.any(cells[1:] != cells[:-1], axis=1)
+    return points[first]
 
 
 def _tops(xy: np.ndarray, solids: list[Solid]) -> np.ndarray:
