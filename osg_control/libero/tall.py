@@ -1,5 +1,5 @@
-"""The grasp of a tall object the plan sets on a region's top: below its top, the palm
-clear of it, so that it hangs upright from the hand.
+"""The grasp of a tall object the plan sets on a region's top, or lays down in a drawer
+(``lay``): below its top, the palm clear of it, so that it hangs upright from the hand.
 
 The top-down grasp (``grasp.grips``) closes at most ``GRASP_FLOOR`` above an object's
 bottom; on an object that rises more than the palm's height above that point (the wine
@@ -10,9 +10,9 @@ and 9, half their picks). Leaning, it stopped on the wine rack's slot (62 deg fr
 with its origin outside the slot, or fell off it. When the plan sets such an object on a
 region's top next, its pick takes it where the palm clears its top (``neck_grasps``, set
 on the episode's ``Context.grasps`` like ``insert.doorway_grasps``); it hangs upright, 13
-cm below the hand, and the carry rises for it (``pick_place.HELD_CLEARANCE``). A place
-into a region (LIBERO-Object's bottles into the basket, 497 / 500 with the low grasp) keeps
-the low grasp: not tried there.
+cm below the hand, and the carry rises for it (``pick_place.HELD_CLEARANCE``); so when it
+goes into a drawer it is laid down in. Another place into a region (LIBERO-Object's bottles
+into the basket, 497 / 500 with the low grasp) keeps the low grasp: not tried there.
 """
 
 from __future__ import annotations
