@@ -4,10 +4,13 @@ not one per test file)."""
 
 from __future__ import annotations
 
+import json
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
+from osg_control import cli
 from osg_control.control.description import RobotDescription
 from osg_control.libero.drive import JointTargetDriver
 from osg_control.libero.env import LiberoEnv
@@ -54,3 +57,14 @@ def started(
     policy = executor()
     policy.start(start.problem, start.robot, start.ctx.scene, start.percept)
     return policy, start.percept
+
+
+def scripted_episode(capsys: Any, suite: str, task: int, state: int) -> dict[str, Any]:
+    """``task``'s initial ``state`` run by ``osg --domain libero evaluate benchmark`` with
+    the scripted operators (its step budget, ``check_success()``): its episode log entry."""
+    argv = ["--domain", "libero", "evaluate", "benchmark", "--suite", suite, "--task",
+            str(task), "--init-states", f"{state}:{state + 1}", "--policy", "scripted-plan",
+            "--json"]  # fmt: skip
+    assert cli.main(argv) == 0
+    (episode,) = json.loads(capsys.readouterr().out)["episode_log"]
+    return dict(episode)

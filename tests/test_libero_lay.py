@@ -6,16 +6,13 @@ pushed over toward the far corner so that it lies across the drawer."""
 
 from __future__ import annotations
 
-import json
-
 import numpy as np
 import pytest
 
 pytest.importorskip("libero.libero", reason="needs the libero extra: pip install -e .[libero]")
 
-from libero_start import episode_start  # noqa: E402
+from libero_start import episode_start, scripted_episode  # noqa: E402
 
-from osg_control import cli  # noqa: E402
 from osg_control.libero.facts import region_pose  # noqa: E402
 from osg_control.libero.lay import across, lay, lies_down, push_over  # noqa: E402
 from osg_control.libero.spots import surface  # noqa: E402
@@ -81,10 +78,6 @@ def test_the_push_goes_past_the_bottles_axis_across_the_drawer() -> None:
 def test_the_bottle_lies_in_the_closed_drawer(capsys) -> None:
     """State 40 within its 520 steps, no operator failed (at 5b83ccf the standing bottle
     stopped the drawer's close)."""
-    argv = ["--domain", "libero", "evaluate", "benchmark", "--suite", "libero_10_task",
-            "--task", "3", "--init-states", "40:41", "--policy", "scripted-plan",
-            "--json"]  # fmt: skip
-    assert cli.main(argv) == 0
-    (episode,) = json.loads(capsys.readouterr().out)["episode_log"]
+    episode = scripted_episode(capsys, "libero_10_task", 3, 40)
     assert episode["success"], episode["trace"]
     assert not any("FAILED" in line for line in episode["trace"])

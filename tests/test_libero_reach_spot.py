@@ -6,14 +6,13 @@ quarter turn to fit beside it. LIBERO-10's stove, within reach, keeps the first 
 
 from __future__ import annotations
 
-import json
-
 import numpy as np
 import pytest
 
 pytest.importorskip("libero.libero", reason="needs the libero extra: pip install -e .[libero]")
 
-from osg_control import cli  # noqa: E402
+from libero_start import scripted_episode  # noqa: E402
+
 from osg_control.libero.env import LiberoEnv  # noqa: E402
 from osg_control.libero.executor import PlanExecutor  # noqa: E402
 from osg_control.libero.facts import region_pose  # noqa: E402
@@ -82,10 +81,6 @@ def test_a_stove_within_reach_keeps_the_first_choice() -> None:
 def test_both_pots_stand_on_the_far_stove(capsys) -> None:
     """Swapped kitchen, state 1, within its 520 steps: both pots on the stove (one turned
     a quarter turn beside the other) and the stove on; no operator failed."""
-    argv = ["--domain", "libero", "evaluate", "benchmark", "--suite", "libero_10_swap",
-            "--task", "8", "--init-states", "1:2", "--policy", "scripted-plan",
-            "--json"]  # fmt: skip
-    assert cli.main(argv) == 0
-    (episode,) = json.loads(capsys.readouterr().out)["episode_log"]
+    episode = scripted_episode(capsys, "libero_10_swap", 8, 1)
     assert episode["success"], episode["trace"]
     assert not any("FAILED" in line for line in episode["trace"])

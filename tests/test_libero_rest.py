@@ -6,16 +6,13 @@ on the caddy's collision boxes, its origin inside the box."""
 
 from __future__ import annotations
 
-import json
-
 import numpy as np
 import pytest
 
 pytest.importorskip("libero.libero", reason="needs the libero extra: pip install -e .[libero]")
 
-from libero_start import episode_start  # noqa: E402
+from libero_start import episode_start, scripted_episode  # noqa: E402
 
-from osg_control import cli  # noqa: E402
 from osg_control.libero.facts import region_pose  # noqa: E402
 from osg_control.libero.rest import (  # noqa: E402
     HEADROOM,
@@ -87,10 +84,6 @@ def test_a_drawer_or_an_object_that_rests_nowhere_inside_keeps_the_floor() -> No
 def test_the_mug_goes_into_the_back_compartment(capsys) -> None:
     """State 41 within its 520 steps, no operator failed (at 5b83ccf: the place failed,
     the mug fell on its side and was not picked again)."""
-    argv = ["--domain", "libero", "evaluate", "benchmark", "--suite", "libero_10_task",
-            "--task", "5", "--init-states", "41:42", "--policy", "scripted-plan",
-            "--json"]  # fmt: skip
-    assert cli.main(argv) == 0
-    (episode,) = json.loads(capsys.readouterr().out)["episode_log"]
+    episode = scripted_episode(capsys, "libero_10_task", 5, 41)
     assert episode["success"], episode["trace"]
     assert not any("FAILED" in line for line in episode["trace"])
