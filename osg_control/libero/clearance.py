@@ -25,17 +25,23 @@ and the open fingers, each (half-length along the fingers' sliding axis, half-wi
 across it, height of its lower face above the TCP) [m]."""
 
 
-def footprint(ctx: Context, percept: LiberoPercept, obj: str, turn: float = 0.0) -> np.ndarray:
-    """An object's perceived footprint: the world xy box (lower, upper) round its
-    collision geometry (a moka pot's handle included), turned ``turn`` [rad] about the
-    vertical through its origin first."""
-    pos, rot = percept.objects[obj]
+def posed_corners(ctx: Context, percept: LiberoPercept, obj: str, turn: float = 0.0) -> np.ndarray:
+    """The 8 corners of ``obj``'s collision extent, about its origin, at its perceived
+    rotation turned ``turn`` [rad] about the vertical first (world axes, 8 x 3)."""
+    _, rot = percept.objects[obj]
     if turn:
         rot = yawed(turn) @ rot
     low, high = ctx.scene.extents[obj]
     corners = np.array([[x, y, z] for x in (low[0], high[0]) for y in (low[1], high[1])
                         for z in (low[2], high[2])])  # fmt: skip
-    world = pos[:2] + (corners @ rot.T)[:, :2]
+    return corners @ rot.T
+
+
+def footprint(ctx: Context, percept: LiberoPercept, obj: str, turn: float = 0.0) -> np.ndarray:
+    """An object's perceived footprint: the world xy box (lower, upper) round its
+    collision geometry (a moka pot's handle included), turned ``turn`` [rad] about the
+    vertical through its origin first."""
+    world = percept.position(obj)[:2] + posed_corners(ctx, percept, obj, turn)[:, :2]
     return np.array([world.min(axis=0), world.max(axis=0)])
 
 

@@ -35,6 +35,7 @@ from osg_control.libero.clearance import (
     carried,
     footprint,
     hang,
+    posed_corners,
     transit_height,
 )
 from osg_control.libero.drive import GRIPPER_CLOSED, GRIPPER_OPEN
@@ -193,11 +194,7 @@ def opening(
 def reach(ctx: Context, percept: LiberoPercept, obj: str, direction: np.ndarray) -> float:
     """How far ``obj``'s geometry extends from its origin along ``direction`` (its box's
     corners in its perceived pose)."""
-    _, rot = percept.objects[obj]
-    low, high = ctx.scene.extents[obj]
-    corners = np.array([[x, y, z] for x in (low[0], high[0]) for y in (low[1], high[1])
-                        for z in (low[2], high[2])])  # fmt: skip
-    return float(np.max(corners @ rot.T @ direction))
+    return float(np.max(posed_corners(ctx, percept, obj) @ direction))
 
 
 def goal_depth(way: Doorway, outer: float, inner: float) -> float:

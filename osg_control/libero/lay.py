@@ -111,27 +111,27 @@ def push_over(ctx: Context, obj: str, region: str) -> list[Leg]:
     reach, half_width, palm = HAND_BOXES[0]
     side = _radius(ctx, obj) + half_width + PUSH_GAP
     height = float(low[2] + PUSH_HEIGHT * (high[2] - low[2])) - palm
-    start: list[tuple[np.ndarray, np.ndarray, np.ndarray]] = []  # object, push, hand
+    push: list[tuple[np.ndarray, np.ndarray, np.ndarray]] = []  # beside, fall, hand
 
     def beside(now: LiberoPercept) -> np.ndarray:
-        if not start:
-            fall = lay(ctx, now, obj, region).fall(now.position(obj))  # where it stands
+        if not push:  # decided once, where the object was let go
+            standing = now.position(obj)
+            fall = lay(ctx, now, obj, region).fall(standing)
             along = np.cross([0.0, 0.0, 1.0], fall)  # the palm's long axis
             along = along if along @ out >= 0.0 else -along
-            start.append((now.position(obj), fall, fingers_along(ctx, along)))
-            start.append((start[0][0] - fall * side + along * (reach - PALM_OVERLAP),
-                          fall, start[0][2]))  # fmt: skip
-        return start[1][0] + np.array([0.0, 0.0, height])
+            point = standing - fall * side + along * (reach - PALM_OVERLAP)
+            push.append((point + np.array([0.0, 0.0, height]), fall, fingers_along(ctx, along)))
+        return push[0][0]
 
     def over(now: LiberoPercept, first: LiberoPercept) -> tuple[np.ndarray, np.ndarray]:
         point = beside(now)
-        return np.r_[point[:2], max(point[2], first.tcp[2])], start[0][2]
+        return np.r_[point[:2], max(point[2], first.tcp[2])], push[0][2]
 
     def down(now: LiberoPercept, first: LiberoPercept) -> tuple[np.ndarray, np.ndarray]:
-        return beside(now), start[0][2]
+        return beside(now), push[0][2]
 
-    def push(now: LiberoPercept, first: LiberoPercept) -> tuple[np.ndarray, np.ndarray]:
-        return beside(now) + start[0][1] * (side + PUSH_PAST), start[0][2]
+    def across_axis(now: LiberoPercept, first: LiberoPercept) -> tuple[np.ndarray, np.ndarray]:
+        return beside(now) + push[0][1] * (side + PUSH_PAST), push[0][2]
 
     return [Leg(over, GRIPPER_CLOSED, 40, 0.01, transit=True), Leg(down, GRIPPER_CLOSED, 30, 0.01),
-            Leg(push, GRIPPER_CLOSED, 40, 0.01), up(0.08, GRIPPER_CLOSED)]  # fmt: skip
+            Leg(across_axis, GRIPPER_CLOSED, 40, 0.01), up(0.08, GRIPPER_CLOSED)]  # fmt: skip

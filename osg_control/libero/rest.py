@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from osg_control.libero.clearance import posed_corners
 from osg_control.libero.facts import region_pose
 from osg_control.libero.legs import Context, yawed
 from osg_control.libero.perception import LiberoPercept
@@ -37,10 +38,7 @@ def too_wide(ctx: Context, percept: LiberoPercept, held_obj: str, target: str) -
     if box.carrier is not None or box.joint is not None or box.parent not in ctx.scene.solids:
         return False
     _, mat = region_pose(ctx.scene, percept, target)
-    _, rot = percept.objects[held_obj]
-    low, high = ctx.scene.extents[held_obj]
-    corners = np.array([[x, y, z] for x in (low[0], high[0]) for y in (low[1], high[1])
-                        for z in (low[2], high[2])]) @ rot.T  # fmt: skip
+    corners = posed_corners(ctx, percept, held_obj)
     for axis in range(3):
         direction = mat[:, axis]
         if abs(direction[2]) > 0.5:  # the region's vertical axis

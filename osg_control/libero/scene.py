@@ -29,8 +29,9 @@ KNOB_DEPTH = 0.015
 
 @dataclass(frozen=True)
 class Solid:
-    """A collision geom's bounding box in the world: its ``centre`` [m], ``rotation`` (its
-    axes as columns) and ``half`` sizes along them [m]."""
+    """A collision geom's bounding box in a frame (the world's, or an object's upright
+    frame): its ``centre`` [m], ``rotation`` (its axes as columns) and ``half`` sizes along
+    them [m]."""
 
     centre: np.ndarray
     rotation: np.ndarray
@@ -297,10 +298,10 @@ def read_scene(env: Any, problem: Any) -> Scene:
         found = [_joint(model, data, j, fixture) for j in getattr(fixture, "joints", None) or ()]
         mine = [j for j in found if j is not None]
         joints.update({j.name: j for j in mine})
-        if not mine and fixture is not None:
-            root = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_BODY, fixture.root_body)
-            solids[name] = _geom_solids(model, data, _subtree(model, root))
         if not mine:
+            if fixture is not None:  # a table has no object: nothing is set down in it
+                root = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_BODY, fixture.root_body)
+                solids[name] = _geom_solids(model, data, _subtree(model, root))
             continue
         moving = model.jnt_bodyid[mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_JOINT, mine[0].name)]
         leaf = _subtree(model, int(moving))
