@@ -37,6 +37,10 @@ def test_local_pool_returns_results_in_order() -> None:
     assert list(LocalExecutor(2).map(_square, range(7))) == [x * x for x in range(7)]
 
 
+def test_local_pool_results_stay_in_order_over_a_lazy_list() -> None:
+    assert list(LocalExecutor(2).map(_square, iter(range(50)))) == [x * x for x in range(50)]
+
+
 def test_unknown_backend_lists_the_known_ones() -> None:
     with pytest.raises(BackendError, match="unknown backend 'dask'; known backends: local, ray"):
         with open_executor("dask", 1):

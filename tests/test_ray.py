@@ -1,9 +1,17 @@
 """The Ray backend on a local Ray instance (2 CPUs): same bytes and tables as the local
-pool, a killed worker's chunk rerun, clear errors when Ray is missing or unreachable."""
+pool, every ``--backend`` verb's same results, jobs drawn lazily, a killed worker's chunk
+rerun, clear errors when Ray is missing or unreachable. The instance lives in the pytest
+process for this module only: the fault tests that start processes of their own
+(``test_reliability_parallel``) run without it."""
 
 from __future__ import annotations
 
+import argparse
+import functools
 import hashlib
+import itertools
+import json
+import operator
 import os
 import signal
 import socket
@@ -15,12 +23,13 @@ from pathlib import Path
 
 import pytest
 
-from osg_control.cli import main
+from osg_control.cli import build_parser, main
 from osg_control.data.collect import collect_skill
 from osg_control.domain.registry import get_domain
 from osg_control.errors import BackendError
 from osg_control.evaluation.evaluate import task_table
 from osg_control.parallel import LocalExecutor, open_executor
+from osg_control.parallel.lazy import IN_FLIGHT_PER_WORKER
 from osg_control.parallel.ray_backend import RayExecutor
 
 KITCHEN = get_domain("kitchen")
@@ -146,3 +155,78 @@ def test_missing_ray_says_how_to_install(monkeypatch: pytest.MonkeyPatch) -> Non
     with pytest.raises(BackendError, match=r"pip install 'osg-control\[ray\]'"):
         with open_executor("ray", 1):
             pass
+
+
+BACKEND_VERBS = {
+    "collect": ["collect", "--skill", SKILL, "--episodes", "4"],
+    "evaluate tasks": ["evaluate", "tasks", "--episodes", "1", "--task", "open-door",
+                       "--replans", "0", "1"],
+    "evaluate benchmark": ["--domain", "franka-kitchen", "evaluate", "benchmark",
+                           "--episodes", "2"],
+    "eval-skills": ["eval-skills", "--episodes", "2", "--skill", SKILL, "--noise", "0", "0.02"],
+    "classifier reach": ["classifier", "reach", "--episodes", "1"],
+}  # fmt: skip
+"""Every verb that takes --backend, with tiny counts (a test checks the list is complete)."""
+
+
+TRIPLE = functools.partial(operator.mul, 3)
+"""A partial (not a plain function), importable by Ray's workers."""
+
+
+def _backend_verbs(parser: object, words: tuple[str, ...] = ()) -> set[str]:
+    """The verbs (space-joined) of ``parser`` that have a ``--backend`` option."""
+    found = set()
+    for action in getattr(parser, "_actions", []):
+        if action.dest == "backend" and words:
+            found.add(" ".join(words))
+        if isinstance(action, argparse._SubParsersAction):
+            for name, sub in action.choices.items():
+                found |= _backend_verbs(sub, (*words, name))
+    return found
+
+
+def test_the_backend_verb_list_is_complete() -> None:
+    assert _backend_verbs(build_parser()) == set(BACKEND_VERBS)
+
+
+def _run_json(argv: list[str], capsys: pytest.CaptureFixture[str]) -> dict | list:
+    code = main([*argv, "--json"])
+    out, err = capsys.readouterr()
+    assert code == 0, err
+    return json.loads(out)
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("verb", list(BACKEND_VERBS))
+def test_every_backend_verb_gives_the_same_results_on_local_and_ray(
+    verb: str, ray_executor: RayExecutor, tmp_path: Path, capsys, monkeypatch
+) -> None:
+    results = {}
+    for backend in ("local", "ray"):
+        monkeypatch.setenv("OSG_CACHE_DIR", str(tmp_path / backend))  # no shared resume
+        argv = [*BACKEND_VERBS[verb], "--backend", backend, "--workers", "2"]
+        results[backend] = _run_json(argv, capsys)
+    if verb == "collect":  # the data sets, byte for byte
+        local, remote = (
+            hashlib.sha256(Path(r[0]["path"]).read_bytes()).hexdigest() for r in results.values()
+        )
+        assert local == remote
+    else:
+        assert results["ray"] == results["local"]
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("backend", ["local", "ray"])
+def test_jobs_are_drawn_lazily_with_a_bounded_window(
+    backend: str, request: pytest.FixtureRequest
+) -> None:
+    if backend == "ray":
+        request.getfixturevalue("ray_executor")
+    drawn = itertools.count()
+    items = (next(drawn) for _ in itertools.count())  # endless: a job list can't be built
+    with open_executor(backend, 2) as executor:
+        mapped = executor.map(TRIPLE, items)
+        assert [next(mapped) for _ in range(5)] == [3 * x for x in range(5)]
+        mapped.close()
+    cpus = 2  # the local pool's workers, or the Ray instance's CPUs
+    assert next(drawn) <= 5 + IN_FLIGHT_PER_WORKER * cpus

@@ -151,7 +151,7 @@ class RayExecutor:
         sigterm = signal.getsignal(signal.SIGTERM)
         try:
             ray.init(
-                address=address,
+                address=address or "local",  # None would join a cluster RAY_ADDRESS names
                 num_cpus=num_cpus,
                 include_dashboard=False,
                 log_to_driver=False,
