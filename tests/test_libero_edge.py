@@ -6,6 +6,7 @@ closes round keep it."""
 from __future__ import annotations
 
 import json
+from dataclasses import replace
 
 import numpy as np
 import pytest
@@ -15,10 +16,19 @@ pytest.importorskip("libero.libero", reason="needs the libero extra: pip install
 from libero_start import started  # noqa: E402
 
 from osg_control import cli  # noqa: E402
-from osg_control.libero.edge import EDGE_DEPTH, EDGE_TILT, pinched, pinched_last  # noqa: E402
+from osg_control.libero.edge import (  # noqa: E402
+    EDGE_CREEP,
+    EDGE_CREEP_RATE,
+    EDGE_DEPTH,
+    EDGE_FIRM,
+    EDGE_TILT,
+    pinched,
+    pinched_last,
+)
 from osg_control.libero.executor import PlanExecutor  # noqa: E402
 from osg_control.libero.facts import region_pose  # noqa: E402
 from osg_control.libero.operators import PICKS  # noqa: E402
+from osg_control.libero.pick_place import lift  # noqa: E402
 from osg_control.libero.plan import plan_holds  # noqa: E402
 from osg_control.libero.spots import surface  # noqa: E402
 
@@ -50,6 +60,25 @@ def test_the_wide_can_is_pinched_across_its_top_edge() -> None:
     assert -rotation[:, 2] @ out > 0 and -rotation[:, 2][2] > 0  # the palm out and up
     across = np.cross(out, [0.0, 0.0, 1.0]) / np.linalg.norm(out)  # within 10 deg of it
     assert abs(rotation[:, 1] @ across) < np.sin(np.radians(10.0)) * np.linalg.norm(rotation[:2, 1])
+
+
+def test_a_pinched_object_is_lifted_slowly_and_no_further_once_slipped() -> None:
+    """The pinched can's lift starts with a creep (its target at most ``EDGE_CREEP_RATE``
+    above the hand, up to ``EDGE_CREEP``), and the rest of it ends at once when the fingers
+    closed nearer than ``EDGE_FIRM``; the cream cheese, held across, lifts at once."""
+    policy, percept = started("libero_10_object", 7)
+    ctx = policy.ctx
+    creeping, rest = lift(ctx, CAN)
+    start = percept
+    target, _ = creeping.target(percept, start)
+    assert target[2] == pytest.approx(percept.tcp[2] + EDGE_CREEP_RATE)
+    high = replace(percept, tcp=percept.tcp + [0.0, 0.0, EDGE_CREEP - 0.001])
+    assert creeping.target(high, start)[0][2] == pytest.approx(start.tcp[2] + EDGE_CREEP)
+    assert rest.until is not None
+    assert rest.until(replace(percept, finger_width=EDGE_FIRM - 0.005))
+    assert not rest.until(replace(percept, finger_width=EDGE_FIRM + 0.005))
+    (cheese_lift,) = lift(ctx, "red_cream_cheese_1")
+    assert cheese_lift.until is None
 
 
 def test_a_pinched_object_is_released_above_the_region() -> None:

@@ -5,12 +5,16 @@ No slice of such an object fits between the open fingers (``grasp.fits_hand``: L
 bigger alphabet soup can is 9.4 cm round, the Panda's pads open 7.9 cm apart), so every
 top-down grasp closed on nothing above it (``libero_10_object`` tasks 0 and 7, 0 / 3 on
 states 0-2). Tilted ``EDGE_TILT``, the fingers close along a line 45 deg from the side's
-normal and from the top's: within the pads' friction cone (robosuite's pads have friction
-2: 63 deg), and the two contacts, ``EDGE_DEPTH`` apart, hold the hang's torque. The hand
-comes from outside the edge, its palm out and up; of the edges round the object turned at
-most ``EDGE_YAWS`` from the one facing the arm's base, the one whose tilted hand stands
-clearest of the perceived neighbours. Set on the episode's ``Context.grasps`` from the plan
-(``edge_grasps``), like ``tall.neck_grasps``.
+normal and from the top's. It is the fingers' bodies that touch the can, not their pads
+(friction 1 against the pads' 2: a 45 deg cone), so the pinch holds at the edge of its
+friction cones: the fingers slide toward the edge as the can's weight comes on them.
+Hence the slow first lift (``EDGE_CREEP``, ``legs.creep``) and the check that the
+fingers stopped ``EDGE_FIRM`` apart (``slipped``) before the rest of it. The hand comes
+from outside the edge, its palm out and up; of the edges round the object turned at most
+``EDGE_YAWS`` from the one facing the arm's base, the one whose tilted hand stands
+clearest of the perceived neighbours, the next clearest after each failed pick. Set on
+the episode's ``Context.grasps`` from the plan (``edge_grasps``), like
+``tall.neck_grasps``.
 """
 
 from __future__ import annotations
@@ -38,6 +42,19 @@ the can slipped out of the hand, LIBERO-PRO's ``libero_10_object`` task 0 state 
 EDGE_YAWS = np.radians([0.0, 30.0, -30.0, 60.0, -60.0])
 """The turns about the vertical, from the direction of the arm's base, of the edges tried
 (ties in clearance go in this order) [rad]."""
+EDGE_CREEP = 0.02
+"""How high the pinched object is first lifted slowly [m]: lifted at the careful pace, the
+hand's first step rose 8 mm and swung 5 mm aside, and the fingers slid off the edge and
+closed on nothing (a quarter of the first pinches of ``_object`` task 7)."""
+EDGE_CREEP_RATE = 0.004
+"""How far above the TCP the slow lift's target leads it [m] (``legs.creep``)."""
+EDGE_CREEP_STEPS = 30
+"""The slow lift's steps at most."""
+EDGE_FIRM = 0.030
+"""The least distance between the fingers of a pinch that holds [m]: the fingers slide
+toward the edge as the slow lift takes the can's weight, and those that stopped nearer
+than this let it fall on the way to the basket (2.5 and 2.8 cm; 3.3 cm and more on those
+carried there)."""
 HAND_HEIGHT = 0.04
 """How far above its lower face the hand's palm and fingers are sampled for the clearance
 of a tilted hand [m]."""
@@ -170,3 +187,9 @@ def _clearance(
             gap = np.linalg.norm(np.maximum(outside, 0.0)) if np.any(outside > 0) else outside.max()
             least = min(least, float(gap))
     return least
+
+
+def slipped(percept: LiberoPercept) -> bool:
+    """Whether a pinch's fingers slid too near the edge to hold (``EDGE_FIRM``): the pick
+    then ends low, fails, and lets go there (the retry takes the next edge)."""
+    return percept.finger_width < EDGE_FIRM

@@ -27,6 +27,8 @@ TURN_TOLERANCE = 0.1
 """A leg that names a rotation is reached only within this of it [rad]."""
 HOVER = 0.10
 """Height above a thing's grasp point the empty hand approaches [m]."""
+CREEP_TOLERANCE = 0.002
+"""How near the top of its rise a creeping leg (``creep``) ends [m]."""
 STALL_STEPS = 8
 """Steps a transit leg may go without getting nearer its unchanged target (by ``PROGRESS``
 or ``TURN_PROGRESS``) before it counts as stalled and ends (``StallWatch``)."""
@@ -223,6 +225,19 @@ def hold(gripper: float, steps: int) -> Leg:
     return Leg(here((0.0, 0.0, 0.0)), gripper, steps, 0.0)
 
 
-def up(height: float, gripper: float) -> Leg:
-    """Straight up ``height`` from where the leg starts, commanding the gripper."""
-    return Leg(here((0.0, 0.0, height)), gripper, 30, 0.02)
+def up(height: float, gripper: float, until: Callable[[LiberoPercept], bool] | None = None) -> Leg:
+    """Straight up ``height`` from where the leg starts, commanding the gripper (ending
+    where it is once ``until`` holds)."""
+    return Leg(here((0.0, 0.0, height)), gripper, 30, 0.02, until)
+
+
+def creep(height: float, rate: float, gripper: float, steps: int) -> Leg:
+    """Straight up ``height`` from where the leg starts, the target never more than
+    ``rate`` above the TCP: the IK, told a small error, moves the arm slowly (it is told
+    the whole error on a careful leg, ``drive.JointTargetDriver.action``)."""
+
+    def target(now: LiberoPercept, start: LiberoPercept) -> tuple[np.ndarray, None]:
+        top = start.tcp[2] + height
+        return np.r_[start.tcp[:2], min(now.tcp[2] + rate, top)], None
+
+    return Leg(target, gripper, steps, CREEP_TOLERANCE)

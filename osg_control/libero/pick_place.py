@@ -11,11 +11,18 @@ from scipy.spatial.transform import Rotation
 
 from osg_control.libero.clearance import carried, transit_height
 from osg_control.libero.drive import GRIPPER_CLOSED, GRIPPER_OPEN
+from osg_control.libero.edge import (
+    EDGE_CREEP,
+    EDGE_CREEP_RATE,
+    EDGE_CREEP_STEPS,
+    pinched,
+    slipped,
+)
 from osg_control.libero.facts import held, region_pose
 from osg_control.libero.fixtures import door_point, drawer_front, drawer_hand
 from osg_control.libero.grasp import carry_point, grasp_point, grasp_rotation
 from osg_control.libero.lay import lies_down, push_over
-from osg_control.libero.legs import HOVER, Context, Leg, hold, up
+from osg_control.libero.legs import HOVER, Context, Leg, creep, hold, up
 from osg_control.libero.overhang import lean_hover, leaning, slide
 from osg_control.libero.perception import LiberoPercept
 from osg_control.libero.spots import DROP, SetDown, set_down
@@ -143,8 +150,17 @@ def pick(ctx: Context, obj: str) -> list[Leg]:
         ),
         hold(GRIPPER_CLOSED, CLOSING_STEPS),
         slide(ctx, obj),
-        up(LIFT, GRIPPER_CLOSED),
+        *lift(ctx, obj),
     ]
+
+
+def lift(ctx: Context, obj: str) -> list[Leg]:
+    """Up ``LIFT``; a pinched object (``edge``) first slowly, and no further when its
+    pinch slipped (``edge.slipped``)."""
+    if not pinched(ctx, obj):
+        return [up(LIFT, GRIPPER_CLOSED)]
+    return [creep(EDGE_CREEP, EDGE_CREEP_RATE, GRIPPER_CLOSED, EDGE_CREEP_STEPS),
+            up(LIFT - EDGE_CREEP, GRIPPER_CLOSED, until=slipped)]  # fmt: skip
 
 
 def place(ctx: Context, obj: str, target: str, inside: bool) -> list[Leg]:
