@@ -12,8 +12,10 @@ from pathlib import Path
 import pytest
 
 from osg_control.cli import main
-from osg_control.errors import BackendError
+from osg_control.commands.errors import handle_errors
+from osg_control.errors import EXIT_CODES, BackendError
 from osg_control.parallel import LocalExecutor, open_executor
+from osg_control.parallel.lazy import INTERRUPTED, windowed
 from osg_control.parallel.processes import descendants, process_stat
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -138,3 +140,32 @@ def test_an_interrupt_while_a_result_is_half_sent_still_exits(tmp_path: Path) ->
     )
     assert done.returncode == 0 and done.stdout.strip() == "interrupted", done.stderr
     assert time.monotonic() - started < 30
+
+
+def test_an_interrupt_a_finalizer_swallowed_still_ends_the_job() -> None:
+    """Ctrl-C's KeyboardInterrupt is lost if it lands in a finalizer; the mark its handler
+    sets ends the job at the next result, and the jobs in flight are cancelled."""
+    cancelled: list[int] = []
+    mapped = windowed(lambda x: x, lambda x: 3 * x, cancelled.append, iter(range(10)), 3)
+    assert next(mapped) == 0
+    INTERRUPTED.set()
+    try:
+        with pytest.raises(KeyboardInterrupt):
+            next(mapped)
+    finally:
+        INTERRUPTED.clear()
+    assert cancelled == [2, 3]
+
+
+def test_handle_errors_marks_ctrl_c_and_restores_the_handlers() -> None:
+    """Within ``handle_errors`` Ctrl-C raises KeyboardInterrupt and sets the mark (exit 130);
+    the mark starts clear and the process's own handlers come back after."""
+    before = signal.getsignal(signal.SIGINT), signal.getsignal(signal.SIGTERM)
+    INTERRUPTED.set()  # left over from an earlier command in this process
+    with handle_errors() as outcome:
+        assert not INTERRUPTED.is_set()
+        os.kill(os.getpid(), signal.SIGINT)
+        time.sleep(1.0)  # the handler raises at the next bytecode
+    assert INTERRUPTED.is_set() and outcome.code == EXIT_CODES["interrupted"]
+    INTERRUPTED.clear()
+    assert (signal.getsignal(signal.SIGINT), signal.getsignal(signal.SIGTERM)) == before

@@ -224,7 +224,12 @@ def test_a_billion_episodes_start_at_once_in_flat_memory(verb: str, tmp_path: Pa
             time.sleep(0.2)
         assert peak < RSS_LIMIT_KB, f"{peak} kB resident"
         proc.send_signal(signal.SIGINT)
-        proc.wait(timeout=60)
+        try:
+            proc.wait(timeout=60)
+        except subprocess.TimeoutExpired:
+            proc.kill()
+            reader.join(timeout=10)
+            pytest.fail("no exit within 60 s of SIGINT; its stderr:\n" + "".join(lines)[-4000:])
     finally:
         proc.kill()
         reader.join(timeout=10)

@@ -2,9 +2,10 @@
 code (``errors.EXIT_CODES``); ``--debug`` (or ``OSG_DEBUG=1``) adds the traceback.
 
 SIGTERM is handled like Ctrl-C in the main process: the work in progress stops the same
-way (finished chunks kept, exit 130). A closed standard output (``osg ... | head``) ends
-the command quietly, as POSIX tools do: no message, exit 1 (the Python docs' recipe for
-SIGPIPE).
+way (finished chunks kept, exit 130); both are also marked (``lazy.INTERRUPTED``), so
+that one swallowed by a finalizer still ends a long job at its next result. A closed
+standard output (``osg ... | head``) ends the command quietly, as POSIX tools do: no
+message, exit 1 (the Python docs' recipe for SIGPIPE).
 """
 
 from __future__ import annotations
@@ -21,6 +22,7 @@ from dataclasses import dataclass
 from types import FrameType
 
 from osg_control.errors import EXIT_CODES, OSGError, UsageError
+from osg_control.parallel.lazy import INTERRUPTED
 
 
 @dataclass
@@ -30,16 +32,20 @@ class Outcome:
     code: int = 0
 
 
-def _sigterm_as_interrupt(main_pid: int) -> None:
-    """Raise ``KeyboardInterrupt`` on SIGTERM in this process; children keep the default."""
+def _interrupts(main_pid: int) -> None:
+    """Raise ``KeyboardInterrupt`` on Ctrl-C and SIGTERM in this process, and mark it
+    (``lazy.INTERRUPTED``: a long job raises it again should a finalizer swallow it);
+    children keep the default."""
 
     def handler(signum: int, _frame: FrameType | None) -> None:
         if os.getpid() != main_pid:
             signal.signal(signum, signal.SIG_DFL)
             os.kill(os.getpid(), signum)
             return
+        INTERRUPTED.set()
         raise KeyboardInterrupt
 
+    signal.signal(signal.SIGINT, handler)
     signal.signal(signal.SIGTERM, handler)
 
 
@@ -71,9 +77,10 @@ def handle_errors(debug: bool = False) -> Iterator[Outcome]:
     """Run a command's body; map its exceptions to a message and ``Outcome.code``."""
     outcome = Outcome()
     in_main_thread = threading.current_thread() is threading.main_thread()
-    previous = signal.getsignal(signal.SIGTERM)
+    previous = {sig: signal.getsignal(sig) for sig in (signal.SIGINT, signal.SIGTERM)}
+    INTERRUPTED.clear()
     if in_main_thread:  # signal handlers can only be set there
-        _sigterm_as_interrupt(os.getpid())
+        _interrupts(os.getpid())
     try:
         yield outcome
         sys.stdout.flush()  # a closed pipe shows here, not as a warning at exit
@@ -101,4 +108,5 @@ def handle_errors(debug: bool = False) -> Iterator[Outcome]:
         outcome.code = EXIT_CODES["failure"]
     finally:
         if in_main_thread:
-            signal.signal(signal.SIGTERM, previous)
+            for sig, handler in previous.items():
+                signal.signal(sig, handler)

@@ -8,6 +8,7 @@ keeps at most ``window`` of them submitted, so memory stays flat and the first r
 
 from __future__ import annotations
 
+import threading
 from collections import deque
 from collections.abc import Callable, Iterable, Iterator, Sequence
 from typing import Generic, TypeVar, overload
@@ -18,6 +19,10 @@ C = TypeVar("C")
 F = TypeVar("F")
 IN_FLIGHT_PER_WORKER = 2
 """Jobs submitted per worker (or Ray CPU) ahead of the one being collected."""
+INTERRUPTED = threading.Event()
+"""Set by ``osg``'s Ctrl-C and SIGTERM handler (``commands.errors``). The handler's
+``KeyboardInterrupt`` is lost when it lands while the main thread runs a finalizer (Python
+prints "Exception ignored" and goes on), so ``windowed`` raises it again at the next result."""
 
 
 class Jobs(Sequence[T], Generic[T]):
@@ -60,13 +65,20 @@ def windowed(
     """``result(submit(item))`` for every item, in the items' order, with at most ``window``
     submitted and not yet collected; leaving early cancels those."""
     pending: deque[F] = deque()
+
+    def collected() -> R:
+        done = result(pending.popleft())
+        if INTERRUPTED.is_set():
+            raise KeyboardInterrupt
+        return done
+
     try:
         for item in items:
             pending.append(submit(item))
             if len(pending) >= window:
-                yield result(pending.popleft())
+                yield collected()
         while pending:
-            yield result(pending.popleft())
+            yield collected()
     finally:
         for handle in pending:
             cancel(handle)
