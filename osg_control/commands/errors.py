@@ -107,6 +107,7 @@ def handle_errors(debug: bool = False) -> Iterator[Outcome]:
         _report(f"internal error {type(err).__name__}: {err} (please report it){hint}", debug)
         outcome.code = EXIT_CODES["failure"]
     finally:
+        INTERRUPTED.clear()  # a later job in this process (the Python API) runs on
         if in_main_thread:
             for sig, handler in previous.items():
                 signal.signal(sig, handler)
