@@ -5,7 +5,6 @@ closes round keep it."""
 
 from __future__ import annotations
 
-import json
 from dataclasses import replace
 
 import numpy as np
@@ -13,9 +12,8 @@ import pytest
 
 pytest.importorskip("libero.libero", reason="needs the libero extra: pip install -e .[libero]")
 
-from libero_start import started  # noqa: E402
+from libero_start import scripted_episode, started  # noqa: E402
 
-from osg_control import cli  # noqa: E402
 from osg_control.libero.edge import (  # noqa: E402
     EDGE_CREEP,
     EDGE_CREEP_RATE,
@@ -127,11 +125,7 @@ def test_the_cheese_and_the_can_reach_the_basket(capsys: pytest.CaptureFixture[s
     of the can closed on nothing above it; at the first edge 8 mm clear of the neighbours,
     not the clearest, the fingers slid the can along the table and closed on nothing:
     states 0-9 1 / 10, this one lost)."""
-    argv = ["--domain", "libero", "evaluate", "benchmark", "--suite", "libero_10_object",
-            "--task", "7", "--init-states", "0:1", "--policy", "scripted-plan",
-            "--json"]  # fmt: skip
-    assert cli.main(argv) == 0
-    episode = json.loads(capsys.readouterr().out)["episode_log"][0]
+    episode = scripted_episode(capsys, "libero_10_object", 7, 0)
     picks = [line for line in episode["trace"] if f"pick {CAN} " in line]
     assert picks and picks[0].endswith(": ok"), episode["trace"]
     assert episode["success"], episode["trace"]

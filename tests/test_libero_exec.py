@@ -14,6 +14,8 @@ from scipy.spatial.transform import Rotation
 
 pytest.importorskip("libero.libero", reason="needs the libero extra: pip install -e .[libero]")
 
+from libero_start import scripted_episode  # noqa: E402
+
 from osg_control import cli  # noqa: E402
 from osg_control.libero.benchmark import Job, run_job  # noqa: E402
 from osg_control.libero.clearance import (  # noqa: E402
@@ -306,10 +308,7 @@ def test_scripted_plan_puts_it_in_and_closes(capsys, task: int, placed: str) -> 
     """LIBERO-10, initial state 0, within 520 steps: task 3, the bowl into the open drawer,
     then the drawer pushed shut (its joint sensed with noise); task 9, the mug picked by its
     handle, taken in through the microwave's doorway and pushed in, the door pushed shut."""
-    argv = ["--domain", "libero", "evaluate", "benchmark", "--suite", "libero_10", "--task",
-            str(task), "--init-states", "0:1", "--policy", "scripted-plan", "--json"]  # fmt: skip
-    assert cli.main(argv) == 0
-    (episode,) = json.loads(capsys.readouterr().out)["episode_log"]
+    episode = scripted_episode(capsys, "libero_10", task, 0)
     assert episode["success"], episode["trace"]
     assert any(line.endswith(f"{placed}: ok") for line in episode["trace"])
 
@@ -319,10 +318,7 @@ def test_the_hand_turns_for_the_push_clear_of_the_handle(capsys) -> None:
     """LIBERO-10 task 9, initial state 14: let go in the microwave, the hand backs out to
     the push's standoff before it turns for the push (backed out a fixed 6 cm, a finger
     caught the mug's handle and tipped the mug over, and the episode failed)."""
-    argv = ["--domain", "libero", "evaluate", "benchmark", "--suite", "libero_10", "--task",
-            "9", "--init-states", "14:15", "--policy", "scripted-plan", "--json"]  # fmt: skip
-    assert cli.main(argv) == 0
-    (episode,) = json.loads(capsys.readouterr().out)["episode_log"]
+    episode = scripted_episode(capsys, "libero_10", 9, 14)
     assert episode["success"], episode["trace"]
     assert not any(line.endswith("FAILED") for line in episode["trace"]), episode["trace"]
 
@@ -339,10 +335,7 @@ def test_scripted_plan_opens_the_drawer_and_turns_the_knob(capsys, task, fixture
     the hand level and pulled past LIBERO's open threshold; the stove's knob (task 7)
     grasped across its grip and turned on. Each at the first try: one plan, no operator
     failed, within the 300 steps."""
-    argv = ["--domain", "libero", "evaluate", "benchmark", "--suite", "libero_goal", "--task",
-            str(task), "--init-states", "0:1", "--policy", "scripted-plan", "--json"]  # fmt: skip
-    assert cli.main(argv) == 0
-    (episode,) = json.loads(capsys.readouterr().out)["episode_log"]
+    episode = scripted_episode(capsys, "libero_goal", task, 0)
     assert episode["success"] and episode["steps"] < 300, episode["trace"]
     assert f"approach {fixture}: ok" in " ".join(episode["trace"])
     assert sum("plan (" in line for line in episode["trace"]) == 1, episode["trace"]
@@ -433,9 +426,6 @@ def test_scripted_plan_puts_the_cream_cheese_in_the_basket(capsys) -> None:
     leaving the basket on a straight line down to the cream cheese box, dragged the basket
     onto the box): both objects into the basket within 520 steps, each pick the first
     time."""
-    argv = ["--domain", "libero", "evaluate", "benchmark", "--suite", "libero_10", "--task",
-            "7", "--init-states", "0:1", "--policy", "scripted-plan", "--json"]  # fmt: skip
-    assert cli.main(argv) == 0
-    (episode,) = json.loads(capsys.readouterr().out)["episode_log"]
+    episode = scripted_episode(capsys, "libero_10", 7, 0)
     assert episode["success"], episode["trace"]
     assert not any("FAILED" in line for line in episode["trace"]), episode["trace"]

@@ -4,7 +4,6 @@ first set down at one end of the row the goal fills, leaving the second room."""
 
 from __future__ import annotations
 
-import json
 from dataclasses import replace
 
 import numpy as np
@@ -12,7 +11,8 @@ import pytest
 
 pytest.importorskip("libero.libero", reason="needs the libero extra: pip install -e .[libero]")
 
-from osg_control import cli  # noqa: E402
+from libero_start import scripted_episode  # noqa: E402
+
 from osg_control.libero.clearance import HAND_BOXES, footprint  # noqa: E402
 from osg_control.libero.drive import JointTargetDriver  # noqa: E402
 from osg_control.libero.env import LiberoEnv  # noqa: E402
@@ -86,9 +86,6 @@ def test_the_first_pot_leaves_the_second_room(kitchen) -> None:
 def test_scripted_plan_puts_both_moka_pots_on_the_stove(capsys) -> None:
     """LIBERO-10 task 8, initial state 0, within 520 steps: both pots carried level and
     set down side by side, no operator failed."""
-    argv = ["--domain", "libero", "evaluate", "benchmark", "--suite", "libero_10", "--task",
-            "8", "--init-states", "0:1", "--policy", "scripted-plan", "--json"]  # fmt: skip
-    assert cli.main(argv) == 0
-    (episode,) = json.loads(capsys.readouterr().out)["episode_log"]
+    episode = scripted_episode(capsys, "libero_10", 8, 0)
     assert episode["success"], episode["trace"]
     assert not any("FAILED" in line for line in episode["trace"])

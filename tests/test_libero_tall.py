@@ -5,7 +5,6 @@ keep the grasp they had."""
 
 from __future__ import annotations
 
-import json
 from dataclasses import replace
 
 import numpy as np
@@ -13,9 +12,8 @@ import pytest
 
 pytest.importorskip("libero.libero", reason="needs the libero extra: pip install -e .[libero]")
 
-from libero_start import started  # noqa: E402
+from libero_start import scripted_episode, started  # noqa: E402
 
-from osg_control import cli  # noqa: E402
 from osg_control.libero.clearance import HAND_BOXES  # noqa: E402
 from osg_control.libero.executor import PlanExecutor  # noqa: E402
 from osg_control.libero.pick_place import CARRY_CEILING, HELD_CLEARANCE, approach  # noqa: E402
@@ -82,9 +80,6 @@ def test_scripted_plan_sets_the_bottle_on_its_target(capsys, task: int) -> None:
     """LIBERO-Goal tasks 2 and 9, initial state 1: grasped near its bottom the palm came
     down on the bottle's neck; every pick failed and the episodes ran out of their 300
     steps. Now one plan, nothing failed, within 200 steps."""
-    argv = ["--domain", "libero", "evaluate", "benchmark", "--suite", "libero_goal", "--task",
-            str(task), "--init-states", "1:2", "--policy", "scripted-plan", "--json"]  # fmt: skip
-    assert cli.main(argv) == 0
-    (episode,) = json.loads(capsys.readouterr().out)["episode_log"]
+    episode = scripted_episode(capsys, "libero_goal", task, 1)
     assert episode["success"] and episode["steps"] < 200, episode["trace"]
     assert not any("FAILED" in line for line in episode["trace"]), episode["trace"]
