@@ -14,7 +14,6 @@ import json
 import operator
 import os
 import signal
-import socket
 import sys
 import threading
 import time
@@ -22,6 +21,7 @@ from collections.abc import Iterator
 from pathlib import Path
 
 import pytest
+from ports import closed_port
 
 from osg_control.cli import build_parser, main
 from osg_control.data.collect import collect_skill
@@ -50,12 +50,6 @@ def ray_executor() -> Iterator[RayExecutor]:
 
 def _sha256(path: Path) -> str:
     return hashlib.sha256(path.read_bytes()).hexdigest()
-
-
-def _closed_port() -> int:
-    with socket.socket() as sock:
-        sock.bind(("127.0.0.1", 0))
-        return int(sock.getsockname()[1])
 
 
 def _ray_workers_running(function: str) -> list[int]:
@@ -128,7 +122,7 @@ def test_a_killed_ray_worker_has_its_chunk_rerun(tmp_path: Path, ray_executor: R
 
 
 def test_unreachable_ray_address_fails_fast_with_the_address() -> None:
-    address = f"127.0.0.1:{_closed_port()}"
+    address = f"127.0.0.1:{closed_port()}"
     started = time.monotonic()
     with pytest.raises(BackendError, match=f"Ray cluster at '{address}' is unreachable"):
         with open_executor("ray", 1, address):
@@ -137,7 +131,7 @@ def test_unreachable_ray_address_fails_fast_with_the_address() -> None:
 
 
 def test_cli_reports_an_unreachable_cluster(capsys: pytest.CaptureFixture[str]) -> None:
-    address = f"127.0.0.1:{_closed_port()}"
+    address = f"127.0.0.1:{closed_port()}"
     code = main(["collect", "--skill", SKILL, "--episodes", "1", "--backend", "ray",
                  "--address", address])  # fmt: skip
     assert code == 1

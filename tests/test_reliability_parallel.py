@@ -15,6 +15,7 @@ import time
 from pathlib import Path
 
 import pytest
+from ports import closed_port
 
 from osg_control import cli
 from osg_control.errors import EXIT_CODES, BackendError
@@ -81,9 +82,7 @@ def test_the_cli_names_a_silent_address(capsys) -> None:
 def test_a_ray_instance_started_here_ignores_ray_address(monkeypatch) -> None:
     """Without ``--address`` osg starts its own instance (the one its watchdog ends), even
     where ``RAY_ADDRESS`` names another cluster, which Ray would otherwise join."""
-    with socket.socket() as sock:
-        sock.bind(("127.0.0.1", 0))
-        closed = f"127.0.0.1:{sock.getsockname()[1]}"
+    closed = f"127.0.0.1:{closed_port()}"
     monkeypatch.setenv("RAY_ADDRESS", closed)
     assert not ray.is_initialized()
     with open_executor("ray", 1) as executor:
