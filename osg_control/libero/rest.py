@@ -85,10 +85,9 @@ def rest_heights(
     turn = yawed(float(np.arctan2(rot[1, 0], rot[0, 0])))
     local = _underside(np.concatenate([_lattice(shape) for shape in ctx.scene.shapes[held_obj]]))
     local = local @ turn.T
-    xy = spots[:, None, :] + local[None, :, :2]
-    low, high = xy.reshape(-1, 2).min(axis=0), xy.reshape(-1, 2).max(axis=0)
-    near = [solid for solid in solids if _overlaps(solid, low, high)]
-    tops = _tops(xy.reshape(-1, 2), near).reshape(xy.shape[:2])
+    xy = (spots[:, None, :] + local[None, :, :2]).reshape(-1, 2)
+    near = [solid for solid in solids if _overlaps(solid, xy.min(axis=0), xy.max(axis=0))]
+    tops = _tops(xy, near).reshape(len(spots), len(local))
     return np.max(tops - local[None, :, 2], axis=1)
 
 
