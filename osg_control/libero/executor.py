@@ -29,6 +29,7 @@ from osg_control.libero.plan import plan_holds, plan_task
 from osg_control.libero.problem import Atom, LiberoProblem
 from osg_control.libero.scene import Scene
 from osg_control.libero.tall import neck_grasps
+from osg_control.libero.tip import tipped
 from osg_control.planning.task import SearchLimits
 
 MAX_REPLANS = 4
@@ -114,6 +115,7 @@ class PlanExecutor:
             grasps = edge_grasps(self.ctx, self.queue) | grasps
             grasps |= neck_grasps(self.ctx, self.queue)
         self.ctx.grasps = grasps
+        self.ctx.tipped = tipped(self.ctx, percept, self.queue)
         self.ctx.opening = frozenset(  # the approach turns the hand for the pull
             args[0] for (op, args), (then, on) in zip(self.queue, self.queue[1:], strict=False)
             if op == "approach" and then == "open" and on[0] == args[0]

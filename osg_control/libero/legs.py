@@ -88,8 +88,9 @@ class Context:
     chosen and failed so far, and those that replace the top-down one for objects the
     plan takes somewhere it does not fit (``grasps``: set by the plan executor from what
     the plan does next, ``insert``), the drawers the plan approaches to open next
-    (``opening``: the approach turns the hand for the pull, ``fixtures.drawer_hand``), and
-    the task's goal atoms (``goal``: a place leaves room for what the goal still puts
+    (``opening``: the approach turns the hand for the pull, ``fixtures.drawer_hand``), the
+    objects the plan lets go lying into a region (``tipped``: another lands on them,
+    ``tip``), and the task's goal atoms (``goal``: a place leaves room for what the goal still puts
     beside it)."""
 
     scene: Scene
@@ -102,6 +103,7 @@ class Context:
     grasps: dict[str, GraspRule] = field(default_factory=dict)
     goal: tuple[Atom, ...] = ()
     opening: frozenset[str] = frozenset()
+    tipped: frozenset[str] = frozenset()
 
     def __post_init__(self) -> None:
         self.rotation = self.base

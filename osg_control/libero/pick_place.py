@@ -26,6 +26,7 @@ from osg_control.libero.legs import HOVER, Context, Leg, creep, hold, up
 from osg_control.libero.overhang import lean_hover, leaning, slide
 from osg_control.libero.perception import LiberoPercept
 from osg_control.libero.spots import DROP, SetDown, set_down
+from osg_control.libero.tip import release
 
 TURN_FIRST = 0.4
 """A hand that must turn more than this [rad] to grasp turns where it is, at least at
@@ -168,7 +169,9 @@ def place(ctx: Context, obj: str, target: str, inside: bool) -> list[Leg]:
     reach moved into it), over the spot at the height ``obj`` was carried in (an object's
     top, a region's floor or a free spot of its top), lower until its bottom is ``DROP``
     above the surface, open, up, and turn the hand back (left turned, the next grasp's
-    hand lay past the wrist's limit and the arm wound up against it)."""
+    hand lay past the wrist's limit and the arm wound up against it). An object another
+    lands on after it in the region (``Context.tipped``) is let go turned onto its side
+    just above the region's box instead (``tip.release``)."""
 
     chosen: list[SetDown] = []  # decided once: a swinging load moved the spot
 
@@ -196,6 +199,11 @@ def place(ctx: Context, obj: str, target: str, inside: bool) -> list[Leg]:
         point, _ = down(now, start)  # at the carrying height first: nothing swept
         return np.r_[point[:2], max(point[2], start.tcp[2])], None
 
+    if inside and obj in ctx.tipped:
+        return [Leg(turn, GRIPPER_CLOSED, 40, 0.01, transit=True),
+                Leg(over, GRIPPER_CLOSED, 30, 0.01),
+                *release(ctx, obj, target, lambda now: over(now, now)[0]),
+                Leg(turn_back, GRIPPER_OPEN, 40, 0.01, transit=True)]  # fmt: skip
     laid = push_over(ctx, obj, target) if inside and lies_down(ctx, obj, target) else []
     return [Leg(turn, GRIPPER_CLOSED, 40, 0.01, transit=True),
             Leg(over, GRIPPER_CLOSED, 30, 0.01), Leg(down, GRIPPER_CLOSED, 40, 0.01),
