@@ -14,7 +14,7 @@ from scipy.spatial.transform import Rotation
 
 pytest.importorskip("libero.libero", reason="needs the libero extra: pip install -e .[libero]")
 
-from libero_start import scripted_episode  # noqa: E402
+from libero_start import scripted_episode, started  # noqa: E402
 
 from osg_control import cli  # noqa: E402
 from osg_control.libero.benchmark import Job, run_job  # noqa: E402
@@ -26,7 +26,12 @@ from osg_control.libero.clearance import (  # noqa: E402
 from osg_control.libero.controllers import operator_legs  # noqa: E402
 from osg_control.libero.drive import JointTargetDriver  # noqa: E402
 from osg_control.libero.env import LiberoEnv  # noqa: E402
-from osg_control.libero.executor import SETTLE_STEPS, SETTLED, PlanExecutor  # noqa: E402
+from osg_control.libero.executor import (  # noqa: E402
+    DROPPED_STEPS,
+    SETTLE_STEPS,
+    SETTLED,
+    PlanExecutor,
+)
 from osg_control.libero.facts import holds, perceived_init, region_pose  # noqa: E402
 from osg_control.libero.grasp import (  # noqa: E402
     GRASP_CLEARANCE,
@@ -429,3 +434,30 @@ def test_scripted_plan_puts_the_cream_cheese_in_the_basket(capsys) -> None:
     episode = scripted_episode(capsys, "libero_10", 7, 0)
     assert episode["success"], episode["trace"]
     assert not any("FAILED" in line for line in episode["trace"]), episode["trace"]
+
+
+def test_a_carried_object_seen_out_of_the_hand_fails_the_carry() -> None:
+    """Carrying LIBERO-10 task 0's soup can to the basket: while the percepts show it in the
+    closed hand the approach runs on; seen on the table instead (an edge pinch that slid
+    off: carried on as if held, the carry rose to 1.27 m over it), the approach fails after
+    ``DROPPED_STEPS`` percepts, the hand lets go and lifts, and the can's failures count
+    one more (its retry grasps otherwise)."""
+    policy, percept = started("libero_10", 0)
+    can, basket = "alphabet_soup_1", "basket_1_contain_region"
+    policy.seen = None  # at rest
+    args = (basket,)
+    policy.queue.clear()
+    policy.holding, policy.current = can, ("approach", args)
+    policy.runner = LegRunner(operator_legs(policy.ctx, "approach", args, can), policy.ctx)
+    in_hand = replace(percept, finger_width=0.0, tcp=percept.position(can))
+    for _ in range(DROPPED_STEPS + 2):
+        policy.act(in_hand)
+    assert policy.current == ("approach", args) and not policy.trace[1:]
+    on_table = replace(percept, finger_width=0.0)
+    for _ in range(DROPPED_STEPS - 1):
+        policy.act(on_table)
+    assert policy.current == ("approach", args)
+    policy.act(on_table)
+    assert policy.trace[-1].endswith(f"approach {basket}: FAILED")
+    assert policy.current is None and policy.holding is None
+    assert policy.ctx.failures == {can: 1}

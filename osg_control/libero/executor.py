@@ -19,7 +19,7 @@ from osg_control.control.ik_backends import IKConfig
 from osg_control.libero.controllers import operator_legs
 from osg_control.libero.drive import GRIPPER_OPEN, JointTargetDriver
 from osg_control.libero.edge import edge_grasps, pinched_last
-from osg_control.libero.facts import holds, perceived_init
+from osg_control.libero.facts import held, holds, perceived_init
 from osg_control.libero.insert import doorway_grasps
 from osg_control.libero.legs import Context, Leg, LegRunner, Runner, hold, up
 from osg_control.libero.operators import PICKS, PLACES
@@ -46,6 +46,8 @@ FIXTURE_POSTURE_COST = 0.001
 ``POSTURE_COST`` the level hand's pull on LIBERO-Goal's middle drawer stopped short of the
 open threshold."""
 FIXTURE_OPERATORS = frozenset({"open", "close", "turn-on", "turn-off"})
+CARRIES = frozenset({"approach", "retreat"})
+"""The operators that move the hand with what it holds, if anything."""
 SETTLED = 0.002
 """How far an object may move between two percepts [m] for the scene to count as at rest:
 the first operator waits for it (``SETTLE_STEPS`` at most). LIBERO's initial states start
@@ -53,6 +55,11 @@ some objects moving (LIBERO-10 task 0's cartons thrown 30 cm up for 15 steps); t
 its transit pace met the soup can in the air and knocked it 14 cm away."""
 SETTLE_STEPS = 30
 """The most steps the first operator waits for the scene to come to rest."""
+DROPPED_STEPS = 3
+"""Steps a held object must be perceived out of the hand (``facts.held``) for the carry to
+count as failed. An edge-pinched can that slid out of the fingers just after its pick was
+carried as if held for 130 steps, the carry rising to 1.27 m over it (its hang below the
+hand grew as the hand rose: ``clearance.transit_height``), and set down for 110 more."""
 PLAN_TIME_S = 30.0
 """A search's time limit [s]."""
 EFFECTS: dict[str, tuple[str, int]] = {
@@ -60,8 +67,8 @@ EFFECTS: dict[str, tuple[str, int]] = {
     "turn-on": ("turnon", 1), "turn-off": ("turnoff", 1),
 }  # fmt: skip
 """Operator -> the goal predicate its effect makes true, and how many of its arguments
-that atom takes (``approach``/``retreat`` have no perceived effect; ``pick``'s is
-checked by ``pick_place.holding_ok``)."""
+that atom takes (``approach``/``retreat`` have none but, holding something, that it is
+still held; ``pick``'s is checked by ``pick_place.holding_ok``)."""
 
 
 class PlanExecutor:
@@ -94,6 +101,7 @@ class PlanExecutor:
         self.trace: list[str] = []
         self.step, self.replans = 0, 0
         self.holding: str | None = None
+        self.out_of_hand = 0  # steps the carried object has been perceived out of the hand
         self.runner: Runner | None = None
         self.current: tuple[str, tuple[str, ...]] | None = None
         self.queue: list[tuple[str, tuple[str, ...]]] = []
@@ -127,6 +135,8 @@ class PlanExecutor:
         operator, args = self.current
         if operator in PICKS:
             return holding_ok(self.ctx, percept, args[0], self.start_z)
+        if operator in CARRIES and self.holding is not None:
+            return held(self.ctx.scene, percept, self.holding)
         if operator in EFFECTS:
             predicate, arity = EFFECTS[operator]
             return holds(self.ctx.scene, percept, Atom(predicate, args[:arity]))
@@ -189,11 +199,24 @@ class PlanExecutor:
             if self.runner is None and not self._next(percept):
                 break
             assert self.runner is not None
+            if self._dropped(percept):  # the carry fails at once: its effect does not hold
+                self._finish(percept)
+                continue
             action = self.runner.act(percept)
             if action is not None:
                 return action
             self._finish(percept)
         return np.r_[np.zeros(7), GRIPPER_OPEN]
+
+    def _dropped(self, percept: LiberoPercept) -> bool:
+        """Whether the object an ``approach`` or ``retreat`` carries has been perceived out
+        of the hand for ``DROPPED_STEPS`` steps in a row."""
+        carrying = self.current is not None and self.current[0] in CARRIES
+        if not carrying or self.holding is None or held(self.ctx.scene, percept, self.holding):
+            self.out_of_hand = 0
+            return False
+        self.out_of_hand += 1
+        return self.out_of_hand >= DROPPED_STEPS
 
     def _finish(self, percept: LiberoPercept) -> None:
         """An operator's (or a recovery's) legs are done: check its effect; on failure
@@ -212,8 +235,11 @@ class PlanExecutor:
             elif operator in PLACES:
                 self.holding = None
             return
-        if operator in PICKS:  # the retry grasps otherwise
-            self.ctx.failures[args[0]] = self.ctx.failures.get(args[0], 0) + 1
+        dropped = self.holding if operator in CARRIES else None
+        if operator in PICKS or dropped is not None:  # the retry grasps otherwise
+            obj = args[0] if dropped is None else dropped
+            self.ctx.failures[obj] = self.ctx.failures.get(obj, 0) + 1
+            self.holding = None
         self.current = None
         self.runner = LegRunner([hold(GRIPPER_OPEN, 8), up(0.10, GRIPPER_OPEN)], self.ctx)
 
