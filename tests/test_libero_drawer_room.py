@@ -27,7 +27,7 @@ def test_the_bowl_goes_in_front_of_the_handles_above() -> None:
     start = episode_start("libero_10", 3, 13)
     ctx, percept, scene = start.ctx, start.percept, start.ctx.scene
     joint = scene.joints[str(scene.regions[DRAWER].joint)]
-    out = joint.axis * joint.opening  # the drawer's pull, out of the cabinet
+    out = joint.outward  # the drawer's pull, out of the cabinet
     spot = float(surface(ctx, percept, DRAWER, True, BOWL) @ out)
     half = float(np.max(scene.extents[BOWL][1][:2] - scene.extents[BOWL][0][:2])) / 2
     pos, mat = region_pose(scene, percept, DRAWER)

@@ -40,7 +40,7 @@ def test_the_bottle_stands_in_the_near_corner_and_falls_toward_the_far_one() -> 
     ctx, percept = start.ctx, start.percept
     box = ctx.scene.regions[DRAWER]
     joint = ctx.scene.joints[str(box.joint)]
-    out = joint.axis * joint.opening
+    out = joint.outward
     way = across(ctx, DRAWER)
     assert abs(way @ joint.axis) < 1e-9 and way[:2] @ (box.pos[:2] - ctx.base_xy[:2]) > 0.0
     spot = surface(ctx, percept, DRAWER, True, BOTTLE)

@@ -57,7 +57,7 @@ def room(scene: Scene, percept: LiberoPercept, region: str) -> tuple[float, floa
     ``HANDLE_DEPTH`` before its centre), or to the region's back edge."""
     box = scene.regions[region]
     joint = scene.joints[str(box.joint)]
-    out = joint.axis * joint.opening
+    out = joint.outward
     pos, mat = region_pose(scene, percept, region)
     half = float(np.abs(mat @ box.size) @ np.abs(out))
     own = scene.handles[joint.name][2]

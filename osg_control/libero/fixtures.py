@@ -79,7 +79,7 @@ def drawer_front(ctx: Context, percept: LiberoPercept, region: str) -> np.ndarra
     """The point ``PULL_STANDOFF`` in front of a drawer's handle at its sensed travel: where
     the empty hand approaches a drawer (``pick_place.approach``, ``HOVER`` above it)."""
     joint = ctx.scene.joints[ctx.scene.articulated[region][0]]
-    out = joint.axis * joint.opening
+    out = joint.outward
     return handle_at(ctx.scene, joint, percept.joint(joint.name)) + out * PULL_STANDOFF
 
 
@@ -94,7 +94,7 @@ def drawer_hand(ctx: Context, region: str) -> np.ndarray:
 
 def _pull_hand(ctx: Context, joint: Joint) -> np.ndarray:
     """The hand that pinches a drawer's handle: level, facing the drawer (``_level``)."""
-    out = joint.axis * joint.opening
+    out = joint.outward
     return _level(fingers_along(ctx, out), out)
 
 
@@ -102,7 +102,7 @@ def drawer(ctx: Context, region: str, opening: bool) -> list[Leg]:
     """Open: grasp the handle, pull past the open threshold. Close: push the handle's
     face with the closed hand to the closed stop."""
     joint = ctx.scene.joints[ctx.scene.articulated[region][0]]
-    out = joint.axis * joint.opening  # the direction the drawer comes out
+    out = joint.outward  # the direction the drawer comes out
     across = fingers_along(ctx, np.cross(out, [0.0, 0.0, 1.0]))  # the hand thin along out
     sensed = lambda p: p.joint(joint.name)  # noqa: E731
     if opening:  # pinch the handle's bar top and bottom, the hand level, facing the drawer

@@ -85,7 +85,7 @@ def lay(ctx: Context, percept: LiberoPercept, obj: str, region: str) -> Lay:
     corner (the cabinet's side, away from the arm), its footprint as far inside."""
     box = ctx.scene.regions[region]
     joint = ctx.scene.joints[str(box.joint)]
-    out = joint.axis * joint.opening  # toward the drawer's front
+    out = joint.outward  # toward the drawer's front
     way = across(ctx, region)
     pos, mat = region_pose(ctx.scene, percept, region)
     half_way = float(np.abs(way @ mat) @ box.size)
@@ -106,7 +106,7 @@ def push_over(ctx: Context, obj: str, region: str) -> list[Leg]:
     height it was left at, down until the palm's lower face is ``PUSH_HEIGHT`` up it,
     ``PUSH_PAST`` past its axis with the palm's side, and up."""
     joint = ctx.scene.joints[str(ctx.scene.regions[region].joint)]
-    out = joint.axis * joint.opening
+    out = joint.outward
     low, high = ctx.scene.extents[obj]
     reach, half_width, palm = HAND_BOXES[0]
     side = _radius(ctx, obj) + half_width + PUSH_GAP

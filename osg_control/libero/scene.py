@@ -95,6 +95,11 @@ class Joint:
         """+1 when opening increases the joint value, -1 when it decreases it."""
         return 1.0 if self.active > self.rest else -1.0
 
+    @property
+    def outward(self) -> np.ndarray:
+        """The world direction a drawer comes out along (its axis, signed by ``opening``)."""
+        return self.axis * self.opening
+
     def is_active(self, q: float) -> bool:
         """Open / on by LIBERO's rule (strictly past ``active``)."""
         return bool((q - self.active) * self.opening > 0)
@@ -220,7 +225,7 @@ def _handle(model: Any, data: Any, joint: Joint) -> np.ndarray:
     furthest out along its opening direction (within ``HANDLE_DEPTH`` of the furthest)."""
     body = int(model.jnt_bodyid[model.joint(joint.name).id])
     boxes = _geom_boxes(model, data, _subtree(model, body))
-    out = joint.axis * joint.opening
+    out = joint.outward
     reach = [float((box @ out).max()) for box in boxes]
     front = [box.mean(axis=0) for box, r in zip(boxes, reach, strict=True)
              if r > max(reach) - HANDLE_DEPTH]  # fmt: skip

@@ -56,7 +56,7 @@ def surface(
         pos = np.r_[spot[:2], pos[2]]
     elif ctx.scene.regions[target].joint is not None:
         joint = ctx.scene.joints[str(ctx.scene.regions[target].joint)]
-        out = joint.axis * joint.opening
+        out = joint.outward
         pos = pos + out * (sum(room(ctx.scene, percept, target)) / 2 - pos @ out)
         if lies_down(ctx, held_obj, target):
             pos = lay(ctx, percept, held_obj, target).stand
