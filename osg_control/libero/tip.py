@@ -54,7 +54,7 @@ def tips_over(ctx: Context, percept: LiberoPercept, obj: str, region: str, other
     standing over the region's centre, ``other``'s origin would stand above the region's
     box; ``obj`` stands taller than wide (lying lowers ``other`` by the difference) and lies
     within the box; it is not a drawer's region (``lay``) nor an object pinched at its edge
-    (the pinch does not hold it turned)."""
+    (its grip already lies at the edge of the fingers' friction cones)."""
     box = ctx.scene.regions[region]
     if box.joint is not None or pinched(ctx, obj):
         return False
@@ -87,8 +87,9 @@ def release(
 ) -> list[Leg]:
     """From over the spot (``over``: the hand's point at the carrying height), down until
     ``obj``, turned ``TIP_ANGLE`` about the fingers' axis (its lower end toward the arm's
-    base: the other way the wrist swung the arm 20 cm aside), keeps ``TIP_DROP`` above
-    the region's box all the way; turn it, open, up, and turn the hand back upright."""
+    base: turned the other way the hand rose 7 cm), keeps ``TIP_DROP`` above the region's
+    box all the way; turn it at the arm's full pace (at the careful pace, the IK told the
+    whole turn, the arm swung 20 cm aside), open, up, and turn the hand back upright."""
     turn: list[tuple[np.ndarray, np.ndarray, np.ndarray]] = []  # point, tipped, upright
 
     def decided(now: LiberoPercept) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
